@@ -1,0 +1,81 @@
+/* Backend kind: the SLAM (or odometry) that turns frames into camera poses and a map.
+ * Per frame the host calls predict_pose (so the motion checker can place boxes in the world frame),
+ * then track with the frame's label mask and boxes; after a keyframe the reconstructor's landmarks come
+ * back through add_landmarks. finish() ends the run (final optimisation); then the host reads the
+ * trajectories and map points. Frames a backend did not track are absent from its trajectories. */
+#ifndef BESLAM_KINDS_BACKEND_H
+#define BESLAM_KINDS_BACKEND_H
+
+#include "beslam/data.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define BESLAM_TRACKING_NOT_INITIALIZED 0
+#define BESLAM_TRACKING_OK 1
+#define BESLAM_TRACKING_LOST 2
+
+typedef struct beslam_track_result {
+  uint32_t struct_size;
+  int32_t state;                   /* BESLAM_TRACKING_* */
+  int32_t is_keyframe;             /* 1: this frame became keyframe keyframe_id */
+  int32_t tracked_points;          /* map points matched (inliers) in this frame */
+  int64_t keyframe_id;
+  beslam_pose T_world_cam;         /* valid when state == OK */
+  const beslam_stage_time* stage_times; /* instance-owned until its next call; may be NULL */
+  uint32_t stage_count;
+  uint32_t reserved;
+} beslam_track_result;
+
+#define BESLAM_TRAJECTORY_FINAL 0     /* every tracked frame, relative to its keyframe after optimisation */
+#define BESLAM_TRAJECTORY_ONLINE 1    /* the pose each frame got when it was tracked */
+#define BESLAM_TRAJECTORY_KEYFRAMES 2 /* keyframes only */
+
+typedef struct beslam_trajectory_entry {
+  int64_t frame_index;
+  double timestamp;
+  beslam_pose T_world_cam;
+} beslam_trajectory_entry;
+
+typedef struct beslam_trajectory_list {
+  const beslam_trajectory_entry* entries;
+  uint32_t count;
+  uint32_t element_size;
+} beslam_trajectory_list;
+
+typedef struct beslam_map_point {
+  double p_world[3];
+  uint8_t color[3];   /* RGB */
+  uint8_t reserved;
+  int32_t observations;
+} beslam_map_point;
+
+typedef struct beslam_map_point_list {
+  const beslam_map_point* points;
+  uint64_t count;
+  uint32_t element_size;
+  uint32_t reserved;
+} beslam_map_point_list;
+
+typedef struct beslam_backend_v1 {
+  uint32_t struct_size;
+  uint32_t reserved;
+  /* *valid = 0 when the backend has no prediction (not initialised). */
+  beslam_status (*predict_pose)(void* instance, const beslam_frame* frame, beslam_pose* T_world_cam,
+                                int32_t* valid);
+  /* mask: LABEL16 view (data NULL when the pipeline has no mask generator). */
+  beslam_status (*track)(void* instance, const beslam_frame* frame, const beslam_image_view* mask,
+                         const beslam_box_list* boxes, beslam_track_result* result);
+  beslam_status (*add_landmarks)(void* instance, const beslam_landmark_list* landmarks);
+  beslam_status (*finish)(void* instance);
+  /* which: BESLAM_TRAJECTORY_*; the instance's memory until its next call. */
+  beslam_status (*trajectory)(void* instance, int32_t which, beslam_trajectory_list* out);
+  beslam_status (*map_points)(void* instance, beslam_map_point_list* out);
+} beslam_backend_v1;
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

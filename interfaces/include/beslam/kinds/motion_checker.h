@@ -1,0 +1,25 @@
+/* Motion checker kind: decides, per box, whether the object is static (parked) or dynamic, by keeping
+ * tracks of objects in the world frame over time. It writes track_id and motion_state in place and must
+ * not reorder, add or remove boxes. */
+#ifndef BESLAM_KINDS_MOTION_CHECKER_H
+#define BESLAM_KINDS_MOTION_CHECKER_H
+
+#include "beslam/data.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct beslam_motion_checker_v1 {
+  uint32_t struct_size;
+  uint32_t reserved;
+  /* T_world_cam: the backend's prediction for this frame, or NULL when it has none yet. */
+  beslam_status (*classify)(void* instance, const beslam_frame* frame, const beslam_pose* T_world_cam,
+                            beslam_box_array* boxes);
+} beslam_motion_checker_v1;
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,26 @@
+/* Reconstructor kind (the paper's Algorithm 2): on each new keyframe, estimates shape code, pose and
+ * scale of the static objects it sees and returns them as world-frame landmarks for the backend. */
+#ifndef BESLAM_KINDS_RECONSTRUCTOR_H
+#define BESLAM_KINDS_RECONSTRUCTOR_H
+
+#include "beslam/data.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct beslam_reconstructor_v1 {
+  uint32_t struct_size;
+  uint32_t reserved;
+  /* keyframe: the backend's new keyframe (this frame); mask: the frame's label mask (data may be NULL).
+   * *out: landmarks created or updated by this call, the instance's memory until its next call. */
+  beslam_status (*reconstruct)(void* instance, const beslam_keyframe* keyframe, const beslam_frame* frame,
+                               const beslam_box_list* boxes, const beslam_image_view* mask,
+                               beslam_landmark_list* out);
+} beslam_reconstructor_v1;
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,203 @@
+// `beslam`: the command-line front of the host.
+//   beslam run PIPELINE.yaml [--set key=value]... [--out DIR] [--plugin-path DIR]... [--quiet]
+//   beslam plugins [--plugin-path DIR]... [--json]
+//   beslam eval --ref FILE --est FILE [...]
+//   beslam synth --config FILE --out DIR [--set key=value]...
+// Every failure prints one line "beslam: error: <file or plugin>: <cause>" and exits non-zero
+// (2 for a usage error, 1 for anything else).
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "beslam/common/error.hpp"
+#include "beslam/eval/eval.hpp"
+#include "beslam/pipeline/runner.hpp"
+#include "beslam/pipeline/spec.hpp"
+#include "beslam/registry/registry.hpp"
+#include "beslam/sim/synth.hpp"
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: beslam <command> [options]\n"
+    "\n"
+    "commands:\n"
+    "  run PIPELINE.yaml   run a pipeline (see configs/ and docs/pipelines.md)\n"
+    "  plugins             list every plugin found, with its configuration schema\n"
+    "  eval                APE/RPE of a trajectory against a reference (evo's definitions)\n"
+    "  synth               render a synthetic sequence with full ground truth\n"
+    "\n"
+    "`beslam <command> --help` describes a command's options.\n";
+
+constexpr const char* kRunUsage =
+    "usage: beslam run PIPELINE.yaml [options]\n"
+    "\n"
+    "  --set KEY=VALUE     override a pipeline value, e.g. --set dataset.sequence=00 (repeatable)\n"
+    "  --out DIR           output folder (default: output.dir of the pipeline)\n"
+    "  --plugin-path DIR   also look for plugins in DIR (repeatable; BESLAM_PLUGIN_PATH works too)\n"
+    "  --quiet             no progress line, warnings only\n"
+    "  --verbose           plugins' info messages too\n"
+    "\n"
+    "Writes trajectory.tum/.kitti, trajectory_online.tum, keyframes.tum, pipeline.resolved.yaml,\n"
+    "timing.csv, summary.json, and objects.txt, masks/, map_points.ply where the pipeline makes them.\n";
+
+constexpr const char* kPluginsUsage =
+    "usage: beslam plugins [--plugin-path DIR]... [--json]\n"
+    "\n"
+    "Lists every plugin in the search path: id, kind, version, library and configuration schema,\n"
+    "and every library that was refused, with the reason.\n";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+std::string takeValue(const std::vector<std::string>& args, size_t& i) {
+  if (i + 1 >= args.size()) throw UsageError(args[i] + " needs a value");
+  return args[++i];
+}
+
+bool wantsHelp(const std::vector<std::string>& args) {
+  for (const auto& a : args)
+    if (a == "--help" || a == "-h") return true;
+  return false;
+}
+
+int runCommand(const std::vector<std::string>& args) {
+  if (wantsHelp(args)) {
+    std::cout << kRunUsage;
+    return 0;
+  }
+  std::string pipeline_path;
+  std::vector<std::string> overrides, plugin_paths;
+  beslam::pipeline::RunOptions options;
+  options.progress = true;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--set") overrides.push_back(takeValue(args, i));
+    else if (a.rfind("--set=", 0) == 0) overrides.push_back(a.substr(6));
+    else if (a == "--out") options.output_dir = takeValue(args, i);
+    else if (a == "--plugin-path") plugin_paths.push_back(takeValue(args, i));
+    else if (a == "--quiet") options.progress = false;
+    else if (a == "--verbose") options.log_level = BESLAM_LOG_INFO;
+    else if (!a.empty() && a[0] == '-') throw UsageError("run: unknown option " + a);
+    else if (pipeline_path.empty()) pipeline_path = a;
+    else throw UsageError("run: more than one pipeline file given");
+  }
+  if (pipeline_path.empty()) throw UsageError("run: no pipeline file given");
+
+  beslam::pipeline::PipelineSpec spec = beslam::pipeline::loadPipeline(pipeline_path, overrides);
+  beslam::registry::Registry registry;
+  for (const auto& p : plugin_paths) registry.addSearchPath(p);
+  for (const auto& p : spec.plugin_paths) registry.addSearchPath(p);
+  registry.scan();
+  for (const auto& problem : registry.problems()) std::cerr << "beslam: warning: skipped " << problem << "\n";
+  beslam::pipeline::resolvePlugins(spec, registry);
+  const beslam::pipeline::RunSummary s = beslam::pipeline::run(spec, registry, options);
+
+  std::cout << "frames " << s.frames << ", tracked " << s.tracked << ", keyframes " << s.keyframes
+            << ", median " << s.median_frame_ms << " ms/frame\n";
+  if (!s.untracked.empty()) {
+    std::cout << "untracked frames:";
+    for (size_t i = 0; i < s.untracked.size() && i < 20; ++i) std::cout << ' ' << s.untracked[i];
+    if (s.untracked.size() > 20) std::cout << " ... (" << s.untracked.size() << " in all)";
+    std::cout << "\n";
+  }
+  if (s.has_ape)
+    std::cout << "APE translation RMSE " << s.ape_trans_rmse << " m (" << spec.evaluation.alignment
+              << ", scale " << s.ape_alignment_scale << "), RPE translation RMSE " << s.rpe_trans_rmse << " m\n";
+  std::cout << "output: " << s.output_dir << "\n";
+  return 0;
+}
+
+int pluginsCommand(const std::vector<std::string>& args) {
+  if (wantsHelp(args)) {
+    std::cout << kPluginsUsage;
+    return 0;
+  }
+  beslam::registry::Registry registry;
+  bool json_out = false;
+  for (size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == "--plugin-path") registry.addSearchPath(takeValue(args, i));
+    else if (args[i] == "--json") json_out = true;
+    else throw UsageError("plugins: unknown option " + args[i]);
+  }
+  registry.scan();
+  if (json_out) {
+    nlohmann::json j;
+    j["search_paths"] = registry.searchPaths();
+    j["plugins"] = nlohmann::json::array();
+    for (const auto& p : registry.plugins()) {
+      nlohmann::json pj{{"id", p.id}, {"kind", beslam::registry::kindName(p.kind)}, {"version", p.version},
+                        {"abi", std::to_string(p.abi_version >> 16) + "." + std::to_string(p.abi_version & 0xffff)},
+                        {"name", p.name}, {"description", p.description}, {"library", p.library_path}};
+      pj["config"] = nlohmann::json::array();
+      for (const auto& f : p.fields) {
+        nlohmann::json fj{{"key", f.key}, {"type", beslam::registry::configTypeName(f.type)}, {"required", f.required},
+                          {"default", f.default_value}, {"doc", f.doc}};
+        if (f.min_value <= f.max_value) fj["range"] = {f.min_value, f.max_value};
+        if (!f.choices.empty()) fj["choices"] = f.choices;
+        pj["config"].push_back(fj);
+      }
+      j["plugins"].push_back(pj);
+    }
+    j["problems"] = registry.problems();
+    std::cout << j.dump(2) << "\n";
+    return 0;
+  }
+  std::cout << "search path:";
+  for (const auto& p : registry.searchPaths()) std::cout << ' ' << p;
+  std::cout << "\n\n";
+  for (const auto& p : registry.plugins()) {
+    std::cout << p.id << "  (" << beslam::registry::kindName(p.kind) << ", version " << p.version << ", ABI "
+              << (p.abi_version >> 16) << "." << (p.abi_version & 0xffff) << ")\n"
+              << "  " << p.name << ": " << p.description << "\n"
+              << "  library: " << p.library_path << "\n";
+    for (const auto& f : p.fields) {
+      std::cout << "    " << f.key << " (" << beslam::registry::configTypeName(f.type);
+      if (f.min_value <= f.max_value) std::cout << ", " << f.min_value << " to " << f.max_value;
+      if (!f.choices.empty()) std::cout << ", one of " << f.choices;
+      std::cout << (f.required ? ", required" : ", default " + f.default_value) << "): " << f.doc << "\n";
+    }
+    std::cout << "\n";
+  }
+  for (const auto& problem : registry.problems()) std::cout << "refused: " << problem << "\n";
+  std::cout << registry.plugins().size() << " plugins";
+  if (!registry.problems().empty()) std::cout << ", " << registry.problems().size() << " libraries refused";
+  std::cout << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+    std::cout << kUsage;
+    return args.empty() ? 2 : 0;
+  }
+  const std::string command = args[0];
+  args.erase(args.begin());
+  try {
+    if (command == "run") return runCommand(args);
+    if (command == "plugins") return pluginsCommand(args);
+    if (command == "eval") return beslam::eval::runEvalCommand(args, std::cout, std::cerr);
+    if (command == "synth") return beslam::sim::runSynthCommand(args, std::cout, std::cerr);
+    if (command == "--version" || command == "version") {
+      std::cout << "beslam " BESLAM_VERSION " (plugin ABI " << BESLAM_ABI_VERSION_MAJOR << "."
+                << BESLAM_ABI_VERSION_MINOR << ")\n";
+      return 0;
+    }
+    throw UsageError("unknown command '" + command + "'");
+  } catch (const UsageError& e) {
+    std::cerr << "beslam: usage error: " << e.what() << "\n" << kUsage;
+    return 2;
+  } catch (const beslam::Error& e) {
+    std::cerr << "beslam: error: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "beslam: internal error: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,44 @@
+// The per-frame runner: dataset -> detector -> motion checker -> mask generator -> backend
+// (-> reconstructor on new keyframes -> landmarks back to the backend).
+//
+// For each frame the backend first offers a predicted T_world_cam, which the motion checker uses to
+// place boxes in the world frame; boxes from the detector are checked for NaN/inf before anything else
+// sees them. Every stage's wall time is recorded. At the end the run writes, each file atomically:
+// trajectory.kitti / trajectory.tum (final poses), trajectory_online.tum, keyframes.tum,
+// pipeline.resolved.yaml, timing.csv, summary.json, objects.txt (with a detector), masks/NNNNNN.png
+// (with output.masks), map_points.ply (when the backend has a map). Frames the backend did not track
+// are absent from the trajectories and listed in summary.json. On an error nothing partial replaces
+// an earlier run's files: per-frame files go to their own names, the rest is written at the end.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "beslam/pipeline/spec.hpp"
+
+namespace beslam::pipeline {
+
+struct RunOptions {
+  std::string output_dir;             // overrides spec.output.dir when not empty
+  bool progress = false;              // a progress line on stderr
+  int32_t log_level = BESLAM_LOG_WARNING;
+};
+
+struct RunSummary {
+  std::string output_dir;
+  int64_t frames = 0;
+  int64_t tracked = 0;
+  int64_t keyframes = 0;
+  std::vector<int64_t> untracked;     // frame indices the backend did not track
+  bool has_ape = false;
+  double ape_trans_rmse = 0;          // metres, with spec.evaluation.alignment
+  double rpe_trans_rmse = 0;
+  double ape_alignment_scale = 1;
+  double median_frame_ms = 0;
+};
+
+// Runs a loaded and resolved pipeline. Throws beslam::Error (naming the file or plugin) on failure.
+RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, const RunOptions& options);
+
+}  // namespace beslam::pipeline

@@ -1,0 +1,313 @@
+#include "beslam/pipeline/spec.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "beslam/common/error.hpp"
+#include "beslam/common/yaml_set.hpp"
+
+namespace fs = std::filesystem;
+
+namespace beslam::pipeline {
+
+void PluginConfig::add(const std::string& key, int32_t type, double number, const std::string& text,
+                       const std::vector<double>& list) {
+  entries_.push_back(std::make_unique<Entry>(Entry{key, type, number, text, list}));
+  view_.clear();
+}
+
+const std::vector<beslam_config_value>& PluginConfig::values() const {
+  if (view_.size() != entries_.size()) {
+    view_.clear();
+    for (const auto& e : entries_) {
+      beslam_config_value v{};
+      v.key = e->key.c_str();
+      v.type = e->type;
+      v.number = e->number;
+      v.text = e->text.c_str();
+      v.list = e->list.empty() ? nullptr : e->list.data();
+      v.list_size = e->list.size();
+      view_.push_back(v);
+    }
+  }
+  return view_;
+}
+
+namespace {
+
+using registry::ConfigField;
+
+// "file:line" for a node read from the file, "file (--set)" for one an override created.
+std::string at(const std::string& file, const YAML::Node& node) {
+  const YAML::Mark mark = node.Mark();
+  if (mark.line < 0) return file + " (--set)";
+  return file + ":" + std::to_string(mark.line + 1);
+}
+
+[[noreturn]] void fail(const std::string& file, const YAML::Node& node, const std::string& key,
+                       const std::string& message) {
+  throw Error(at(file, node) + ": " + key + ": " + message);
+}
+
+std::string scalarText(const YAML::Node& node) {
+  if (node.IsScalar()) return node.Scalar();
+  std::stringstream ss;
+  ss << node;
+  return ss.str();
+}
+
+std::string rangeText(const ConfigField& f) {
+  std::ostringstream ss;
+  ss << "[" << f.min_value << ", " << f.max_value << "]";
+  return ss.str();
+}
+
+double parseNumber(const YAML::Node& node, const ConfigField& f, const std::string& file, const std::string& key,
+                   bool integer) {
+  if (!node.IsScalar()) fail(file, node, key, std::string("expected ") + (integer ? "an integer" : "a number"));
+  const std::string text = node.Scalar();
+  double value = 0;
+  try {
+    if (integer) {
+      size_t used = 0;
+      const long long v = std::stoll(text, &used);
+      if (used != text.size()) throw std::invalid_argument(text);
+      value = static_cast<double>(v);
+    } else {
+      value = node.as<double>();
+    }
+  } catch (const std::exception&) {
+    fail(file, node, key, std::string("expected ") + (integer ? "an integer" : "a number") + ", got '" + text + "'");
+  }
+  if (!std::isfinite(value)) fail(file, node, key, "value must be finite, got '" + text + "'");
+  if (f.min_value <= f.max_value && (value < f.min_value || value > f.max_value))
+    fail(file, node, key, "value " + text + " is out of range " + rangeText(f));
+  return value;
+}
+
+std::string knownKeys(const std::vector<ConfigField>& fields, const std::vector<std::string>& extra) {
+  std::string known;
+  for (const auto& k : extra) known += (known.empty() ? "" : ", ") + k;
+  for (const auto& f : fields) known += (known.empty() ? "" : ", ") + f.key;
+  return known.empty() ? "none" : known;
+}
+
+std::string resolvePath(const std::string& text, const std::string& base_dir) {
+  if (text.empty() || fs::path(text).is_absolute() || base_dir.empty()) return text;
+  return fs::weakly_canonical(fs::path(base_dir) / text).string();
+}
+
+std::vector<ConfigField> datasetFields() {
+  return {
+      {"type", BESLAM_CONFIG_STRING, true, "", 1, 0, "kitti_odometry|kitti_tracking|kitti_raw|kitti_object|tum",
+       "dataset layout"},
+      {"root", BESLAM_CONFIG_PATH, true, "", 1, 0, "", "dataset folder (relative to the pipeline file)"},
+      {"sequence", BESLAM_CONFIG_STRING, false, "\"\"", 1, 0, "", "sequence name: 06, 0007, ..."},
+      {"camera", BESLAM_CONFIG_STRING, false, "auto", 1, 0, "auto|image_0|image_2", "which camera folder"},
+      {"first", BESLAM_CONFIG_INT, false, "0", 0, 1e12, "", "first frame"},
+      {"last", BESLAM_CONFIG_INT, false, "-1", -1, 1e12, "", "last frame, inclusive (-1: to the end)"},
+      {"step", BESLAM_CONFIG_INT, false, "1", 1, 1e6, "", "use every step-th frame"},
+      {"lidar", BESLAM_CONFIG_BOOL, false, "false", 1, 0, "", "load LiDAR scans"},
+      {"color", BESLAM_CONFIG_BOOL, false, "false", 1, 0, "", "load colour images beside grey"},
+      {"ego_poses", BESLAM_CONFIG_PATH, false, "\"\"", 1, 0, "", "KITTI-format poses for layouts without them"},
+  };
+}
+
+std::vector<ConfigField> outputFields() {
+  return {
+      {"dir", BESLAM_CONFIG_STRING, false, "\"\"", 1, 0, "", "output folder (relative to the working folder)"},
+      {"masks", BESLAM_CONFIG_BOOL, false, "false", 1, 0, "", "write masks/NNNNNN.png"},
+      {"map_points", BESLAM_CONFIG_BOOL, false, "true", 1, 0, "", "write map_points.ply"},
+  };
+}
+
+std::vector<ConfigField> evaluationFields() {
+  return {
+      {"enabled", BESLAM_CONFIG_BOOL, false, "true", 1, 0, "", "APE/RPE against ground truth when available"},
+      {"alignment", BESLAM_CONFIG_STRING, false, "sim3", 1, 0, "none|se3|sim3", "trajectory alignment"},
+      {"rpe_delta", BESLAM_CONFIG_INT, false, "1", 1, 1e6, "", "RPE frame delta"},
+  };
+}
+
+const beslam_config_value& value(const PluginConfig& c, const std::string& key) {
+  for (const auto& v : c.values())
+    if (key == v.key) return v;
+  throw std::logic_error("no value " + key);
+}
+
+}  // namespace
+
+PluginConfig validateSettings(const YAML::Node& map_in, const std::vector<ConfigField>& fields,
+                              const std::string& where, const std::string& file, const std::string& base_dir,
+                              const std::vector<std::string>& ignore) {
+  YAML::Node map = map_in;
+  if (!map.IsMap()) fail(file, map, where, "expected a map of settings");
+  for (const auto& kv : map) {
+    const std::string key = kv.first.as<std::string>();
+    bool known = std::find(ignore.begin(), ignore.end(), key) != ignore.end();
+    for (const auto& f : fields) known = known || f.key == key;
+    if (!known) fail(file, kv.first, where + "." + key, "unknown key (known: " + knownKeys(fields, ignore) + ")");
+  }
+  PluginConfig config;
+  for (const ConfigField& f : fields) {
+    const std::string key = where + "." + f.key;
+    YAML::Node node = map[f.key];
+    if (!node.IsDefined() || node.IsNull()) {
+      if (f.required) fail(file, map, key, "required setting is missing");
+      try {
+        node = YAML::Load(f.default_value);
+      } catch (const YAML::Exception& e) {
+        throw Error("plugin schema: default of " + key + " is not YAML: " + e.msg);
+      }
+      map[f.key] = node;
+    }
+    switch (f.type) {
+      case BESLAM_CONFIG_BOOL: {
+        bool b = false;
+        if (!node.IsScalar() || !YAML::convert<bool>::decode(node, b))
+          fail(file, node, key, "expected true or false, got '" + scalarText(node) + "'");
+        config.add(f.key, f.type, b ? 1.0 : 0.0, "", {});
+        break;
+      }
+      case BESLAM_CONFIG_INT:
+      case BESLAM_CONFIG_DOUBLE:
+        config.add(f.key, f.type, parseNumber(node, f, file, key, f.type == BESLAM_CONFIG_INT), "", {});
+        break;
+      case BESLAM_CONFIG_STRING:
+      case BESLAM_CONFIG_PATH: {
+        if (!node.IsScalar()) fail(file, node, key, "expected a string");
+        std::string text = node.Scalar();
+        if (!f.choices.empty()) {
+          bool ok = false;
+          std::stringstream ss(f.choices);
+          for (std::string c; std::getline(ss, c, '|');) ok = ok || c == text;
+          if (!ok) fail(file, node, key, "'" + text + "' is not one of " + f.choices);
+        }
+        if (f.type == BESLAM_CONFIG_PATH) {
+          text = resolvePath(text, base_dir);
+          if (!text.empty()) map[f.key] = text;
+        }
+        config.add(f.key, f.type, 0, text, {});
+        break;
+      }
+      case BESLAM_CONFIG_DOUBLE_LIST: {
+        if (!node.IsSequence()) fail(file, node, key, "expected a list of numbers, e.g. [1.0, 2.0]");
+        std::vector<double> list;
+        for (const auto& item : node) list.push_back(parseNumber(item, f, file, key, false));
+        config.add(f.key, f.type, 0, "", list);
+        break;
+      }
+      default:
+        throw Error(key + ": unknown configuration type " + std::to_string(f.type));
+    }
+  }
+  return config;
+}
+
+PipelineSpec loadPipeline(const std::string& path, const std::vector<std::string>& overrides) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throwAt(path, "no such pipeline file");
+  if (fs::is_directory(path, ec)) throwAt(path, "is a folder, not a pipeline file");
+  PipelineSpec spec;
+  spec.path = path;
+  spec.base_dir = fs::absolute(path).parent_path().string();
+  try {
+    spec.document = YAML::LoadFile(path);
+  } catch (const YAML::ParserException& e) {
+    throwAt(path, "YAML syntax error: " + e.msg, e.mark.line + 1);
+  } catch (const YAML::Exception& e) {
+    throwAt(path, "cannot read YAML: " + e.msg);
+  }
+  YAML::Node& doc = spec.document;
+  if (doc.IsNull() || !doc.IsDefined()) throwAt(path, "the pipeline file is empty");
+  if (!doc.IsMap()) throwAt(path, "a pipeline must be a map with dataset, backend, ... sections", doc.Mark().line + 1);
+  for (const std::string& o : overrides) {
+    try {
+      applySetOverride(doc, o);
+    } catch (const Error& e) {
+      throwAt(path, e.what());
+    }
+  }
+
+  static const std::vector<std::string> top = {"name",    "description", "dataset",    "plugin_paths",
+                                               "output",  "evaluation",  "detector",   "motion_checker",
+                                               "mask_generator", "reconstructor", "backend"};
+  for (const auto& kv : doc) {
+    const std::string key = kv.first.as<std::string>();
+    if (std::find(top.begin(), top.end(), key) == top.end()) {
+      std::string known;
+      for (const auto& t : top) known += (known.empty() ? "" : ", ") + t;
+      fail(path, kv.first, key, "unknown key (known: " + known + ")");
+    }
+  }
+
+  if (!doc["dataset"].IsDefined()) throwAt(path, "dataset: required section is missing");
+  const PluginConfig dataset = validateSettings(doc["dataset"], datasetFields(), "dataset", path, spec.base_dir);
+  spec.dataset.type = value(dataset, "type").text;
+  spec.dataset.root = value(dataset, "root").text;
+  spec.dataset.sequence = value(dataset, "sequence").text;
+  spec.dataset.camera = value(dataset, "camera").text;
+  spec.dataset.first = static_cast<int64_t>(value(dataset, "first").number);
+  spec.dataset.last = static_cast<int64_t>(value(dataset, "last").number);
+  spec.dataset.step = static_cast<int64_t>(value(dataset, "step").number);
+  spec.dataset.lidar = value(dataset, "lidar").number != 0;
+  spec.dataset.color = value(dataset, "color").number != 0;
+  spec.dataset.ego_poses = value(dataset, "ego_poses").text;
+  if (spec.dataset.last >= 0 && spec.dataset.last < spec.dataset.first)
+    fail(path, doc["dataset"]["last"], "dataset.last", "is before dataset.first");
+
+  if (!doc["output"].IsDefined() || doc["output"].IsNull()) doc["output"] = YAML::Node(YAML::NodeType::Map);
+  const PluginConfig output = validateSettings(doc["output"], outputFields(), "output", path, "");
+  spec.output.dir = value(output, "dir").text;
+  spec.output.masks = value(output, "masks").number != 0;
+  spec.output.map_points = value(output, "map_points").number != 0;
+
+  if (!doc["evaluation"].IsDefined() || doc["evaluation"].IsNull())
+    doc["evaluation"] = YAML::Node(YAML::NodeType::Map);
+  const PluginConfig evaluation = validateSettings(doc["evaluation"], evaluationFields(), "evaluation", path, "");
+  spec.evaluation.enabled = value(evaluation, "enabled").number != 0;
+  spec.evaluation.alignment = value(evaluation, "alignment").text;
+  spec.evaluation.rpe_delta = static_cast<int64_t>(value(evaluation, "rpe_delta").number);
+
+  if (YAML::Node paths = doc["plugin_paths"]; paths.IsDefined() && !paths.IsNull()) {
+    if (!paths.IsSequence()) fail(path, paths, "plugin_paths", "expected a list of folders");
+    for (const auto& p : paths) {
+      if (!p.IsScalar()) fail(path, p, "plugin_paths", "expected a folder name");
+      spec.plugin_paths.push_back(resolvePath(p.Scalar(), spec.base_dir));
+    }
+  }
+
+  for (const char* slot : kSlots) {
+    SlotSpec s;
+    s.slot = slot;
+    YAML::Node node = doc[slot];
+    if (node.IsDefined() && !node.IsNull()) {
+      if (node.IsScalar()) fail(path, node, slot, "expected a map with a 'plugin' key (e.g. plugin: backend_orb)");
+      if (!node.IsMap()) fail(path, node, slot, "expected a map with a 'plugin' key");
+      YAML::Node id = node["plugin"];
+      if (!id.IsDefined() || !id.IsScalar()) fail(path, node, std::string(slot) + ".plugin", "missing plugin id");
+      s.plugin_id = id.Scalar() == "none" ? "" : id.Scalar();
+      s.settings = node;
+    }
+    spec.slots[slot] = std::move(s);
+  }
+  if (spec.slots["backend"].plugin_id.empty())
+    throwAt(path, "backend: a pipeline needs a backend (e.g. backend: {plugin: backend_orb})");
+  return spec;
+}
+
+void resolvePlugins(PipelineSpec& spec, const registry::Registry& registry) {
+  for (auto& [name, slot] : spec.slots) {
+    if (slot.plugin_id.empty()) continue;
+    const int32_t kind = registry::kindFromName(name);
+    try {
+      slot.plugin = &registry.find(slot.plugin_id, kind);
+    } catch (const Error& e) {
+      throw Error(at(spec.path, slot.settings["plugin"]) + ": " + name + ".plugin: " + e.what());
+    }
+    slot.config = validateSettings(slot.settings, slot.plugin->fields, name, spec.path, spec.base_dir, {"plugin"});
+  }
+}
+
+}  // namespace beslam::pipeline

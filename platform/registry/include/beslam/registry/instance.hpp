@@ -1,0 +1,107 @@
+// Host-side handles to plugin instances: create/destroy in RAII, typed calls per kind, and every non-OK
+// status turned into a beslam::Error that names the plugin, its library, the call and the message the
+// plugin logged. The host log sink prints plugin messages to stderr with the plugin id.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "beslam/plugin.h"
+#include "beslam/registry/registry.hpp"
+
+namespace beslam::registry {
+
+// Where plugins' log messages go; also remembers the last ERROR each plugin logged.
+class HostLog {
+ public:
+  explicit HostLog(int32_t min_level = BESLAM_LOG_INFO);
+  const beslam_host* host() const { return &host_; }
+  std::string takeLastError(const std::string& plugin_id);
+  void setMinLevel(int32_t level) { min_level_ = level; }
+
+ private:
+  static void logCallback(void* user_data, int32_t level, const char* plugin_id, const char* message);
+  beslam_host host_{};
+  int32_t min_level_;
+  std::vector<std::pair<std::string, std::string>> last_error_;  // plugin id -> message
+};
+
+class Instance {
+ public:
+  // Creates an instance; throws beslam::Error on a non-OK create or a null instance.
+  Instance(const Plugin& plugin, const beslam_create_info& info, HostLog& log);
+  ~Instance();
+  Instance(const Instance&) = delete;
+  Instance& operator=(const Instance&) = delete;
+
+  const Plugin& plugin() const { return plugin_; }
+
+ protected:
+  void check(beslam_status status, const char* call) const;
+  template <class Table>
+  Table table() const;  // the kind's table, zero-filled past what the plugin knows
+  void* handle_ = nullptr;
+
+ private:
+  const Plugin& plugin_;
+  HostLog& log_;
+};
+
+class DetectorInstance : public Instance {
+ public:
+  using Instance::Instance;
+  std::vector<beslam_box3d> detect(const beslam_frame& frame);
+};
+
+class MotionCheckerInstance : public Instance {
+ public:
+  using Instance::Instance;
+  void classify(const beslam_frame& frame, const std::optional<Eigen::Isometry3d>& T_world_cam,
+                std::vector<beslam_box3d>& boxes);
+};
+
+class MaskGeneratorInstance : public Instance {
+ public:
+  using Instance::Instance;
+  void generate(const beslam_frame& frame, const std::vector<beslam_box3d>& boxes, beslam_mask_buffer& mask);
+};
+
+struct Landmarks {  // a copy of what the reconstructor returned, owning its arrays
+  std::vector<beslam_object_landmark> landmarks;
+  std::vector<std::vector<float>> shape_codes, surface_points;
+};
+
+class ReconstructorInstance : public Instance {
+ public:
+  using Instance::Instance;
+  Landmarks reconstruct(const beslam_keyframe& keyframe, const beslam_frame& frame,
+                        const std::vector<beslam_box3d>& boxes, const beslam_image_view& mask);
+};
+
+struct TrackOutput {
+  beslam_track_result result{};
+  std::vector<std::pair<std::string, double>> stage_ms;
+};
+
+struct PoseEntry {
+  int64_t frame_index;
+  double timestamp;
+  Eigen::Isometry3d T_world_cam;
+};
+
+class BackendInstance : public Instance {
+ public:
+  using Instance::Instance;
+  std::optional<Eigen::Isometry3d> predictPose(const beslam_frame& frame);
+  TrackOutput track(const beslam_frame& frame, const beslam_image_view& mask, const std::vector<beslam_box3d>& boxes);
+  void addLandmarks(const Landmarks& landmarks);
+  void finish();
+  std::vector<PoseEntry> trajectory(int32_t which);
+  std::vector<beslam_map_point> mapPoints();
+};
+
+}  // namespace beslam::registry

@@ -1,0 +1,310 @@
+#include "beslam/registry/registry.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include <boost/dll/library_info.hpp>
+#include <boost/dll/runtime_symbol_info.hpp>
+#include <boost/dll/shared_library.hpp>
+
+#include "beslam/common/error.hpp"
+
+namespace fs = std::filesystem;
+
+namespace beslam::registry {
+
+const char* kindName(int32_t kind) {
+  switch (kind) {
+    case BESLAM_KIND_DETECTOR: return "detector";
+    case BESLAM_KIND_MOTION_CHECKER: return "motion_checker";
+    case BESLAM_KIND_MASK_GENERATOR: return "mask_generator";
+    case BESLAM_KIND_RECONSTRUCTOR: return "reconstructor";
+    case BESLAM_KIND_BACKEND: return "backend";
+    default: return "unknown";
+  }
+}
+
+int32_t kindFromName(const std::string& name) {
+  for (int32_t k = BESLAM_KIND_DETECTOR; k <= BESLAM_KIND_BACKEND; ++k)
+    if (name == kindName(k)) return k;
+  return 0;
+}
+
+const char* configTypeName(int32_t type) {
+  switch (type) {
+    case BESLAM_CONFIG_BOOL: return "bool";
+    case BESLAM_CONFIG_INT: return "int";
+    case BESLAM_CONFIG_DOUBLE: return "double";
+    case BESLAM_CONFIG_STRING: return "string";
+    case BESLAM_CONFIG_PATH: return "path";
+    case BESLAM_CONFIG_DOUBLE_LIST: return "list of double";
+    default: return "unknown";
+  }
+}
+
+const char* statusName(beslam_status status) {
+  switch (status) {
+    case BESLAM_OK: return "ok";
+    case BESLAM_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case BESLAM_ERROR_INVALID_CONFIG: return "invalid configuration";
+    case BESLAM_ERROR_RUNTIME: return "runtime error";
+    case BESLAM_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case BESLAM_ERROR_UNSUPPORTED: return "unsupported";
+    case BESLAM_ERROR_INTERNAL: return "internal error";
+    default: return "unknown status";
+  }
+}
+
+namespace {
+
+// The smallest struct sizes ABI 1.0 defines: anything shorter is refused.
+constexpr uint32_t kMinDescriptorSize = offsetof(beslam_plugin_descriptor, functions) + sizeof(void*);
+constexpr uint32_t kMinFieldSize = offsetof(beslam_config_field, doc) + sizeof(const char*);
+
+uint32_t minTableSize(int32_t kind) {
+  switch (kind) {
+    case BESLAM_KIND_DETECTOR: return sizeof(beslam_detector_v1);
+    case BESLAM_KIND_MOTION_CHECKER: return sizeof(beslam_motion_checker_v1);
+    case BESLAM_KIND_MASK_GENERATOR: return sizeof(beslam_mask_generator_v1);
+    case BESLAM_KIND_RECONSTRUCTOR: return sizeof(beslam_reconstructor_v1);
+    case BESLAM_KIND_BACKEND: return sizeof(beslam_backend_v1);
+    default: return 0;
+  }
+}
+
+// Every function pointer of a kind's table must be set (ABI 1.0 has no optional calls).
+bool tableComplete(int32_t kind, const void* table) {
+  auto all = [](std::initializer_list<const void*> fns) {
+    return std::all_of(fns.begin(), fns.end(), [](const void* f) { return f != nullptr; });
+  };
+  switch (kind) {
+    case BESLAM_KIND_DETECTOR: {
+      auto t = static_cast<const beslam_detector_v1*>(table);
+      return all({reinterpret_cast<const void*>(t->detect)});
+    }
+    case BESLAM_KIND_MOTION_CHECKER: {
+      auto t = static_cast<const beslam_motion_checker_v1*>(table);
+      return all({reinterpret_cast<const void*>(t->classify)});
+    }
+    case BESLAM_KIND_MASK_GENERATOR: {
+      auto t = static_cast<const beslam_mask_generator_v1*>(table);
+      return all({reinterpret_cast<const void*>(t->generate)});
+    }
+    case BESLAM_KIND_RECONSTRUCTOR: {
+      auto t = static_cast<const beslam_reconstructor_v1*>(table);
+      return all({reinterpret_cast<const void*>(t->reconstruct)});
+    }
+    case BESLAM_KIND_BACKEND: {
+      auto t = static_cast<const beslam_backend_v1*>(table);
+      return all({reinterpret_cast<const void*>(t->predict_pose), reinterpret_cast<const void*>(t->track),
+                  reinterpret_cast<const void*>(t->add_landmarks), reinterpret_cast<const void*>(t->finish),
+                  reinterpret_cast<const void*>(t->trajectory), reinterpret_cast<const void*>(t->map_points)});
+    }
+    default: return false;
+  }
+}
+
+bool validId(const char* id) {
+  if (id == nullptr || *id == '\0') return false;
+  for (const char* c = id; *c; ++c)
+    if (!((*c >= 'a' && *c <= 'z') || (*c >= '0' && *c <= '9') || *c == '_')) return false;
+  return true;
+}
+
+std::string str(const char* s) { return s ? s : ""; }
+
+}  // namespace
+
+struct Registry::Impl {
+  std::vector<std::string> extra_paths;
+  std::vector<boost::dll::shared_library> libraries;  // kept loaded as long as the registry lives
+  std::vector<Plugin> plugins;
+  std::vector<std::string> problems;
+  std::map<std::string, std::string> loaded_files;  // canonical path -> path
+
+  void load(const std::string& path);
+};
+
+Registry::Registry() : impl_(std::make_unique<Impl>()) {}
+Registry::~Registry() {
+  impl_->plugins.clear();  // descriptors point into the libraries: drop them first
+}
+
+void Registry::addSearchPath(const std::string& folder) { impl_->extra_paths.push_back(folder); }
+
+std::vector<std::string> Registry::searchPaths() const {
+  std::vector<std::string> paths = impl_->extra_paths;
+  if (const char* env = std::getenv("BESLAM_PLUGIN_PATH")) {
+    std::stringstream ss(env);
+    std::string item;
+    while (std::getline(ss, item, ':'))
+      if (!item.empty()) paths.push_back(item);
+  }
+  boost::system::error_code ec;
+  const auto exe = boost::dll::program_location(ec);
+  if (!ec) {
+    const fs::path prefix = fs::path(exe.string()).parent_path().parent_path();
+    paths.push_back((prefix / "lib" / "beslam" / "plugins").string());
+#ifdef BESLAM_INSTALL_LIBDIR
+    paths.push_back((prefix / BESLAM_INSTALL_LIBDIR / "beslam" / "plugins").string());
+#endif
+  }
+  std::vector<std::string> unique;
+  for (const auto& p : paths)
+    if (std::find(unique.begin(), unique.end(), p) == unique.end()) unique.push_back(p);
+  return unique;
+}
+
+void Registry::scan() {
+  for (const std::string& folder : searchPaths()) {
+    std::error_code ec;
+    if (!fs::is_directory(folder, ec)) continue;
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(folder, ec))
+      if (entry.is_regular_file() && entry.path().extension() == ".so") files.push_back(entry.path());
+    std::sort(files.begin(), files.end());
+    for (const fs::path& file : files) {
+      try {
+        impl_->load(file.string());
+      } catch (const Error& e) {
+        impl_->problems.push_back(e.what());
+      }
+    }
+  }
+}
+
+void Registry::loadLibrary(const std::string& path) { impl_->load(path); }
+
+void Registry::Impl::load(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throwAt(path, "no such plugin library");
+  const std::string canonical = fs::canonical(path, ec).string();
+  if (loaded_files.count(canonical)) return;
+
+  // Check the entry points are there before running any of the library's code.
+  try {
+    boost::dll::library_info info(path);
+    const auto symbols = info.symbols();
+    const bool has_version =
+        std::find(symbols.begin(), symbols.end(), BESLAM_ABI_VERSION_SYMBOL) != symbols.end();
+    const bool has_list = std::find(symbols.begin(), symbols.end(), BESLAM_PLUGIN_LIST_SYMBOL) != symbols.end();
+    if (!has_version && !has_list) throwAt(path, "not a BE-SLAM plugin (no beslam_plugin_list or beslam_plugin_abi_version symbol)");
+    if (!has_version) throwAt(path, "missing symbol " BESLAM_ABI_VERSION_SYMBOL);
+    if (!has_list) throwAt(path, "missing symbol " BESLAM_PLUGIN_LIST_SYMBOL);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throwAt(path, std::string("not a loadable shared library: ") + e.what());
+  }
+
+  boost::dll::shared_library lib;
+  try {
+    lib.load(path, boost::dll::load_mode::rtld_local | boost::dll::load_mode::rtld_now);
+  } catch (const std::exception& e) {
+    throwAt(path, std::string("cannot load: ") + e.what());
+  }
+  const auto abi_version = lib.get<uint32_t()>(BESLAM_ABI_VERSION_SYMBOL)();
+  const uint32_t major = abi_version >> 16, minor = abi_version & 0xffff;
+  if (major != BESLAM_ABI_VERSION_MAJOR) {
+    throwAt(path, "built for plugin ABI " + std::to_string(major) + "." + std::to_string(minor) +
+                      ", this host speaks ABI " + std::to_string(BESLAM_ABI_VERSION_MAJOR) + "." +
+                      std::to_string(BESLAM_ABI_VERSION_MINOR) + " (major versions must match)");
+  }
+
+  const beslam_plugin_descriptor* const* list = nullptr;
+  uint32_t count = 0;
+  const beslam_status status =
+      lib.get<beslam_status(const beslam_plugin_descriptor* const**, uint32_t*)>(BESLAM_PLUGIN_LIST_SYMBOL)(&list, &count);
+  if (status != BESLAM_OK) throwAt(path, std::string("beslam_plugin_list failed: ") + statusName(status));
+  if (count > 0 && list == nullptr) throwAt(path, "beslam_plugin_list returned a null list");
+
+  std::vector<Plugin> found;
+  for (uint32_t i = 0; i < count; ++i) {
+    const beslam_plugin_descriptor* d = list[i];
+    const std::string where = "descriptor " + std::to_string(i);
+    if (d == nullptr) throwAt(path, where + " is null");
+    if (d->struct_size < kMinDescriptorSize)
+      throwAt(path, where + ": struct_size " + std::to_string(d->struct_size) + " is smaller than ABI 1.0's " +
+                        std::to_string(kMinDescriptorSize));
+    Plugin p;
+    std::memcpy(&p.descriptor, d, std::min<size_t>(d->struct_size, sizeof(p.descriptor)));
+    const beslam_plugin_descriptor& c = p.descriptor;
+    if ((c.abi_version >> 16) != BESLAM_ABI_VERSION_MAJOR)
+      throwAt(path, where + ": descriptor claims ABI major " + std::to_string(c.abi_version >> 16));
+    if (!validId(c.id)) throwAt(path, where + ": id '" + str(c.id) + "' is not [a-z0-9_]+");
+    const std::string id = c.id;
+    if (minTableSize(c.kind) == 0) throwAt(path, "plugin " + id + ": unknown kind " + std::to_string(c.kind));
+    if (c.create == nullptr || c.destroy == nullptr) throwAt(path, "plugin " + id + ": create or destroy is null");
+    if (c.functions == nullptr) throwAt(path, "plugin " + id + ": no function table");
+    const uint32_t table_size = *static_cast<const uint32_t*>(c.functions);
+    if (table_size < minTableSize(c.kind))
+      throwAt(path, "plugin " + id + ": " + kindName(c.kind) + " table struct_size " + std::to_string(table_size) +
+                        " is smaller than ABI 1.0's " + std::to_string(minTableSize(c.kind)));
+    if (!tableComplete(c.kind, c.functions)) throwAt(path, "plugin " + id + ": a function of its table is null");
+    if (c.config_field_count > 0 && (c.config_fields == nullptr || c.config_field_size < kMinFieldSize))
+      throwAt(path, "plugin " + id + ": bad configuration schema (null fields or field size too small)");
+
+    p.id = id;
+    p.name = str(c.name);
+    p.description = str(c.description);
+    p.kind = c.kind;
+    p.version = std::to_string(c.version_major) + "." + std::to_string(c.version_minor) + "." +
+                std::to_string(c.version_patch);
+    p.abi_version = c.abi_version;
+    p.library_path = path;
+    p.functions = c.functions;
+    p.functions_size = table_size;
+    const char* base = reinterpret_cast<const char*>(c.config_fields);
+    for (uint32_t f = 0; f < c.config_field_count; ++f) {
+      beslam_config_field raw{};
+      std::memcpy(&raw, base + static_cast<size_t>(f) * c.config_field_size,
+                  std::min<size_t>(c.config_field_size, sizeof(raw)));
+      if (!validId(raw.key)) throwAt(path, "plugin " + id + ": configuration key '" + str(raw.key) + "' is not [a-z0-9_]+");
+      if (std::string(raw.key) == "plugin") throwAt(path, "plugin " + id + ": configuration key 'plugin' is reserved");
+      if (raw.type < BESLAM_CONFIG_BOOL || raw.type > BESLAM_CONFIG_DOUBLE_LIST)
+        throwAt(path, "plugin " + id + ": configuration key '" + raw.key + "' has unknown type " + std::to_string(raw.type));
+      if (!raw.required && raw.default_value == nullptr)
+        throwAt(path, "plugin " + id + ": configuration key '" + raw.key + "' is optional but has no default");
+      ConfigField field{raw.key, raw.type, raw.required != 0, str(raw.default_value), raw.min_value,
+                        raw.max_value, str(raw.choices), str(raw.doc)};
+      p.fields.push_back(std::move(field));
+    }
+    for (const Plugin& other : plugins)
+      if (other.id == id) throwAt(path, "plugin id '" + id + "' is already provided by " + other.library_path);
+    for (const Plugin& other : found)
+      if (other.id == id) throwAt(path, "plugin id '" + id + "' appears twice in this library");
+    found.push_back(std::move(p));
+  }
+  libraries.push_back(std::move(lib));
+  loaded_files[canonical] = path;
+  for (Plugin& p : found) plugins.push_back(std::move(p));
+}
+
+const std::vector<Plugin>& Registry::plugins() const { return impl_->plugins; }
+const std::vector<std::string>& Registry::problems() const { return impl_->problems; }
+
+const Plugin& Registry::find(const std::string& id, int32_t kind) const {
+  std::string known;
+  for (const Plugin& p : impl_->plugins) {
+    if (p.id == id) {
+      if (kind != 0 && p.kind != kind)
+        throw Error("plugin '" + id + "' is a " + kindName(p.kind) + ", not a " + kindName(kind) + " (" +
+                    p.library_path + ")");
+      return p;
+    }
+    if (kind == 0 || p.kind == kind) known += (known.empty() ? "" : ", ") + p.id;
+  }
+  std::string message = "unknown plugin '" + id + "'";
+  message += known.empty() ? std::string(" (no plugins of that kind found") : " (known: " + known;
+  message += "; searched ";
+  const auto paths = searchPaths();
+  for (size_t i = 0; i < paths.size(); ++i) message += (i ? ":" : "") + paths[i];
+  message += ")";
+  throw Error(message);
+}
+
+}  // namespace beslam::registry

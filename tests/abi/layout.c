@@ -1,0 +1,60 @@
+/* The ABI's layout as a C11 compiler sees it: static asserts here, and the same numbers reported to
+ * the C++ test (layout_test.cpp), which asserts them again as a C++ compiler sees them. */
+#include <stddef.h>
+
+#include "beslam/plugin.h"
+
+/* Sizes and offsets a plugin built by any C or C++ compiler on LP64 must agree on. Changing one is a
+ * breaking change (a new major version). */
+_Static_assert(sizeof(beslam_pose) == 96, "beslam_pose");
+_Static_assert(sizeof(beslam_image_view) == 24, "beslam_image_view");
+_Static_assert(sizeof(beslam_point_cloud_view) == 24, "beslam_point_cloud_view");
+_Static_assert(sizeof(beslam_box3d) == 144, "beslam_box3d");
+_Static_assert(offsetof(beslam_box3d, center_cam) == 16, "beslam_box3d.center_cam");
+_Static_assert(offsetof(beslam_box3d, score) == 128, "beslam_box3d.score");
+_Static_assert(offsetof(beslam_plugin_descriptor, struct_size) == 0, "descriptor starts with struct_size");
+_Static_assert(offsetof(beslam_plugin_descriptor, functions) == 80, "beslam_plugin_descriptor.functions");
+_Static_assert(sizeof(beslam_plugin_descriptor) == 88, "beslam_plugin_descriptor");
+_Static_assert(sizeof(beslam_config_field) == 56, "beslam_config_field");
+_Static_assert(sizeof(beslam_config_value) == 48, "beslam_config_value");
+_Static_assert(sizeof(beslam_frame) == 104, "beslam_frame");
+_Static_assert(sizeof(beslam_create_info) == 184, "beslam_create_info");
+_Static_assert(sizeof(beslam_track_result) == 136, "beslam_track_result");
+_Static_assert(sizeof(beslam_backend_v1) == 56, "beslam_backend_v1");
+_Static_assert(sizeof(beslam_object_landmark) == 168, "beslam_object_landmark");
+
+#define ENTRY(x) (size_t)(x)
+size_t beslam_c_layout(int i) {
+  static const size_t values[] = {
+      ENTRY(sizeof(beslam_pose)),
+      ENTRY(sizeof(beslam_image_view)),
+      ENTRY(sizeof(beslam_point_cloud_view)),
+      ENTRY(sizeof(beslam_box3d)),
+      ENTRY(offsetof(beslam_box3d, velocity_cam)),
+      ENTRY(offsetof(beslam_box3d, occlusion)),
+      ENTRY(sizeof(beslam_camera)),
+      ENTRY(sizeof(beslam_frame)),
+      ENTRY(offsetof(beslam_frame, lidar)),
+      ENTRY(sizeof(beslam_create_info)),
+      ENTRY(offsetof(beslam_create_info, camera)),
+      ENTRY(sizeof(beslam_plugin_descriptor)),
+      ENTRY(offsetof(beslam_plugin_descriptor, create)),
+      ENTRY(sizeof(beslam_config_field)),
+      ENTRY(sizeof(beslam_config_value)),
+      ENTRY(sizeof(beslam_host)),
+      ENTRY(sizeof(beslam_keyframe)),
+      ENTRY(sizeof(beslam_object_landmark)),
+      ENTRY(offsetof(beslam_object_landmark, surface_points)),
+      ENTRY(sizeof(beslam_track_result)),
+      ENTRY(offsetof(beslam_track_result, T_world_cam)),
+      ENTRY(sizeof(beslam_detector_v1)),
+      ENTRY(sizeof(beslam_motion_checker_v1)),
+      ENTRY(sizeof(beslam_mask_generator_v1)),
+      ENTRY(sizeof(beslam_reconstructor_v1)),
+      ENTRY(sizeof(beslam_backend_v1)),
+      ENTRY(sizeof(beslam_map_point)),
+      ENTRY(sizeof(beslam_trajectory_entry)),
+      ENTRY(sizeof(beslam_mask_buffer)),
+  };
+  return i >= 0 && i < (int)(sizeof(values) / sizeof(values[0])) ? values[i] : (size_t)-1;
+}
