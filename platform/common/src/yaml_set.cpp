@@ -6,6 +6,26 @@
 
 namespace beslam {
 
+namespace {
+
+// A copy of a parsed value without source marks, so errors about it say "--set", not "line 1".
+YAML::Node withoutMarks(const YAML::Node& node) {
+  if (node.IsScalar()) return YAML::Node(node.Scalar());
+  if (node.IsSequence()) {
+    YAML::Node out(YAML::NodeType::Sequence);
+    for (const auto& item : node) out.push_back(withoutMarks(item));
+    return out;
+  }
+  if (node.IsMap()) {
+    YAML::Node out(YAML::NodeType::Map);
+    for (const auto& kv : node) out[kv.first.Scalar()] = withoutMarks(kv.second);
+    return out;
+  }
+  return YAML::Node();
+}
+
+}  // namespace
+
 void applySetOverride(YAML::Node& root, const std::string& assignment) {
   const auto eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0)
@@ -30,6 +50,7 @@ void applySetOverride(YAML::Node& root, const std::string& assignment) {
     throw Error("--set " + assignment + ": value is not valid YAML: " + e.msg);
   }
   if (!value.IsDefined() || value.IsNull()) value = YAML::Node(text);
+  value = withoutMarks(value);
 
   // yaml-cpp nodes are handles: walk by reassigning a handle to each child map.
   YAML::Node node = root;

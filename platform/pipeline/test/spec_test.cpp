@@ -1,0 +1,154 @@
+// Pipeline files: every mistake a user can make is one error naming the file, the line and the key.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "beslam/common/error.hpp"
+#include "beslam/pipeline/spec.hpp"
+
+namespace fs = std::filesystem;
+using beslam::pipeline::loadPipeline;
+
+namespace {
+
+class PipelineSpecTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("beslam_spec_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+                                        "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string write(const std::string& text) {
+    const std::string path = (dir_ / "pipeline.yaml").string();
+    std::ofstream(path) << text;
+    return path;
+  }
+
+  // Expects loadPipeline to fail with a message containing every fragment.
+  void expectError(const std::string& text, const std::vector<std::string>& fragments,
+                   const std::vector<std::string>& overrides = {}) {
+    const std::string path = write(text);
+    try {
+      loadPipeline(path, overrides);
+      ADD_FAILURE() << "accepted:\n" << text;
+    } catch (const beslam::Error& e) {
+      for (const auto& f : fragments) EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << e.what();
+    }
+  }
+
+  fs::path dir_;
+};
+
+const char* kGood =
+    "name: test\n"
+    "dataset:\n"
+    "  type: kitti_odometry\n"
+    "  root: data/odometry\n"
+    "  sequence: \"06\"\n"
+    "backend:\n"
+    "  plugin: backend_pose_replay\n"
+    "  poses: poses.txt\n";
+
+}  // namespace
+
+TEST_F(PipelineSpecTest, LoadsAndFillsHostDefaults) {
+  const auto spec = loadPipeline(write(kGood));
+  EXPECT_EQ(spec.dataset.type, "kitti_odometry");
+  EXPECT_EQ(spec.dataset.root, (dir_ / "data/odometry").string());  // relative to the pipeline file
+  EXPECT_EQ(spec.dataset.sequence, "06");
+  EXPECT_EQ(spec.dataset.last, -1);
+  EXPECT_EQ(spec.evaluation.alignment, "sim3");
+  EXPECT_EQ(spec.slots.at("backend").plugin_id, "backend_pose_replay");
+  EXPECT_TRUE(spec.slots.at("detector").plugin_id.empty());
+  EXPECT_EQ(spec.document["dataset"]["step"].as<int>(), 1);  // defaults are written back
+}
+
+TEST_F(PipelineSpecTest, SetOverridesApply) {
+  const auto spec = loadPipeline(write(kGood), {"dataset.sequence=00", "dataset.last=99", "detector.plugin=x"});
+  EXPECT_EQ(spec.dataset.sequence, "00");
+  EXPECT_EQ(spec.dataset.last, 99);
+  EXPECT_EQ(spec.slots.at("detector").plugin_id, "x");
+}
+
+TEST_F(PipelineSpecTest, SyntaxErrorNamesFileAndLine) {
+  expectError("dataset:\n  type: kitti_odometry\n  root: [unclosed\nbackend: {plugin: a}\n",
+              {"pipeline.yaml:", "YAML syntax error"});
+}
+
+TEST_F(PipelineSpecTest, UnknownKeyNamesLineAndKnownKeys) {
+  expectError(std::string(kGood) + "datset: {}\n", {"pipeline.yaml:9: datset: unknown key", "known: name"});
+  expectError("dataset:\n  type: tum\n  root: x\n  frist: 3\nbackend: {plugin: a}\n",
+              {"pipeline.yaml:4: dataset.frist: unknown key (known: type, root, sequence"});
+}
+
+TEST_F(PipelineSpecTest, WrongTypesAndRanges) {
+  expectError("dataset:\n  type: tum\n  root: x\n  first: abc\nbackend: {plugin: a}\n",
+              {"pipeline.yaml:4: dataset.first: expected an integer, got 'abc'"});
+  expectError("dataset:\n  type: tum\n  root: x\n  step: 0\nbackend: {plugin: a}\n",
+              {"pipeline.yaml:4: dataset.step: value 0 is out of range [1, 1e+06]"});
+  expectError("dataset:\n  type: tum\n  root: x\n  lidar: maybe\nbackend: {plugin: a}\n",
+              {"pipeline.yaml:4: dataset.lidar: expected true or false, got 'maybe'"});
+  expectError("dataset:\n  type: kitti_something\n  root: x\nbackend: {plugin: a}\n",
+              {"pipeline.yaml:2: dataset.type: 'kitti_something' is not one of kitti_odometry|"});
+  expectError("dataset:\n  type: tum\n  root: x\n  first: 5\n  last: 2\nbackend: {plugin: a}\n",
+              {"pipeline.yaml:5: dataset.last: is before dataset.first"});
+}
+
+TEST_F(PipelineSpecTest, MissingSectionsAndSlots) {
+  expectError("backend: {plugin: a}\n", {"pipeline.yaml: dataset: required section is missing"});
+  expectError("dataset:\n  type: tum\nbackend: {plugin: a}\n", {"pipeline.yaml:2: dataset.root: required setting is missing"});
+  expectError("dataset: {type: tum, root: x}\n", {"a pipeline needs a backend"});
+  expectError("dataset: {type: tum, root: x}\nbackend: backend_orb\n",
+              {"pipeline.yaml:2: backend: expected a map with a 'plugin' key"});
+  expectError("", {"pipeline.yaml: the pipeline file is empty"});
+}
+
+TEST_F(PipelineSpecTest, BadOverridesNameTheOverride) {
+  expectError(kGood, {"--set novalue: expected key=value"}, {"novalue"});
+  expectError(kGood, {"pipeline.yaml (--set): dataset.first: expected an integer, got 'x'"}, {"dataset.first=x"});
+}
+
+TEST_F(PipelineSpecTest, MissingFile) {
+  try {
+    loadPipeline((dir_ / "nope.yaml").string());
+    FAIL();
+  } catch (const beslam::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("nope.yaml: no such pipeline file"), std::string::npos);
+  }
+}
+
+TEST_F(PipelineSpecTest, PluginSettingsValidatedAgainstSchema) {
+  using beslam::registry::ConfigField;
+  const std::vector<ConfigField> fields = {
+      {"features", BESLAM_CONFIG_INT, false, "2000", 100, 10000, "", "features"},
+      {"mode", BESLAM_CONFIG_STRING, false, "sync", 1, 0, "sync|threaded", "mode"},
+      {"weights", BESLAM_CONFIG_DOUBLE_LIST, false, "[1, 2]", 0, 10, "", "weights"},
+      {"model", BESLAM_CONFIG_PATH, true, "", 1, 0, "", "model"},
+  };
+  const std::string file = write("backend:\n  plugin: x\n  features: 50\n");
+  YAML::Node doc = YAML::LoadFile(file);
+  try {
+    beslam::pipeline::validateSettings(doc["backend"], fields, "backend", file, "/base", {"plugin"});
+    FAIL();
+  } catch (const beslam::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("pipeline.yaml:3: backend.features: value 50 is out of range [100, 10000]"),
+              std::string::npos)
+        << e.what();
+  }
+  doc = YAML::Load("plugin: x\nmodel: m.cfg\nweights: [3, 4.5]\n");
+  const auto config = beslam::pipeline::validateSettings(doc, fields, "backend", file, "/base", {"plugin"});
+  ASSERT_EQ(config.values().size(), 4u);
+  EXPECT_EQ(config.values()[0].number, 2000);
+  EXPECT_STREQ(config.values()[1].text, "sync");
+  EXPECT_EQ(config.values()[2].list_size, 2u);
+  EXPECT_EQ(config.values()[2].list[1], 4.5);
+  EXPECT_STREQ(config.values()[3].text, "/base/m.cfg");
+  EXPECT_EQ(doc["features"].as<int>(), 2000);  // default filled into the document
+  doc = YAML::Load("plugin: x\nmodel: m\nweights: [3, 40]\n");
+  EXPECT_THROW(beslam::pipeline::validateSettings(doc, fields, "backend", file, "/base", {"plugin"}), beslam::Error);
+  doc = YAML::Load("plugin: x\nmodel: m\nmode: fast\n");
+  EXPECT_THROW(beslam::pipeline::validateSettings(doc, fields, "backend", file, "/base", {"plugin"}), beslam::Error);
+}
