@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Installs the Debian bookworm packages BE-SLAM builds against. Idempotent: does nothing when all are
+# present (no apt-get update either), so repeated runs and CI re-runs cost a second.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config ccache
+  libeigen3-dev libopencv-dev libceres-dev libpcl-dev libyaml-cpp-dev
+  libboost-dev libboost-filesystem-dev liboctomap-dev nlohmann-json3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
