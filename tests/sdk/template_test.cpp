@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "beslam/common/error.hpp"
 #include "beslam/registry/instance.hpp"

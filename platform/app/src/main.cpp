@@ -16,7 +16,9 @@
 #include "beslam/pipeline/runner.hpp"
 #include "beslam/pipeline/spec.hpp"
 #include "beslam/registry/registry.hpp"
+#ifdef BESLAM_WITH_SIM
 #include "beslam/sim/synth.hpp"
+#endif
 
 namespace {
 
@@ -92,7 +94,10 @@ int runCommand(const std::vector<std::string>& args) {
   for (const auto& p : plugin_paths) registry.addSearchPath(p);
   for (const auto& p : spec.plugin_paths) registry.addSearchPath(p);
   registry.scan();
-  for (const auto& problem : registry.problems()) std::cerr << "beslam: warning: skipped " << problem << "\n";
+  // Refused libraries matter only if the pipeline names one of their plugins, and then the error
+  // says why they were refused; list them all with --verbose.
+  if (options.log_level <= BESLAM_LOG_INFO)
+    for (const auto& problem : registry.problems()) std::cerr << "beslam: skipped " << problem << "\n";
   beslam::pipeline::resolvePlugins(spec, registry);
   const beslam::pipeline::RunSummary s = beslam::pipeline::run(spec, registry, options);
 
@@ -107,6 +112,7 @@ int runCommand(const std::vector<std::string>& args) {
   if (s.has_ape)
     std::cout << "APE translation RMSE " << s.ape_trans_rmse << " m (" << spec.evaluation.alignment
               << ", scale " << s.ape_alignment_scale << "), RPE translation RMSE " << s.rpe_trans_rmse << " m\n";
+  if (!s.evaluation_error.empty()) std::cout << "no APE: " << s.evaluation_error << "\n";
   std::cout << "output: " << s.output_dir << "\n";
   return 0;
 }
@@ -183,7 +189,9 @@ int main(int argc, char** argv) {
     if (command == "run") return runCommand(args);
     if (command == "plugins") return pluginsCommand(args);
     if (command == "eval") return beslam::eval::runEvalCommand(args, std::cout, std::cerr);
+#ifdef BESLAM_WITH_SIM
     if (command == "synth") return beslam::sim::runSynthCommand(args, std::cout, std::cerr);
+#endif
     if (command == "--version" || command == "version") {
       std::cout << "beslam " BESLAM_VERSION " (plugin ABI " << BESLAM_ABI_VERSION_MAJOR << "."
                 << BESLAM_ABI_VERSION_MINOR << ")\n";

@@ -61,7 +61,7 @@ void projectBox(const beslam_box3d& box, const beslam_camera& camera, double bbo
 }  // namespace
 
 std::string formatObjectRow(int64_t frame_index, const beslam_box3d& box, const beslam_camera& camera) {
-  double bbox[4];
+  double bbox[4] = {-1, -1, -1, -1};
   if (box.flags & BESLAM_BOX_HAS_BBOX2D)
     std::copy(box.bbox2d, box.bbox2d + 4, bbox);
   else

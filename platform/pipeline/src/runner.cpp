@@ -329,16 +329,23 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
     if (const auto gt = dataset->groundTruth()) {
       trajectory::Trajectory est;
       for (const auto& p : final_poses) est.push_back(p.timestamp, p.T_world_cam);
-      eval::Options eopt;
-      eopt.alignment = eval::alignmentFromName(spec.evaluation.alignment);
-      eopt.max_time_diff = 1e-3;
-      eopt.rpe_delta = static_cast<int>(spec.evaluation.rpe_delta);
-      const eval::Result result = eval::evaluateAssociated(*gt, est, eopt);
-      summary.has_ape = true;
-      summary.ape_trans_rmse = result.ape.trans.rmse;
-      summary.rpe_trans_rmse = result.rpe.trans.rmse;
-      summary.ape_alignment_scale = result.alignment.scale;
-      json["evaluation"] = nlohmann::json::parse(eval::toJson(result));
+      eval::EvalOptions eopt;
+      eopt.format = "tum";
+      eopt.alignment = eval::parseAlignmentType(spec.evaluation.alignment);
+      eopt.delta = static_cast<std::size_t>(spec.evaluation.rpe_delta);
+      try {
+        const eval::PairedTrajectories paired = eval::associateByTime(*gt, est, 1e-3);
+        const eval::EvalResult result = eval::evaluatePaired(paired.ref, paired.est, eopt);
+        summary.has_ape = true;
+        summary.ape_trans_rmse = result.ape.trans.rmse;
+        summary.rpe_trans_rmse = result.rpe.trans.rmse;
+        summary.ape_alignment_scale = result.alignment.scale;
+        json["evaluation"] = nlohmann::json::parse(eval::toJson(result));
+      } catch (const Error& e) {
+        // A degenerate or too short trajectory cannot be aligned: the run is still good, say why.
+        summary.evaluation_error = e.what();
+        json["evaluation"] = {{"error", e.what()}};
+      }
     }
   }
   writeFileAtomic((fs::path(out_dir) / "summary.json").string(), json.dump(2) + "\n");

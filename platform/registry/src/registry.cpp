@@ -304,6 +304,8 @@ const Plugin& Registry::find(const std::string& id, int32_t kind) const {
   const auto paths = searchPaths();
   for (size_t i = 0; i < paths.size(); ++i) message += (i ? ":" : "") + paths[i];
   message += ")";
+  // A library refused for this reason may have been the one meant: say why each was refused.
+  for (const std::string& problem : impl_->problems) message += "; refused " + problem;
   throw Error(message);
 }
 

@@ -6,11 +6,9 @@
 // frame is declared a keyframe so a reconstructor downstream gets work.
 #include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <map>
-#include <sstream>
 
 #include "beslam/sdk/sdk.hpp"
+#include "beslam/trajectory/trajectory.hpp"
 
 namespace {
 
@@ -25,72 +23,19 @@ const beslam_config_field kFields[] = {
 };
 
 struct PoseFile {
-  bool timestamped = false;
-  std::vector<double> stamps;
-  std::vector<Eigen::Isometry3d, Eigen::aligned_allocator<Eigen::Isometry3d>> poses;
+  bool timestamped = false;  // TUM: match by time; KITTI: row = frame index
+  beslam::trajectory::Trajectory poses;
 };
 
 PoseFile readPoses(const std::string& path, const std::string& format) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open pose file");
   PoseFile file;
-  std::string line;
-  int line_no = 0;
-  int columns = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream ss(line);
-    std::vector<double> v;
-    std::string token;
-    while (ss >> token) {
-      try {
-        size_t used = 0;
-        v.push_back(std::stod(token, &used));
-        if (used != token.size()) throw std::invalid_argument(token);
-      } catch (const std::exception&) {
-        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": '" + token + "' is not a number");
-      }
-      if (!std::isfinite(v.back()))
-        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": non-finite value '" + token + "'");
-    }
-    if (columns == 0) {
-      columns = static_cast<int>(v.size());
-      if (format == "kitti" && columns != 12)
-        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": KITTI rows have 12 numbers, this has " +
-                                 std::to_string(columns));
-      if (format == "tum" && columns != 8)
-        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": TUM rows have 8 numbers, this has " +
-                                 std::to_string(columns));
-      if (columns != 12 && columns != 8)
-        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": expected 12 (KITTI) or 8 (TUM) numbers, got " +
-                                 std::to_string(columns));
-      file.timestamped = columns == 8;
-    } else if (static_cast<int>(v.size()) != columns) {
-      throw std::runtime_error(path + ":" + std::to_string(line_no) + ": expected " + std::to_string(columns) +
-                               " numbers, got " + std::to_string(v.size()));
-    }
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    if (columns == 12) {
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 4; ++c) T.matrix()(r, c) = v[r * 4 + c];
-      const Eigen::Matrix3d R = T.linear();
-      if ((R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-3)
-        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": rotation is not orthonormal");
-      file.stamps.push_back(static_cast<double>(file.poses.size()));
-    } else {
-      Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
-      if (q.norm() < 1e-9) throw std::runtime_error(path + ":" + std::to_string(line_no) + ": zero quaternion");
-      T.linear() = q.normalized().toRotationMatrix();
-      T.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
-      if (!file.stamps.empty() && v[0] <= file.stamps.back())
-        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": timestamps must increase");
-      file.stamps.push_back(v[0]);
-    }
-    file.poses.push_back(T);
-  }
-  if (file.poses.empty()) throw std::runtime_error(path + ": pose file has no poses");
+  const std::string used = format == "auto" ? beslam::trajectory::detectFormat(path) : format;
+  file.poses = beslam::trajectory::read(path, used);
+  file.timestamped = used == "tum";
+  if (file.timestamped)
+    for (size_t i = 1; i < file.poses.size(); ++i)
+      if (!(file.poses.stamps[i] > file.poses.stamps[i - 1]))
+        throw std::runtime_error(path + ": timestamps must increase (pose " + std::to_string(i + 1) + ")");
   return file;
 }
 
@@ -106,7 +51,7 @@ class PoseReplay : public beslam::sdk::Backend {
   std::optional<Eigen::Isometry3d> predictPose(const beslam::sdk::Frame& frame) override {
     const long i = lookup(frame);
     if (i < 0) return std::nullopt;
-    return file_.poses[i];
+    return file_.poses.poses[i];
   }
 
   beslam::sdk::TrackResult track(const beslam::sdk::Frame& frame, const cv::Mat&,
@@ -118,8 +63,8 @@ class PoseReplay : public beslam::sdk::Backend {
       return result;
     }
     result.state = BESLAM_TRACKING_OK;
-    result.T_world_cam = file_.poses[i];
-    const TrajectoryEntry entry{frame.index, frame.timestamp, file_.poses[i]};
+    result.T_world_cam = file_.poses.poses[i];
+    const TrajectoryEntry entry{frame.index, frame.timestamp, file_.poses.poses[i]};
     if (static_cast<int64_t>(tracked_.size()) % keyframe_interval_ == 0) {
       result.is_keyframe = true;
       result.keyframe_id = static_cast<int64_t>(keyframes_.size());
@@ -137,13 +82,14 @@ class PoseReplay : public beslam::sdk::Backend {
   long lookup(const beslam::sdk::Frame& frame) const {
     if (!file_.timestamped)
       return frame.index >= 0 && frame.index < static_cast<int64_t>(file_.poses.size()) ? static_cast<long>(frame.index) : -1;
-    const auto it = std::lower_bound(file_.stamps.begin(), file_.stamps.end(), frame.timestamp);
+    const std::vector<double>& stamps = file_.poses.stamps;
+    const auto it = std::lower_bound(stamps.begin(), stamps.end(), frame.timestamp);
     long best = -1;
     double best_diff = max_time_diff_;
-    for (auto c : {it, it == file_.stamps.begin() ? it : it - 1}) {
-      if (c == file_.stamps.end()) continue;
+    for (auto c : {it, it == stamps.begin() ? it : it - 1}) {
+      if (c == stamps.end()) continue;
       const double diff = std::abs(*c - frame.timestamp);
-      if (diff <= best_diff) best_diff = diff, best = static_cast<long>(c - file_.stamps.begin());
+      if (diff <= best_diff) best_diff = diff, best = static_cast<long>(c - stamps.begin());
     }
     return best;
   }

@@ -35,6 +35,7 @@ struct RunSummary {
   double ape_trans_rmse = 0;          // metres, with spec.evaluation.alignment
   double rpe_trans_rmse = 0;
   double ape_alignment_scale = 1;
+  std::string evaluation_error;       // why APE could not be computed, when it could not
   double median_frame_ms = 0;
 };
 

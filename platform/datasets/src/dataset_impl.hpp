@@ -1,0 +1,90 @@
+// Internal: the one concrete Dataset the layout readers fill in, and helpers they share (not installed).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "beslam/datasets/dataset.hpp"
+
+namespace beslam::datasets::detail {
+
+struct FrameEntry {
+  std::int64_t index = 0;
+  double timestamp = 0;
+  std::string image_path, lidar_path, label_path;
+};
+
+// Everything a layout reader determines at open time; load() only reads files.
+struct DatasetContents {
+  std::string description;
+  Camera camera;
+  std::optional<Eigen::Isometry3d> T_cam_lidar;
+  std::optional<trajectory::Trajectory> ground_truth;
+  std::string label_path;
+  std::vector<FrameEntry> frames;
+  bool load_color = false, load_lidar = false;
+  cv::Mat undistort_map1, undistort_map2;  // applied to gray and color when not empty (TUM fr1/fr2)
+};
+
+class LoadedDataset final : public Dataset {
+ public:
+  explicit LoadedDataset(DatasetContents contents) : c_(std::move(contents)) {}
+  std::string describe() const override { return c_.description; }
+  std::size_t size() const override { return c_.frames.size(); }
+  Frame load(std::size_t i) const override;
+  const Camera& camera() const override { return c_.camera; }
+  std::optional<Eigen::Isometry3d> T_cam_lidar() const override { return c_.T_cam_lidar; }
+  std::optional<trajectory::Trajectory> groundTruth() const override { return c_.ground_truth; }
+  std::string labelPath() const override { return c_.label_path; }
+
+ private:
+  DatasetContents c_;
+};
+
+std::string joinPath(const std::string& a, const std::string& b);
+bool isDirectory(const std::string& path);
+bool isFile(const std::string& path);
+void requireDirectory(const std::string& path, const std::string& what);
+void requireFile(const std::string& path, const std::string& what);
+
+// Files "<digits><ext>" in dir, sorted by number (other names ignored). With contiguous, the numbers must be
+// 0, 1, 2, ... (error naming the first missing file); an empty listing is an error either way.
+std::vector<std::pair<std::int64_t, std::string>> listNumberedFiles(const std::string& dir, const std::string& ext,
+                                                                    bool contiguous);
+
+// Positions (into `indices`, sorted ascending) of the frames options.first/last/step select; throws
+// beslam::Error on a bad range or one that selects nothing from `where`.
+std::vector<std::size_t> selectFrames(const std::vector<std::int64_t>& indices, const DatasetOptions& options,
+                                      const std::string& where);
+
+// "image_0" / "image_00" / "auto" -> camera number 0..3; `present(i)` says whether camera i's folder exists.
+// Throws beslam::Error naming `where` when the camera is unknown or absent.
+int chooseCamera(const std::string& name, const std::function<bool(int)>& present,
+                 const std::function<std::string(int)>& folder_of, const std::string& where);
+
+// Reads a KITTI pose file with one row per sequence frame and keeps the selected ones, stamped with their
+// frame timestamps and pre/post-multiplied: T_world_cam = T_left * T_file * T_right.
+trajectory::Trajectory selectPoses(const std::string& path, std::size_t sequence_frames,
+                                   const std::vector<FrameEntry>& frames,
+                                   const Eigen::Isometry3d& T_left = Eigen::Isometry3d::Identity(),
+                                   const Eigen::Isometry3d& T_right = Eigen::Isometry3d::Identity());
+
+// ", frames 10-20 step 2" when the selection is not the whole sequence; "" otherwise.
+std::string rangeText(const DatasetOptions& options, const std::vector<FrameEntry>& frames, std::size_t total);
+
+// Width/height of the first frame's image into camera (kept if camera_override gave non-zero sizes).
+void fillImageSize(Camera& camera, const std::string& first_image);
+
+// Each layout reader (one file each).
+std::unique_ptr<Dataset> openKittiOdometry(const DatasetOptions& options);
+std::unique_ptr<Dataset> openKittiTracking(const DatasetOptions& options);
+std::unique_ptr<Dataset> openKittiRaw(const DatasetOptions& options);
+std::unique_ptr<Dataset> openKittiObject(const DatasetOptions& options);
+std::unique_ptr<Dataset> openTum(const DatasetOptions& options);
+
+}  // namespace beslam::datasets::detail

@@ -1,0 +1,98 @@
+// KITTI odometry: <root>/sequences/NN/{image_0..image_3, velodyne}/NNNNNN.{png,bin}, calib.txt, times.txt;
+// <root>/poses/NN.txt (optional ground truth: T_world_cam0, world = camera 0 at frame 0).
+#include <filesystem>
+
+#include "beslam/common/error.hpp"
+#include "beslam/common/file_io.hpp"
+#include "beslam/datasets/kitti_calib.hpp"
+#include "dataset_impl.hpp"
+#include "parse_util.hpp"
+
+namespace beslam::datasets::detail {
+namespace {
+
+std::vector<double> readTimes(const std::string& path) {
+  const std::string text = readFile(path);
+  std::vector<double> times;
+  const auto lines = splitLines(text);
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    if (isBlank(lines[i])) continue;
+    const auto tokens = splitWhitespace(lines[i]);
+    double t = 0;
+    if (tokens.size() != 1 || !parseDouble(tokens[0], t))
+      throwAt(path, "expected one timestamp in seconds, got '" + std::string(lines[i]) + "'", static_cast<int>(i + 1));
+    times.push_back(t);
+  }
+  return times;
+}
+
+}  // namespace
+
+std::unique_ptr<Dataset> openKittiOdometry(const DatasetOptions& options) {
+  requireDirectory(options.root, "KITTI odometry root");
+  if (options.sequence.empty()) throw Error("dataset options: kitti_odometry needs a sequence (e.g. \"06\")");
+  const std::string sequence_dir = joinPath(joinPath(options.root, "sequences"), options.sequence);
+  requireDirectory(sequence_dir, "KITTI odometry sequence");
+  const std::string calib_path = joinPath(sequence_dir, "calib.txt");
+  requireFile(calib_path, "calibration file");
+  const KittiCalib calib = readOdometryCalib(calib_path);
+
+  auto folder_of = [](int i) { return "image_" + std::to_string(i); };
+  const int cam = chooseCamera(
+      options.camera, [&](int i) { return isDirectory(joinPath(sequence_dir, folder_of(i))); }, folder_of,
+      sequence_dir);
+  const auto& P = calib.P[static_cast<std::size_t>(cam)];
+  if (!P) throwAt(calib_path, "no P" + std::to_string(cam) + " for " + folder_of(cam));
+
+  const std::string image_dir = joinPath(sequence_dir, folder_of(cam));
+  const auto images = listNumberedFiles(image_dir, ".png", true);
+  const std::string times_path = joinPath(sequence_dir, "times.txt");
+  requireFile(times_path, "timestamps file");
+  const std::vector<double> times = readTimes(times_path);
+  if (times.size() != images.size())
+    throwAt(times_path, "has " + std::to_string(times.size()) + " timestamps but " + image_dir + " has " +
+                            std::to_string(images.size()) + " images");
+
+  std::vector<std::int64_t> indices;
+  for (const auto& [index, path] : images) indices.push_back(index);
+  const std::string velodyne_dir = joinPath(sequence_dir, "velodyne");
+  const bool has_lidar = isDirectory(velodyne_dir);
+
+  DatasetContents c;
+  for (std::size_t p : selectFrames(indices, options, image_dir)) {
+    FrameEntry f;
+    f.index = images[p].first;
+    f.timestamp = times[p];
+    f.image_path = images[p].second;
+    if (has_lidar)
+      f.lidar_path = joinPath(velodyne_dir, std::filesystem::path(images[p].second).stem().string() + ".bin");
+    c.frames.push_back(std::move(f));
+  }
+  c.camera = options.camera_override ? *options.camera_override
+                                     : cameraFromProjection(*P, 0, 0, calib_path + ": P" + std::to_string(cam));
+  fillImageSize(c.camera, c.frames.front().image_path);
+  if (has_lidar) c.T_cam_lidar = T_cami_velo(calib, cam);
+  c.load_color = options.load_color;
+  c.load_lidar = options.load_lidar;
+
+  // Ground truth: poses/NN.txt are T_world_cam0 (rectified camera 0); for camera i,
+  // T_world'_cami = T_cami_cam0 * T_world_cam0 * T_cam0_cami with world' = camera i at frame 0.
+  std::string gt_text;
+  if (!options.ego_poses.empty()) {
+    c.ground_truth = selectPoses(options.ego_poses, images.size(), c.frames);
+    gt_text = ", poses " + options.ego_poses;
+  } else {
+    const std::string poses_path = joinPath(joinPath(options.root, "poses"), options.sequence + ".txt");
+    if (isFile(poses_path)) {
+      const Eigen::Isometry3d T_cami_cam0 = T_cami_rect0(*P);
+      c.ground_truth = selectPoses(poses_path, images.size(), c.frames, T_cami_cam0, T_cami_cam0.inverse());
+      gt_text = ", ground truth";
+    }
+  }
+  c.description = "KITTI odometry " + options.sequence + " (" + std::to_string(c.frames.size()) + " frames, " +
+                  folder_of(cam) + rangeText(options, c.frames, images.size()) + (has_lidar ? ", velodyne" : "") +
+                  gt_text + ")";
+  return std::make_unique<LoadedDataset>(std::move(c));
+}
+
+}  // namespace beslam::datasets::detail

@@ -1,0 +1,92 @@
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "beslam/datasets/image_io.hpp"
+#include "beslam/datasets/velodyne.hpp"
+#include "test_util.hpp"
+
+namespace beslam::datasets {
+namespace {
+
+using test::TempDir;
+
+TEST(Velodyne, RoundTripAndErrors) {
+  TempDir dir;
+  const std::string path = dir / "000000.bin";
+  const std::vector<float> xyzr = {1.5f, -2.f, 0.25f, 0.9f, 10.f, 0.f, -1.7f, 0.f};
+  writeVelodyneBin(path, xyzr);
+  EXPECT_EQ(readVelodyneBin(path), xyzr);
+  EXPECT_EQ(std::filesystem::file_size(path), 32u);
+
+  test::truncateFile(path, 20);
+  EXPECT_BESLAM_ERROR(readVelodyneBin(path), path, "truncated", "20 bytes");
+  EXPECT_BESLAM_ERROR(readVelodyneBin(dir / "missing.bin"), dir / "missing.bin", "missing");
+  EXPECT_BESLAM_ERROR(writeVelodyneBin(path, {1.f, 2.f, 3.f}), path, "multiple of 4");
+  test::truncateFile(path, 0);
+  EXPECT_TRUE(readVelodyneBin(path).empty());  // an empty scan is valid
+}
+
+TEST(ImageIo, GrayAndColour) {
+  TempDir dir;
+  test::writePng(dir / "gray.png", 37, 21, 1, 3);
+  test::writePng(dir / "color.png", 37, 21, 3, 5);
+  const LoadedImage gray = loadImage(dir / "gray.png", true);
+  EXPECT_EQ(gray.gray.type(), CV_8UC1);
+  EXPECT_TRUE(gray.color.empty());  // no colour in the file
+  EXPECT_EQ(cv::norm(gray.gray, test::pattern(37, 21, 1, 3), cv::NORM_INF), 0);
+
+  const LoadedImage color = loadImage(dir / "color.png", true);
+  ASSERT_EQ(color.color.type(), CV_8UC3);
+  EXPECT_EQ(cv::norm(color.color, test::pattern(37, 21, 3, 5), cv::NORM_INF), 0);
+  cv::Mat expected_gray;
+  cv::cvtColor(test::pattern(37, 21, 3, 5), expected_gray, cv::COLOR_BGR2GRAY);
+  EXPECT_EQ(cv::norm(color.gray, expected_gray, cv::NORM_INF), 0);
+  EXPECT_TRUE(loadImage(dir / "color.png", false).color.empty());
+  EXPECT_EQ(readImageSize(dir / "color.png"), cv::Size(37, 21));
+}
+
+TEST(ImageIo, SixteenBitAndJpeg) {
+  TempDir dir;
+  cv::Mat deep(10, 12, CV_16UC1, cv::Scalar(256 * 200 + 17));
+  ASSERT_TRUE(cv::imwrite(dir / "deep.png", deep));
+  const LoadedImage image = loadImage(dir / "deep.png", false);
+  EXPECT_EQ(image.gray.type(), CV_8UC1);
+  EXPECT_EQ(image.gray.at<unsigned char>(3, 4), 200);
+
+  ASSERT_TRUE(cv::imwrite(dir / "a.jpg", test::pattern(64, 48, 3)));
+  EXPECT_EQ(loadImage(dir / "a.jpg", true).color.size(), cv::Size(64, 48));
+  EXPECT_EQ(readImageSize(dir / "a.jpg"), cv::Size(64, 48));
+  test::truncateFile(dir / "a.jpg", std::filesystem::file_size(dir / "a.jpg") / 2);
+  EXPECT_BESLAM_ERROR(loadImage(dir / "a.jpg", false), dir / "a.jpg", "truncated JPEG");
+}
+
+TEST(ImageIo, MissingUnreadableAndTruncated) {
+  TempDir dir;
+  EXPECT_BESLAM_ERROR(loadImage(dir / "none.png", false), dir / "none.png", "missing image");
+  EXPECT_BESLAM_ERROR(readImageSize(dir / "none.png"), dir / "none.png", "missing image");
+  test::writeText(dir / "text.png", "this is not an image");
+  EXPECT_BESLAM_ERROR(loadImage(dir / "text.png", false), dir / "text.png", "cannot decode");
+  test::writeText(dir / "empty.png", "");
+  EXPECT_BESLAM_ERROR(loadImage(dir / "empty.png", false), dir / "empty.png", "empty");
+
+  // Cut at many points: every prefix is reported as truncated (never a silently partial image).
+  test::writePng(dir / "full.png", 200, 120, 1);
+  const std::string bytes = test::readBytes(dir / "full.png");
+  for (std::size_t keep :
+       {std::size_t(8), std::size_t(30), bytes.size() / 3, bytes.size() / 2, bytes.size() - 13, bytes.size() - 1}) {
+    const std::string path = dir / ("cut" + std::to_string(keep) + ".png");
+    test::writeText(path, bytes.substr(0, keep));
+    EXPECT_BESLAM_ERROR(loadImage(path, false), path, "truncated PNG");
+  }
+  // A flipped byte inside the image data is caught by the chunk CRC.
+  std::string corrupt = bytes;
+  corrupt[bytes.size() / 2] = static_cast<char>(corrupt[bytes.size() / 2] ^ 0x5A);
+  test::writeText(dir / "corrupt.png", corrupt);
+  EXPECT_BESLAM_ERROR(loadImage(dir / "corrupt.png", false), dir / "corrupt.png", "CRC mismatch");
+  EXPECT_BESLAM_ERROR(checkPng("x.png", "GIF89a"), "x.png", "not a PNG");
+}
+
+}  // namespace
+}  // namespace beslam::datasets
