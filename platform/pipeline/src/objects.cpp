@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include <Eigen/Geometry>
+
+#include "beslam/datasets/labels.hpp"
 
 namespace beslam::pipeline {
 
@@ -61,20 +62,25 @@ void projectBox(const beslam_box3d& box, const beslam_camera& camera, double bbo
 }  // namespace
 
 std::string formatObjectRow(int64_t frame_index, const beslam_box3d& box, const beslam_camera& camera) {
+  datasets::TrackingLabel label;
+  label.frame = frame_index;
+  label.track_id = box.track_id;
+  datasets::ObjectLabel& o = label.object;
+  o.type = typeName(box.class_id);
+  o.truncated = box.truncation;
+  o.occluded = box.occlusion;
   double bbox[4] = {-1, -1, -1, -1};
   if (box.flags & BESLAM_BOX_HAS_BBOX2D)
     std::copy(box.bbox2d, box.bbox2d + 4, bbox);
   else
     projectBox(box, camera, bbox);
-  const double x = box.center_cam[0], y_bottom = box.center_cam[1] + box.size[2] / 2, z = box.center_cam[2];
-  const double alpha = wrapAngle(box.yaw - std::atan2(x, z));
-  char row[512];
-  std::snprintf(row, sizeof(row),
-                "%lld %d %s %.2f %d %.6f %.2f %.2f %.2f %.2f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %s",
-                static_cast<long long>(frame_index), box.track_id, typeName(box.class_id), box.truncation,
-                box.occlusion, alpha, bbox[0], bbox[1], bbox[2], bbox[3], box.size[2], box.size[1], box.size[0], x,
-                y_bottom, z, box.yaw, static_cast<double>(box.score), stateName(box.motion_state));
-  return row;
+  o.x1 = bbox[0], o.y1 = bbox[1], o.x2 = bbox[2], o.y2 = bbox[3];
+  o.l = box.size[0], o.w = box.size[1], o.h = box.size[2];
+  o.p_cam_bottom = Eigen::Vector3d(box.center_cam[0], box.center_cam[1] + box.size[2] / 2, box.center_cam[2]);
+  o.ry = box.yaw;
+  o.alpha = wrapAngle(box.yaw - std::atan2(o.p_cam_bottom.x(), o.p_cam_bottom.z()));
+  o.score = box.score;
+  return datasets::formatTrackingRow(label) + " " + stateName(box.motion_state);
 }
 
 }  // namespace beslam::pipeline
