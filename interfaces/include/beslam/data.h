@@ -116,7 +116,7 @@ typedef struct beslam_frame {
   uint32_t reserved;
   int64_t index;                 /* position in the sequence, 0-based */
   double timestamp;              /* seconds */
-  beslam_image_view gray;        /* always present (GRAY8) */
+  beslam_image_view gray;        /* GRAY8; data NULL only for an image-less dataset (detections + poses) */
   beslam_image_view color;       /* BGR8, data NULL when the dataset has none */
   beslam_point_cloud_view lidar; /* data NULL when no scan */
   const char* image_path;        /* where the image came from (for messages); may be NULL */

@@ -25,6 +25,10 @@ Frame LoadedDataset::load(std::size_t i) const {
   frame.image_path = entry.image_path;
   frame.lidar_path = entry.lidar_path;
   frame.label_path = entry.label_path;
+  if (entry.image_path.empty()) {  // an image-less sequence (tracking data with detections and poses only)
+    if (c_.load_lidar && !entry.lidar_path.empty()) frame.lidar_xyzi = readVelodyneBin(entry.lidar_path);
+    return frame;
+  }
   LoadedImage image = loadImage(entry.image_path, c_.load_color);
   if (image.gray.cols != c_.camera.width || image.gray.rows != c_.camera.height)
     throwAt(entry.image_path, "image is " + std::to_string(image.gray.cols) + "x" + std::to_string(image.gray.rows) +

@@ -171,6 +171,21 @@ TEST(SharedData, KittiTrackingLabelsAndCalib) {
   o.root = training;
   o.sequence = "0000";
   EXPECT_BESLAM_ERROR(openDataset(o), "image_02/0000", "missing image folder");
+
+  // With ego poses it opens image-less: one frame a pose row, camera 2 from the calibration, no image.
+  o.ego_poses = training + "/ego_poses_orbslam3/0000.txt";
+  if (!test::sharedData("kitti/tracking/training/ego_poses_orbslam3/0000.txt").empty()) {
+    const auto ds = openDataset(o);
+    EXPECT_EQ(ds->size(), trajectory::readKitti(o.ego_poses).size());
+    EXPECT_NE(ds->describe().find("no images"), std::string::npos) << ds->describe();
+    EXPECT_EQ(ds->camera().width, 1242);
+    EXPECT_NEAR(ds->camera().fx, 721.5377, 1e-3);
+    const Frame f = ds->load(5);
+    EXPECT_TRUE(f.gray.empty());
+    EXPECT_EQ(f.index, 5);
+    EXPECT_DOUBLE_EQ(f.timestamp, 0.5);
+    ASSERT_TRUE(ds->groundTruth().has_value());
+  }
 }
 
 }  // namespace

@@ -217,7 +217,7 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
     cv::Mat mask;
     if (masker) {
       t0 = Clock::now();
-      mask = cv::Mat::zeros(frame.gray.rows, frame.gray.cols, CV_16UC1);
+      mask = cv::Mat::zeros(camera.height, camera.width, CV_16UC1);
       beslam_mask_buffer buffer{reinterpret_cast<uint16_t*>(mask.data), mask.cols, mask.rows,
                                 static_cast<int32_t>(mask.step[0]), 0};
       masker->generate(cf, boxes, buffer);
@@ -250,7 +250,7 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
     if (spec.output.masks) {
       const std::string path = (fs::path(out_dir) / "masks" / (std::to_string(1000000 + frame.index).substr(1) + ".png")).string();
       std::vector<uchar> png;
-      if (!cv::imencode(".png", mask.empty() ? cv::Mat::zeros(frame.gray.size(), CV_16UC1) : mask, png))
+      if (!cv::imencode(".png", mask.empty() ? cv::Mat::zeros(camera.height, camera.width, CV_16UC1) : mask, png))
         throwAt(path, "cannot encode mask");
       writeFileAtomic(path, std::string(png.begin(), png.end()));
     }

@@ -136,6 +136,46 @@ const beslam_config_value& value(const PluginConfig& c, const std::string& key) 
   throw std::logic_error("no value " + key);
 }
 
+// Replaces ${dataset.KEY} in every scalar of node with the dataset's own (pre-resolution) value, so
+// plugin settings follow --set dataset.root / dataset.sequence. An unknown placeholder is an error.
+void substitutePlaceholders(YAML::Node node, const YAML::Node& dataset, const std::string& file,
+                            const std::string& where) {
+  if (node.IsMap()) {
+    for (auto kv : node) {
+      const std::string key = kv.first.as<std::string>();
+      if (where == "dataset" && (key == "root" || key == "sequence")) continue;
+      substitutePlaceholders(kv.second, dataset, file, where.empty() ? key : where + "." + key);
+    }
+    return;
+  }
+  if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) substitutePlaceholders(node[i], dataset, file, where);
+    return;
+  }
+  if (!node.IsScalar()) return;
+  std::string text = node.Scalar();
+  if (text.find("${") == std::string::npos) return;
+  std::string out;
+  std::size_t pos = 0;
+  while (true) {
+    const std::size_t open = text.find("${", pos);
+    if (open == std::string::npos) break;
+    const std::size_t close = text.find('}', open);
+    if (close == std::string::npos) fail(file, node, where, "unterminated placeholder in '" + text + "'");
+    const std::string name = text.substr(open + 2, close - open - 2);
+    const std::string prefix = "dataset.";
+    const bool in_dataset = name.rfind(prefix, 0) == 0 && dataset.IsMap();
+    const YAML::Node value = in_dataset ? dataset[name.substr(prefix.size())] : YAML::Node();
+    if (!value.IsDefined() || !value.IsScalar())
+      fail(file, node, where, "unknown placeholder ${" + name + "} (known: ${dataset.root}, ${dataset.sequence}, "
+                              "any other scalar of dataset)");
+    out += text.substr(pos, open - pos) + value.Scalar();
+    pos = close + 1;
+  }
+  out += text.substr(pos);
+  node = out;
+}
+
 }  // namespace
 
 PluginConfig validateSettings(const YAML::Node& map_in, const std::vector<ConfigField>& fields,
@@ -229,6 +269,8 @@ PipelineSpec loadPipeline(const std::string& path, const std::vector<std::string
       throwAt(path, e.what());
     }
   }
+
+  substitutePlaceholders(doc, doc["dataset"], path, "");
 
   static const std::vector<std::string> top = {"name",    "description", "dataset",    "plugin_paths",
                                                "output",  "evaluation",  "detector",   "motion_checker",

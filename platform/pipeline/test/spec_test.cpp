@@ -152,3 +152,14 @@ TEST_F(PipelineSpecTest, PluginSettingsValidatedAgainstSchema) {
   doc = YAML::Load("plugin: x\nmodel: m\nmode: fast\n");
   EXPECT_THROW(beslam::pipeline::validateSettings(doc, fields, "backend", file, "/base", {"plugin"}), beslam::Error);
 }
+
+TEST_F(PipelineSpecTest, DatasetPlaceholdersFollowOverrides) {
+  const std::string text = std::string(kGood) + "detector: {plugin: d, path: \"${dataset.root}/det/${dataset.sequence}.txt\"}\n";
+  const auto spec = loadPipeline(write(text), {"dataset.sequence=0007", "dataset.root=/data/tracking"});
+  EXPECT_EQ(spec.slots.at("detector").settings["path"].as<std::string>(), "/data/tracking/det/0007.txt");
+  EXPECT_EQ(spec.dataset.root, "/data/tracking");
+  expectError(std::string(kGood) + "detector: {plugin: d, path: \"${dataset.nope}\"}\n",
+              {"pipeline.yaml:9: detector.path: unknown placeholder ${dataset.nope}"});
+  expectError(std::string(kGood) + "detector: {plugin: d, path: \"${dataset.root\"}\n",
+              {"detector.path: unterminated placeholder"});
+}

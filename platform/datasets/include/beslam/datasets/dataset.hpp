@@ -30,7 +30,7 @@ struct Frame {
   std::int64_t index = 0;  // frame number in the sequence (file number), not the position in the range
   double timestamp = 0;    // seconds
   std::string image_path;
-  cv::Mat gray;                   // CV_8UC1, always present
+  cv::Mat gray;                   // CV_8UC1; empty only for an image-less sequence (kitti_tracking, see there)
   cv::Mat color;                  // CV_8UC3 BGR, empty unless options.load_color and the images are colour
   std::vector<float> lidar_xyzi;  // x y z intensity in the LiDAR frame; empty unless load_lidar and available
   std::string lidar_path;         // set whenever the dataset has a scan for this frame (even if not loaded)

@@ -8,7 +8,9 @@
 // loadPipeline() applies --set overrides, then validates everything the host knows at load time:
 // unknown keys, wrong types, out-of-range values and unknown choices are beslam::Error messages naming
 // the file, the line and the key ("kitti.yaml:7: dataset.frist: unknown key (known: ...)"). Plugin
-// settings are validated against each plugin's own schema by resolvePlugins(), once the registry is
+// settings are validated against each plugin's own schema by resolvePlugins(). Any value may name
+// the dataset's own settings as ${dataset.root}, ${dataset.sequence}, ... (after --set, before paths
+// resolve), so one pipeline serves every sequence. Plugin, once the registry is
 // loaded; relative paths resolve against the pipeline file's folder. The resolved YAML (every default
 // filled in) is what a run writes as pipeline.resolved.yaml.
 #pragma once

@@ -1,0 +1,412 @@
+#include "beslam/motion/bev_tracker.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "beslam/motion/hungarian.hpp"
+
+namespace beslam::motion {
+
+namespace {
+
+constexpr double kNoMatch = 1e6;  // cost of a gated-out pair
+
+bool carLike(int32_t c) { return c == BESLAM_CLASS_CAR || c == BESLAM_CLASS_VAN || c == BESLAM_CLASS_TRUCK; }
+
+bool compatible(int32_t a, int32_t b, bool any) {
+  if (any || a == b || a == BESLAM_CLASS_UNKNOWN || b == BESLAM_CLASS_UNKNOWN) return true;
+  return carLike(a) && carLike(b);
+}
+
+using Poly = std::vector<Eigen::Vector2d>;
+
+Poly rectangle(const Eigen::Vector2d& c, double yaw, double l, double w) {
+  const Eigen::Vector2d ax(std::cos(yaw), std::sin(yaw)), ay(-std::sin(yaw), std::cos(yaw));
+  const Eigen::Vector2d a = ax * (l / 2), b = ay * (w / 2);
+  return {c + a + b, c - a + b, c - a - b, c + a - b};  // counter-clockwise
+}
+
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+double area(const Poly& p) {
+  double s = 0;
+  for (size_t i = 0; i < p.size(); ++i) s += cross(p[i], p[(i + 1) % p.size()]);
+  return std::abs(s) / 2;
+}
+
+// Clips convex polygon `subject` by convex counter-clockwise polygon `clip` (Sutherland-Hodgman).
+Poly clipConvex(Poly subject, const Poly& clip) {
+  for (size_t e = 0; e < clip.size() && !subject.empty(); ++e) {
+    const Eigen::Vector2d a = clip[e], b = clip[(e + 1) % clip.size()];
+    auto inside = [&](const Eigen::Vector2d& p) { return cross(b - a, p - a) >= 0; };
+    Poly out;
+    for (size_t i = 0; i < subject.size(); ++i) {
+      const Eigen::Vector2d p = subject[i], q = subject[(i + 1) % subject.size()];
+      const bool pin = inside(p), qin = inside(q);
+      if (pin) out.push_back(p);
+      if (pin != qin) {
+        const double dp = cross(b - a, p - a), dq = cross(b - a, q - a);
+        out.push_back(p + (q - p) * (dp / (dp - dq)));
+      }
+    }
+    subject = std::move(out);
+  }
+  return subject;
+}
+
+Eigen::Isometry3d scaleMotion(const Eigen::Isometry3d& delta, double s) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  const Eigen::AngleAxisd aa(delta.linear());
+  out.linear() = Eigen::AngleAxisd(aa.angle() * s, aa.axis()).toRotationMatrix();
+  out.translation() = delta.translation() * s;
+  return out;
+}
+
+}  // namespace
+
+double bevYaw(const Eigen::Matrix3d& R_world_cam, double yaw_cam) {
+  const Eigen::Vector3d heading_cam(std::cos(yaw_cam), 0.0, -std::sin(yaw_cam));  // box x axis (KITTI ry)
+  const Eigen::Vector3d h = R_world_cam * heading_cam;
+  return std::atan2(h.z(), h.x());
+}
+
+double rotatedRectIoU(const Eigen::Vector2d& c1, double yaw1, double l1, double w1, const Eigen::Vector2d& c2,
+                      double yaw2, double l2, double w2) {
+  const double r1 = std::hypot(l1, w1) / 2, r2 = std::hypot(l2, w2) / 2;
+  if ((c1 - c2).norm() > r1 + r2) return 0.0;
+  const Poly a = rectangle(c1, yaw1, l1, w1), b = rectangle(c2, yaw2, l2, w2);
+  const double inter = area(clipConvex(a, b));
+  const double uni = l1 * w1 + l2 * w2 - inter;
+  return uni > 0 ? inter / uni : 0.0;
+}
+
+std::string Params::validate() const {
+  if (association != "distance" && association != "iou") return "association must be distance or iou";
+  if (!(gate > 0)) return "gate must be > 0";
+  if (!(gate_per_m >= 0)) return "gate_per_m must be >= 0";
+  if (!(min_iou > 0 && min_iou < 1)) return "min_iou must be in (0, 1)";
+  if (!(accel_sigma > 0)) return "accel_sigma must be > 0";
+  if (!(pos_sigma > 0)) return "pos_sigma must be > 0";
+  if (!(pos_sigma_per_m >= 0)) return "pos_sigma_per_m must be >= 0";
+  if (!(velocity_sigma > 0)) return "velocity_sigma must be > 0";
+  if (!(init_velocity_sigma > 0)) return "init_velocity_sigma must be > 0";
+  if (!(max_miss_time >= 0)) return "max_miss_time must be >= 0";
+  if (max_history < 2) return "max_history must be >= 2";
+  if (!(window_dynamic > 0) || !(window_static > 0)) return "window_dynamic and window_static must be > 0";
+  if (min_observations < 2) return "min_observations must be >= 2";
+  if (!(max_residual > 0)) return "max_residual must be > 0";
+  if (!(displacement_margin >= 0)) return "displacement_margin must be >= 0";
+  if (anchor_frames < 1) return "anchor_frames must be >= 1";
+  if (!(dynamic_speed >= 0) || !(static_speed > 0)) return "dynamic_speed must be >= 0 and static_speed > 0";
+  if (!(dynamic_speed_per_m >= 0) || !(static_speed_per_m >= 0)) return "speed growth per metre must be >= 0";
+  if (!(z_dynamic >= 0) || !(z_static >= 0)) return "z_dynamic and z_static must be >= 0";
+  if (start_frames < 1 || stop_dwell < 1) return "start_frames and stop_dwell must be >= 1";
+  if (!(max_range > 0)) return "max_range must be > 0";
+  if (!(default_dt > 0)) return "default_dt must be > 0";
+  return {};
+}
+
+BevTracker::BevTracker(const Params& params) : params_(params) {
+  const std::string problem = params.validate();
+  if (!problem.empty()) throw std::invalid_argument("motion tracker: " + problem);
+}
+
+void BevTracker::reset() {
+  tracks_.clear();
+  next_id_ = 0;
+  have_time_ = false;
+  pose_mode_ = false;
+  poses_.clear();
+}
+
+BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
+                                       const std::optional<Eigen::Vector2d>& det_velocity, double det_sigma) const {
+  Speed s;
+  const auto& h = track.history;
+  Eigen::Vector2d v_fit = Eigen::Vector2d::Zero();
+  double sigma_fit = 0;
+  bool fit = false;
+  if (!h.empty()) {
+    const double t_end = h.back().t;
+    size_t first = h.size();
+    while (first > 0 && h[first - 1].t >= t_end - window - 1e-6) --first;
+    const size_t n = h.size() - first;
+    if (static_cast<int>(n) >= params_.min_observations) {
+      double t_mean = 0, var_model = 0;
+      Eigen::Vector2d p_mean = Eigen::Vector2d::Zero();
+      for (size_t i = first; i < h.size(); ++i) t_mean += h[i].t, p_mean += h[i].p, var_model += h[i].sigma * h[i].sigma;
+      t_mean /= static_cast<double>(n), p_mean /= static_cast<double>(n), var_model /= static_cast<double>(n);
+      double stt = 0;
+      Eigen::Vector2d stp = Eigen::Vector2d::Zero();
+      for (size_t i = first; i < h.size(); ++i) {
+        const double dt = h[i].t - t_mean;
+        stt += dt * dt;
+        stp += dt * (h[i].p - p_mean);
+      }
+      if (stt > 1e-9) {
+        v_fit = stp / stt;
+        double var = var_model;
+        bool consistent = true;
+        if (n > 2) {
+          double rss = 0;
+          for (size_t i = first; i < h.size(); ++i)
+            rss += (h[i].p - p_mean - v_fit * (h[i].t - t_mean)).squaredNorm();
+          const double var_residual = rss / (2.0 * static_cast<double>(n - 2));
+          // Positions that no straight line explains (a track that jumped between objects) give no evidence.
+          consistent = var_residual <= params_.max_residual * params_.max_residual * var_model;
+          var = std::max(var, var_residual);
+        }
+        sigma_fit = std::sqrt(var / stt);
+        fit = consistent;
+      }
+    }
+  }
+  if (det_velocity) {
+    if (fit) {
+      const double w1 = 1 / (sigma_fit * sigma_fit), w2 = 1 / (det_sigma * det_sigma);
+      v_fit = (w1 * v_fit + w2 * *det_velocity) / (w1 + w2);
+      sigma_fit = 1 / std::sqrt(w1 + w2);
+    } else {
+      v_fit = *det_velocity;
+      sigma_fit = det_sigma;
+    }
+    fit = true;
+  }
+  if (!fit) return s;
+  s.valid = true;
+  s.speed = v_fit.norm();
+  s.sigma = sigma_fit;
+  return s;
+}
+
+void BevTracker::decide(Track& track, double range, const std::optional<Eigen::Vector2d>& det_velocity,
+                        Decision& out) {
+  const Speed dyn = fitSpeed(track, params_.window_dynamic, det_velocity, params_.velocity_sigma);
+  const Speed sta = fitSpeed(track, params_.window_static, det_velocity, params_.velocity_sigma);
+  // A static track also moves when its latest positions leave the place it was parked at.
+  bool displaced = false;
+  if (track.state == BESLAM_MOTION_STATIC && track.anchor_n > 0 && !track.history.empty()) {
+    const size_t k = std::min<size_t>(3, track.history.size());
+    Eigen::Vector2d recent = Eigen::Vector2d::Zero();
+    double var = 0;
+    for (size_t i = track.history.size() - k; i < track.history.size(); ++i)
+      recent += track.history[i].p, var += track.history[i].sigma * track.history[i].sigma;
+    recent /= static_cast<double>(k);
+    var /= static_cast<double>(k * k);
+    const double d = (recent - track.anchor).norm();
+    displaced = d > params_.z_dynamic * std::sqrt(var + track.anchor_var) + params_.displacement_margin;
+  }
+  const bool dynamic_evidence =
+      displaced ||
+      (dyn.valid && dyn.speed - params_.z_dynamic * dyn.sigma > params_.dynamic_speed + params_.dynamic_speed_per_m * range);
+  const bool static_evidence =
+      !dynamic_evidence && sta.valid &&
+      sta.speed + params_.z_static * sta.sigma < params_.static_speed + params_.static_speed_per_m * range;
+  if (dynamic_evidence) {
+    ++track.dynamic_run;
+    track.static_run = 0;
+  } else if (static_evidence) {
+    ++track.static_run;
+    track.dynamic_run = 0;
+  }  // no evidence either way: both runs continue (only contrary evidence breaks a run)
+  switch (track.state) {
+    case BESLAM_MOTION_UNKNOWN:
+      if (track.dynamic_run >= params_.start_frames) track.state = BESLAM_MOTION_DYNAMIC;
+      else if (static_evidence) track.state = BESLAM_MOTION_STATIC;
+      break;
+    case BESLAM_MOTION_STATIC:
+      if (track.dynamic_run >= params_.start_frames) track.state = BESLAM_MOTION_DYNAMIC;
+      break;
+    case BESLAM_MOTION_DYNAMIC:
+      if (track.static_run >= params_.stop_dwell) track.state = BESLAM_MOTION_STATIC;
+      break;
+  }
+  // The parked position: a running mean (at most anchor_frames deep, so slow pose drift is forgiven).
+  if (track.state == BESLAM_MOTION_STATIC && !displaced && !track.history.empty()) {
+    const Observation& o = track.history.back();
+    track.anchor_n = std::min(track.anchor_n + 1, params_.anchor_frames);
+    track.anchor = track.anchor_n == 1 ? o.p : Eigen::Vector2d(track.anchor + (o.p - track.anchor) / track.anchor_n);
+    track.anchor_var = o.sigma * o.sigma / track.anchor_n;
+  } else if (track.state != BESLAM_MOTION_STATIC) {
+    track.anchor_n = 0;
+  }
+  out.speed = dyn.valid ? dyn.speed : 0;
+  out.speed_sigma = dyn.valid ? dyn.sigma : 0;
+}
+
+std::vector<Decision> BevTracker::update(double timestamp, const std::optional<Eigen::Isometry3d>& T_world_cam_in,
+                                         const std::vector<beslam_box3d>& boxes) {
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const beslam_box3d& b = boxes[i];
+    bool ok = std::isfinite(b.yaw) && std::isfinite(b.size[0]) && std::isfinite(b.size[1]);
+    for (double v : b.center_cam) ok = ok && std::isfinite(v);
+    if ((b.flags & BESLAM_BOX_HAS_VELOCITY) != 0)
+      for (double v : b.velocity_cam) ok = ok && std::isfinite(v);
+    if (!ok) throw std::invalid_argument("motion tracker: box " + std::to_string(i) + " has a non-finite field");
+  }
+  // Time step.
+  double dt = params_.default_dt;
+  if (have_time_ && std::isfinite(timestamp) && timestamp > last_time_) dt = timestamp - last_time_;
+  const double now = have_time_ ? last_time_ + dt : (std::isfinite(timestamp) ? timestamp : 0.0);
+  have_time_ = true;
+  last_time_ = now;
+
+  // Camera pose: given, extrapolated from the last two, or none (camera frame, decisions UNKNOWN).
+  std::optional<Eigen::Isometry3d> T_world_cam = T_world_cam_in;
+  if (T_world_cam) {
+    if (!T_world_cam->matrix().allFinite()) throw std::invalid_argument("motion tracker: non-finite camera pose");
+    if (!pose_mode_) {  // tracks built in the camera frame cannot continue in the world frame
+      tracks_.clear();
+      pose_mode_ = true;
+    }
+    poses_.emplace_back(now, *T_world_cam);
+    if (poses_.size() > 2) poses_.erase(poses_.begin());
+  } else if (!poses_.empty()) {
+    const auto& [t1, T1] = poses_.back();
+    Eigen::Isometry3d T = T1;
+    if (poses_.size() == 2 && t1 > poses_[0].first) {
+      const Eigen::Isometry3d delta = poses_[0].second.inverse() * T1;
+      T = T1 * scaleMotion(delta, (now - t1) / (t1 - poses_[0].first));
+    }
+    T_world_cam = T;
+  }
+  const Eigen::Isometry3d T_wc = T_world_cam ? *T_world_cam : Eigen::Isometry3d::Identity();
+  const Eigen::Matrix3d R_wc = T_wc.linear();
+
+  // Predict every track to now.
+  const double q = params_.accel_sigma * params_.accel_sigma;
+  Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
+  F(0, 2) = F(1, 3) = dt;
+  Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
+  Q(0, 0) = Q(1, 1) = q * dt * dt * dt * dt / 4;
+  Q(0, 2) = Q(2, 0) = Q(1, 3) = Q(3, 1) = q * dt * dt * dt / 2;
+  Q(2, 2) = Q(3, 3) = q * dt * dt;
+  for (Track& t : tracks_) {
+    t.x = F * t.x;
+    t.P = F * t.P * F.transpose() + Q;
+  }
+
+  // Detections in the world BEV.
+  const size_t n = boxes.size(), m = tracks_.size();
+  std::vector<Eigen::Vector2d> p(n);
+  std::vector<double> range(n), sigma(n), yaw(n);
+  std::vector<std::optional<Eigen::Vector2d>> vel(n);
+  for (size_t i = 0; i < n; ++i) {
+    const beslam_box3d& b = boxes[i];
+    const Eigen::Vector3d c_cam(b.center_cam[0], b.center_cam[1], b.center_cam[2]);
+    const Eigen::Vector3d c_w = T_wc * c_cam;
+    p[i] = Eigen::Vector2d(c_w.x(), c_w.z());
+    range[i] = std::hypot(c_cam.x(), c_cam.z());
+    sigma[i] = params_.pos_sigma + params_.pos_sigma_per_m * range[i];
+    yaw[i] = bevYaw(R_wc, b.yaw);
+    if (b.flags & BESLAM_BOX_HAS_VELOCITY) {
+      const Eigen::Vector3d v_w = R_wc * Eigen::Vector3d(b.velocity_cam[0], b.velocity_cam[1], b.velocity_cam[2]);
+      vel[i] = Eigen::Vector2d(v_w.x(), v_w.z());
+    }
+  }
+
+  // Cost matrix and global assignment.
+  std::vector<int> det_to_track(n, -1);
+  if (n > 0 && m > 0) {
+    std::vector<double> cost(n * m, kNoMatch);
+    const bool iou = params_.association == "iou";
+    for (size_t i = 0; i < n; ++i) {
+      for (size_t j = 0; j < m; ++j) {
+        const Track& t = tracks_[j];
+        if (!compatible(boxes[i].class_id, t.class_id, params_.match_across_classes)) continue;
+        const Eigen::Vector2d pred = t.x.head<2>();
+        if (iou) {
+          const double o = rotatedRectIoU(p[i], yaw[i], boxes[i].size[0], boxes[i].size[1], pred, t.yaw_bev, t.length,
+                                          t.width);
+          if (o >= params_.min_iou) cost[i * m + j] = 1.0 - o;
+        } else {
+          const double d = (p[i] - pred).norm();
+          const double spread = std::min(2.0 * std::sqrt(t.P(0, 0) + t.P(1, 1)), params_.gate);
+          const double g = params_.gate + params_.gate_per_m * range[i] + spread;
+          if (d <= g) cost[i * m + j] = d;
+        }
+      }
+    }
+    const std::vector<int> a = solveAssignment(cost, static_cast<int>(n), static_cast<int>(m));
+    for (size_t i = 0; i < n; ++i)
+      if (a[i] >= 0 && cost[i * m + static_cast<size_t>(a[i])] < kNoMatch) det_to_track[i] = a[i];
+  }
+
+  // Update matched tracks, start new ones.
+  std::vector<Decision> out(n);
+  std::vector<char> matched(m, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const beslam_box3d& b = boxes[i];
+    Track* t = nullptr;
+    if (det_to_track[i] >= 0) {
+      t = &tracks_[static_cast<size_t>(det_to_track[i])];
+      matched[static_cast<size_t>(det_to_track[i])] = 1;
+      // Kalman update: position (and velocity when the detector gives one).
+      const int k = vel[i] ? 4 : 2;
+      Eigen::MatrixXd H = Eigen::MatrixXd::Identity(k, 4);
+      Eigen::VectorXd z(k);
+      z.head<2>() = p[i];
+      Eigen::MatrixXd R = Eigen::MatrixXd::Identity(k, k) * (sigma[i] * sigma[i]);
+      if (vel[i]) {
+        z.tail<2>() = *vel[i];
+        R(2, 2) = R(3, 3) = params_.velocity_sigma * params_.velocity_sigma;
+      }
+      const Eigen::MatrixXd S = H * t->P * H.transpose() + R;
+      const Eigen::MatrixXd K = t->P * H.transpose() * S.inverse();
+      t->x += K * (z - H * t->x);
+      t->P = (Eigen::Matrix4d::Identity() - K * H) * t->P;
+    } else {
+      tracks_.emplace_back();
+      t = &tracks_.back();
+      t->id = next_id_++;
+      t->x << p[i], (vel[i] ? *vel[i] : Eigen::Vector2d::Zero());
+      t->P = Eigen::Matrix4d::Zero();
+      t->P(0, 0) = t->P(1, 1) = sigma[i] * sigma[i];
+      t->P(2, 2) = t->P(3, 3) = vel[i] ? params_.velocity_sigma * params_.velocity_sigma
+                                        : params_.init_velocity_sigma * params_.init_velocity_sigma;
+    }
+    t->class_id = carLike(b.class_id) && carLike(t->class_id) ? t->class_id : b.class_id;
+    t->last_t = now;
+    t->yaw_bev = yaw[i];
+    t->length = b.size[0] > 0 ? b.size[0] : t->length;
+    t->width = b.size[1] > 0 ? b.size[1] : t->width;
+    ++t->hits;
+    t->history.push_back({now, p[i], sigma[i]});
+    while (static_cast<int>(t->history.size()) > params_.max_history) t->history.pop_front();
+
+    Decision& d = out[i];
+    d.track_id = t->id;
+    d.range = range[i];
+    decide(*t, range[i], vel[i], d);
+    d.motion_state = (T_world_cam && range[i] <= params_.max_range) ? t->state : BESLAM_MOTION_UNKNOWN;
+  }
+
+  // Drop tracks missed too long (tentative ones sooner).
+  const size_t old_count = m;
+  std::vector<Track> kept;
+  kept.reserve(tracks_.size());
+  for (size_t j = 0; j < tracks_.size(); ++j) {
+    Track& t = tracks_[j];
+    const bool is_old = j < old_count;
+    if (is_old && !matched[j]) {
+      const double missing = now - t.last_t;
+      const double limit = t.hits < params_.min_observations ? std::min(params_.max_miss_time, 2.5 * dt) : params_.max_miss_time;
+      if (missing > limit + 1e-9) continue;
+    }
+    kept.push_back(std::move(t));
+  }
+  tracks_ = std::move(kept);
+  return out;
+}
+
+void BevTracker::classify(double timestamp, const std::optional<Eigen::Isometry3d>& T_world_cam,
+                          std::vector<beslam_box3d>& boxes) {
+  const std::vector<Decision> d = update(timestamp, T_world_cam, boxes);
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    boxes[i].track_id = d[i].track_id;
+    boxes[i].motion_state = d[i].motion_state;
+  }
+}
+
+}  // namespace beslam::motion

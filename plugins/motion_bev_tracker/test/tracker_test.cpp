@@ -1,0 +1,377 @@
+// The tracker and classifier on simulated scenes: an ego camera driving through a world of parked and
+// moving cars, detections with seeded noise that grows with range (monocular-like depth error).
+#include <cmath>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <random>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "beslam/motion/bev_tracker.hpp"
+
+using beslam::motion::BevTracker;
+using beslam::motion::Decision;
+using beslam::motion::Params;
+
+namespace {
+
+constexpr double kDt = 0.1;
+
+struct SimObject {
+  std::function<Eigen::Vector2d(double)> position;  // world BEV (x, z) at time t
+  std::function<bool(int)> visible = [](int) { return true; };
+  int32_t class_id = BESLAM_CLASS_CAR;
+};
+
+struct Sim {
+  std::function<Eigen::Isometry3d(double)> ego = [](double t) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(0, 0, 8.0 * t);  // 8 m/s along world z
+    return T;
+  };
+  std::vector<SimObject> objects;
+  double depth_sigma = 0.05, depth_sigma_per_m = 0.0, lateral_sigma = 0.05;
+  std::mt19937_64 rng{7};
+
+  // Normal deviate from the generator (Box-Muller), deterministic across platforms.
+  double normal() {
+    const double u1 = (static_cast<double>(rng() >> 11) + 0.5) / 9007199254740992.0;
+    const double u2 = static_cast<double>(rng() >> 11) / 9007199254740992.0;
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+  }
+
+  // Boxes of frame k (object index in `ids`, in the order emitted).
+  std::vector<beslam_box3d> boxes(int k, std::vector<int>& ids) {
+    ids.clear();
+    const double t = k * kDt;
+    const Eigen::Isometry3d T_cw = ego(t).inverse();
+    std::vector<beslam_box3d> out;
+    for (size_t i = 0; i < objects.size(); ++i) {
+      if (!objects[i].visible(k)) continue;
+      const Eigen::Vector2d p = objects[i].position(t);
+      Eigen::Vector3d c = T_cw * Eigen::Vector3d(p.x(), 1.0, p.y());
+      if (c.z() < 1.0) continue;
+      const double r = std::hypot(c.x(), c.z());
+      const Eigen::Vector3d ray = Eigen::Vector3d(c.x(), 0, c.z()).normalized();
+      const Eigen::Vector3d side(ray.z(), 0, -ray.x());
+      c += ray * normal() * (depth_sigma + depth_sigma_per_m * r) + side * normal() * lateral_sigma;
+      beslam_box3d b{};
+      b.class_id = objects[i].class_id;
+      b.track_id = -1;
+      for (int a = 0; a < 3; ++a) b.center_cam[a] = c[a];
+      b.size[0] = 4.2, b.size[1] = 1.8, b.size[2] = 1.5;
+      b.score = 0.9f;
+      out.push_back(b);
+      ids.push_back(static_cast<int>(i));
+    }
+    return out;
+  }
+};
+
+// Runs frames [0, n) and returns, per object, its (frame -> decision).
+std::vector<std::map<int, Decision>> run(Sim& sim, BevTracker& tracker, int n, bool with_pose = true) {
+  std::vector<std::map<int, Decision>> out(sim.objects.size());
+  std::vector<int> ids;
+  for (int k = 0; k < n; ++k) {
+    const std::vector<beslam_box3d> boxes = sim.boxes(k, ids);
+    std::optional<Eigen::Isometry3d> pose;
+    if (with_pose) pose = sim.ego(k * kDt);
+    const std::vector<Decision> d = tracker.update(k * kDt, pose, boxes);
+    EXPECT_EQ(d.size(), boxes.size());
+    for (size_t i = 0; i < d.size(); ++i) out[static_cast<size_t>(ids[i])][k] = d[i];
+  }
+  return out;
+}
+
+int countState(const std::map<int, Decision>& d, int32_t state, int from = 0, int to = 1 << 30) {
+  int n = 0;
+  for (const auto& [k, dec] : d)
+    if (k >= from && k < to && dec.motion_state == state) ++n;
+  return n;
+}
+
+SimObject parked(double x, double z) {
+  return {[x, z](double) { return Eigen::Vector2d(x, z); }};
+}
+
+SimObject driving(double x, double z, double vx, double vz) {
+  return {[=](double t) { return Eigen::Vector2d(x + vx * t, z + vz * t); }};
+}
+
+}  // namespace
+
+TEST(BevTracker, ParkedCarsAreStaticAndNeverDynamic) {
+  Sim sim;
+  for (int i = 0; i < 8; ++i) sim.objects.push_back(parked(i % 2 ? -4.0 : 4.0, 10.0 + 6.0 * i));
+  BevTracker tracker;
+  const auto d = run(sim, tracker, 60);
+  for (size_t i = 0; i < d.size(); ++i) {
+    EXPECT_EQ(countState(d[i], BESLAM_MOTION_DYNAMIC), 0) << "parked car " << i;
+    // Static once the window has some history, for as long as the car is ahead of the camera.
+    EXPECT_GE(countState(d[i], BESLAM_MOTION_STATIC), static_cast<int>(d[i].size()) - 10) << "parked car " << i;
+    std::set<int32_t> ids;
+    for (const auto& [k, dec] : d[i]) ids.insert(dec.track_id);
+    EXPECT_EQ(ids.size(), 1u) << "parked car " << i << " changed track";
+  }
+}
+
+TEST(BevTracker, DrivingCarsAreDynamicAndNeverStatic) {
+  Sim sim;
+  sim.objects.push_back(driving(-3.5, 20.0, 0.0, 14.0));   // overtaking-speed car ahead, same direction
+  sim.objects.push_back(driving(3.5, 80.0, 0.0, -10.0));   // oncoming
+  sim.objects.push_back(driving(-15.0, 30.0, 6.0, 8.0));   // merging diagonally
+  sim.objects.push_back(driving(-2.0, 15.0, 0.0, 9.5));    // slow relative to ego: 1.5 m/s over ground
+  BevTracker tracker;
+  const auto d = run(sim, tracker, 50);
+  for (size_t i = 0; i < d.size(); ++i) {
+    ASSERT_GT(d[i].size(), 10u);
+    EXPECT_EQ(countState(d[i], BESLAM_MOTION_STATIC), 0) << "driving car " << i;
+    const int first = d[i].begin()->first;
+    for (const auto& [k, dec] : d[i]) {
+      if (k < first + 6) continue;
+      EXPECT_EQ(dec.motion_state, BESLAM_MOTION_DYNAMIC) << "driving car " << i << " frame " << k;
+    }
+  }
+}
+
+TEST(BevTracker, StopAndGoFollowsTheCarWithHysteresis) {
+  // 8 m/s until t = 1 s, brakes at 2 m/s^2 to a stop at t = 5 s (frame 50; below 1 m/s from frame 45),
+  // waits until t = 9 s, pulls out at 2 m/s^2 (1 m/s at frame 95). The ego camera waits behind.
+  auto z_of = [](double t) {
+    if (t < 1.0) return 5.0 + 8.0 * t;
+    if (t < 5.0) return 13.0 + 8.0 * (t - 1.0) - (t - 1.0) * (t - 1.0);
+    if (t < 9.0) return 29.0;
+    return 29.0 + (t - 9.0) * (t - 9.0);
+  };
+  Sim sim;
+  sim.ego = [](double) { return Eigen::Isometry3d::Identity(); };
+  sim.objects.push_back({[&](double t) { return Eigen::Vector2d(2.0, z_of(t)); }});
+  Params p;
+  p.stop_dwell = 5;
+  BevTracker tracker(p);
+  const auto d = run(sim, tracker, 120);
+  const auto& car = d[0];
+  auto firstState = [&](int32_t state, int from, int to) {
+    for (int k = from; k < to; ++k)
+      if (car.at(k).motion_state == state) return k;
+    return -1;
+  };
+  // Moving: dynamic after a few frames, never static while above 1 m/s.
+  EXPECT_EQ(countState(car, BESLAM_MOTION_STATIC, 0, 45), 0);
+  EXPECT_GE(countState(car, BESLAM_MOTION_DYNAMIC, 5, 45), 38);
+  // Stopped at frame 50: static after the window and the dwell, then static until it pulls out.
+  const int static_from = firstState(BESLAM_MOTION_STATIC, 45, 90);
+  ASSERT_GE(static_from, 45) << "stopped car never became static";
+  EXPECT_LE(static_from, 50 + 15 + p.stop_dwell) << "stopped car not static in time";
+  EXPECT_EQ(countState(car, BESLAM_MOTION_DYNAMIC, static_from, 90), 0);
+  // Pulls out at frame 90 (1 m/s at frame 95, 0.25 m moved): dynamic within a few frames of moving.
+  const int dynamic_from = firstState(BESLAM_MOTION_DYNAMIC, 90, 120);
+  ASSERT_GE(dynamic_from, 90) << "car pulling out never became dynamic";
+  EXPECT_LE(dynamic_from, 95 + 10) << "car pulling out became dynamic too late";
+  EXPECT_EQ(countState(car, BESLAM_MOTION_STATIC, dynamic_from, 120), 0);
+  std::cout << "stop-and-go: stopped at frame 50, static from " << static_from << "; pulls out at 90 (1 m/s at 95), dynamic from "
+            << dynamic_from << "\n";
+}
+
+TEST(BevTracker, KeepsTracksThroughShortOcclusion) {
+  Sim sim;
+  SimObject p = parked(4.0, 25.0);
+  p.visible = [](int k) { return k < 10 || k >= 16; };  // 6 frames hidden
+  SimObject m = driving(-3.0, 15.0, 0.0, 12.0);
+  m.visible = [](int k) { return k < 12 || k >= 17; };  // 5 frames hidden while moving 4 m/s faster than ego
+  sim.objects = {p, m};
+  BevTracker tracker;
+  const auto d = run(sim, tracker, 30);
+  for (size_t i = 0; i < 2; ++i) {
+    std::set<int32_t> ids;
+    for (const auto& [k, dec] : d[i]) ids.insert(dec.track_id);
+    EXPECT_EQ(ids.size(), 1u) << "object " << i << " lost its track through the occlusion";
+  }
+  EXPECT_EQ(d[0].at(16).motion_state, BESLAM_MOTION_STATIC);
+  EXPECT_EQ(d[1].at(17).motion_state, BESLAM_MOTION_DYNAMIC);
+}
+
+TEST(BevTracker, DropsTracksAfterLongMisses) {
+  Sim sim;
+  SimObject p = parked(4.0, 25.0);
+  p.visible = [](int k) { return k < 5 || k >= 30; };  // 2.5 s hidden > max_miss_time
+  sim.objects = {p};
+  BevTracker tracker;
+  const auto d = run(sim, tracker, 32);
+  EXPECT_NE(d[0].at(4).track_id, d[0].at(30).track_id);
+}
+
+TEST(BevTracker, CrossingCarsKeepTheirIdentities) {
+  // Two cars crossing in an X in front of a parked ego camera: they pass within 0.6 m of each other.
+  Sim sim;
+  sim.ego = [](double) { return Eigen::Isometry3d::Identity(); };
+  sim.objects.push_back(driving(-12.0, 14.0, 8.0, 3.0));
+  sim.objects.push_back(driving(12.0, 14.3, -8.0, 3.0));
+  BevTracker tracker;
+  const auto d = run(sim, tracker, 30);
+  for (size_t i = 0; i < 2; ++i) {
+    std::set<int32_t> ids;
+    for (const auto& [k, dec] : d[i]) ids.insert(dec.track_id);
+    EXPECT_EQ(ids.size(), 1u) << "car " << i << " switched identity while crossing";
+    EXPECT_EQ(countState(d[i], BESLAM_MOTION_STATIC), 0);
+  }
+  EXPECT_NE(d[0].begin()->second.track_id, d[1].begin()->second.track_id);
+}
+
+TEST(BevTracker, DepthNoiseGrowingWithRangeDoesNotMakeParkedCarsDynamic) {
+  // Monocular-like depth error: 0.1 m + 3 % of the range along the ray. The tracker is told so.
+  Params p;
+  p.pos_sigma = 0.1;
+  p.pos_sigma_per_m = 0.03;
+  p.dynamic_speed_per_m = 0.02;
+  p.z_dynamic = 3.0;       // the monocular profile (docs/motion.md): 2D-radial 3 sigma, longer static window
+  p.window_static = 3.0;
+  int parked_dynamic = 0, parked_static = 0, near_static = 0, near_frames = 0;
+  int moving_static = 0, moving_dynamic = 0, moving_frames = 0;
+  for (uint64_t seed = 1; seed <= 5; ++seed) {
+    Sim sim;
+    sim.rng.seed(seed);
+    sim.depth_sigma = 0.1;
+    sim.depth_sigma_per_m = 0.03;
+    for (int i = 0; i < 10; ++i) sim.objects.push_back(parked(i % 2 ? -4.5 : 4.5, 12.0 + 7.0 * i));
+    sim.objects.push_back(driving(-1.5, 30.0, 0.0, 13.0));  // 5 m/s faster than ego
+    sim.objects.push_back(driving(1.8, 90.0, 0.0, -9.0));   // oncoming
+    BevTracker tracker(p);
+    const auto d = run(sim, tracker, 80);
+    for (size_t i = 0; i < d.size(); ++i) {
+      for (const auto& [k, dec] : d[i]) {
+        if (i < 10) {
+          parked_dynamic += dec.motion_state == BESLAM_MOTION_DYNAMIC;
+          parked_static += dec.motion_state == BESLAM_MOTION_STATIC;
+          if (dec.range < 30) ++near_frames, near_static += dec.motion_state == BESLAM_MOTION_STATIC;
+        } else {
+          ++moving_frames;
+          moving_static += dec.motion_state == BESLAM_MOTION_STATIC;
+          moving_dynamic += dec.motion_state == BESLAM_MOTION_DYNAMIC;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(moving_static, 0);
+  EXPECT_GE(moving_dynamic, moving_frames * 7 / 10);
+  EXPECT_LE(parked_dynamic, (parked_static + parked_dynamic) / 100) << "parked called dynamic";
+  EXPECT_GE(near_static, near_frames * 7 / 10) << "near parked cars should be decided static";
+}
+
+TEST(BevTracker, TurningEgoKeepsParkedCarsStatic) {
+  Sim sim;
+  sim.ego = [](double t) {  // 8 m/s on a 40 m radius left turn (camera yaw follows the path)
+    const double a = 8.0 * t / 40.0;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(-40.0 * (1 - std::cos(a)), 0, 40.0 * std::sin(a));
+    T.linear() = Eigen::AngleAxisd(-a, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    return T;
+  };
+  for (int i = 0; i < 6; ++i) sim.objects.push_back(parked(-4.0 - 3.0 * i, 10.0 + 4.0 * i));
+  BevTracker tracker;
+  const auto d = run(sim, tracker, 40);
+  for (size_t i = 0; i < d.size(); ++i) EXPECT_EQ(countState(d[i], BESLAM_MOTION_DYNAMIC), 0) << i;
+}
+
+TEST(BevTracker, WithoutPoseEverythingIsUnknownButTracked) {
+  Sim sim;
+  sim.objects = {parked(4.0, 20.0), driving(-3.0, 20.0, 0.0, 12.0)};
+  BevTracker tracker;
+  const auto d = run(sim, tracker, 20, false);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(countState(d[i], BESLAM_MOTION_UNKNOWN), static_cast<int>(d[i].size()));
+    std::set<int32_t> ids;
+    for (const auto& [k, dec] : d[i]) ids.insert(dec.track_id);
+    EXPECT_EQ(ids.size(), 1u);
+  }
+}
+
+TEST(BevTracker, ExtrapolatesThePoseWhenTheBackendHasNone) {
+  Sim sim;
+  sim.objects = {parked(4.0, 30.0), driving(-3.0, 25.0, 0.0, 14.0)};
+  BevTracker tracker;
+  std::vector<int> ids;
+  for (int k = 0; k < 40; ++k) {
+    const auto boxes = sim.boxes(k, ids);
+    std::optional<Eigen::Isometry3d> pose;
+    if (k < 20 || k >= 25) pose = sim.ego(k * kDt);  // backend lost for 5 frames
+    const auto d = tracker.update(k * kDt, pose, boxes);
+    if (k >= 15) {
+      for (size_t i = 0; i < d.size(); ++i)
+        EXPECT_EQ(d[i].motion_state, ids[i] == 0 ? BESLAM_MOTION_STATIC : BESLAM_MOTION_DYNAMIC) << "frame " << k;
+    }
+  }
+}
+
+TEST(BevTracker, DetectorVelocityDecidesWithinStartFrames) {
+  BevTracker tracker;  // start_frames = 2
+  beslam_box3d moving{}, still{};
+  for (beslam_box3d* b : {&moving, &still}) {
+    b->class_id = BESLAM_CLASS_CAR;
+    b->size[0] = 4, b->size[1] = 1.8, b->size[2] = 1.5;
+    b->flags = BESLAM_BOX_HAS_VELOCITY;
+  }
+  moving.center_cam[2] = 15, moving.center_cam[0] = -3, moving.velocity_cam[2] = 6.0;
+  still.center_cam[2] = 20, still.center_cam[0] = 4;
+  auto d = tracker.update(0.0, Eigen::Isometry3d::Identity(), {moving, still});
+  EXPECT_EQ(d[0].motion_state, BESLAM_MOTION_UNKNOWN);  // one frame of evidence
+  EXPECT_NEAR(d[0].speed, 6.0, 1e-9);                   // from the detector alone
+  EXPECT_EQ(d[1].motion_state, BESLAM_MOTION_UNKNOWN);  // 0 +- 1 m/s: not confidently below 0.8 m/s
+  moving.center_cam[2] += 0.6;                          // 6 m/s over 0.1 s
+  d = tracker.update(0.1, Eigen::Isometry3d::Identity(), {moving, still});
+  EXPECT_EQ(d[0].motion_state, BESLAM_MOTION_DYNAMIC);
+  EXPECT_EQ(d[1].motion_state, BESLAM_MOTION_UNKNOWN);
+}
+
+TEST(BevTracker, IouAssociationTracksToo) {
+  Params p;
+  p.association = "iou";
+  Sim sim;
+  sim.objects = {parked(4.0, 20.0), parked(-4.0, 26.0), driving(-1.0, 15.0, 0.0, 10.0)};
+  BevTracker tracker(p);
+  const auto d = run(sim, tracker, 30);
+  for (size_t i = 0; i < d.size(); ++i) {
+    std::set<int32_t> ids;
+    for (const auto& [k, dec] : d[i]) ids.insert(dec.track_id);
+    EXPECT_EQ(ids.size(), 1u) << i;
+  }
+  EXPECT_EQ(d[0].at(15).motion_state, BESLAM_MOTION_STATIC);
+  EXPECT_EQ(d[2].at(15).motion_state, BESLAM_MOTION_DYNAMIC);
+}
+
+TEST(BevTracker, ClassesDoNotMix) {
+  BevTracker tracker;
+  beslam_box3d car{}, ped{};
+  car.class_id = BESLAM_CLASS_CAR;
+  ped.class_id = BESLAM_CLASS_PEDESTRIAN;
+  for (beslam_box3d* b : {&car, &ped}) b->size[0] = b->size[1] = b->size[2] = 1, b->center_cam[2] = 10;
+  const auto a = tracker.update(0.0, Eigen::Isometry3d::Identity(), {car});
+  const auto b = tracker.update(0.1, Eigen::Isometry3d::Identity(), {ped});
+  EXPECT_NE(a[0].track_id, b[0].track_id);
+}
+
+TEST(BevTracker, RejectsBadInput) {
+  BevTracker tracker;
+  beslam_box3d b{};
+  b.class_id = BESLAM_CLASS_CAR;
+  b.size[0] = b.size[1] = b.size[2] = 1;
+  b.center_cam[2] = std::nan("");
+  EXPECT_THROW(tracker.update(0.0, std::nullopt, {b}), std::invalid_argument);
+  Params p;
+  p.gate = -1;
+  EXPECT_THROW(BevTracker{p}, std::invalid_argument);
+  p = Params{};
+  p.association = "magic";
+  EXPECT_NE(p.validate(), "");
+}
+
+TEST(BevGeometry, RotatedRectangleIoU) {
+  using beslam::motion::rotatedRectIoU;
+  const Eigen::Vector2d o(0, 0);
+  EXPECT_NEAR(rotatedRectIoU(o, 0.3, 4, 2, o, 0.3, 4, 2), 1.0, 1e-12);
+  EXPECT_NEAR(rotatedRectIoU(o, 0, 4, 2, Eigen::Vector2d(2, 0), 0, 4, 2), 4.0 / 12.0, 1e-12);
+  EXPECT_NEAR(rotatedRectIoU(o, 0, 2, 2, o, M_PI / 4, 2, 2), (8 * (std::sqrt(2) - 1)) / (8 - 8 * (std::sqrt(2) - 1)), 1e-9);
+  EXPECT_EQ(rotatedRectIoU(o, 0, 4, 2, Eigen::Vector2d(10, 0), 0, 4, 2), 0.0);
+}
