@@ -1,0 +1,136 @@
+// detector_lidar: the SDK wrapper around beslam::detector_lidar::LidarDetector (PCL BEV car detector).
+#include <string>
+
+#include "beslam/detector_lidar/lidar_detector.hpp"
+#include "beslam/sdk/sdk.hpp"
+
+namespace {
+
+namespace field = beslam::sdk::field;
+using beslam::detector_lidar::Options;
+
+const beslam_config_field kFields[] = {
+    field::Double("min_range", "1.5", 0, 200, "points closer to the LiDAR than this (m) are ignored"),
+    field::Double("max_range", "60", 1, 300, "points farther than this (m) are ignored"),
+    field::Bool("camera_fov_only", "true", "keep only points in front of the camera that project into the image"),
+    field::Double("fov_margin_px", "40", 0, 10000, "image grown by this many pixels for camera_fov_only"),
+    field::String("ground_method", "ransac", "ransac|grid",
+                  "ground removal: one RANSAC plane, or a BEV grid of local lowest points"),
+    field::Double("ground_threshold", "0.25", 0.01, 2, "points up to this height above the ground (m) are ground"),
+    field::Double("max_ground_tilt_deg", "10", 0.1, 44, "ransac: largest angle between ground normal and camera y"),
+    field::Int("ransac_iterations", "200", 1, 100000, "ransac: iterations"),
+    field::Double("grid_cell", "0.5", 0.05, 10, "grid: cell size (m)"),
+    field::Int("grid_radius", "6", 0, 50, "grid: local ground is the lowest point within this many cells"),
+    field::Double("max_height", "3.0", 0.1, 20, "points higher than this above the ground (m) are ignored"),
+    field::Double("voxel_size", "0.12", 0, 1, "voxel grid (m) the cloud is thinned to before clustering; 0: none"),
+    field::Double("cluster_tolerance", "0.5", 0.05, 5, "Euclidean clustering distance (m)"),
+    field::Int("min_cluster_points", "8", 3, 1000000, "smallest cluster kept"),
+    field::Int("max_cluster_points", "25000", 3, 10000000, "largest cluster kept"),
+    field::String("box_fit", "lshape", "lshape|min_area", "BEV rectangle: L-shape search or minimum-area rectangle"),
+    field::Double("angle_step_deg", "1", 0.05, 45, "lshape: heading search step (degrees)"),
+    field::Int("lshape_min_points", "40", 0, 1000000,
+               "lshape: clusters with fewer points (after thinning) get the minimum-area rectangle"),
+    field::Double("car_min_extent", "1.0", 0.01, 20, "car gate: the longer footprint side reaches at least this (m)"),
+    field::Double("car_max_length", "6.5", 0.1, 50, "car gate: longest footprint side (m)"),
+    field::Double("car_max_width", "2.8", 0.1, 50, "car gate: shorter footprint side at most (m)"),
+    field::Double("car_min_top", "0.9", 0, 20, "car gate: the cluster's top is at least this high (m)"),
+    field::Double("car_max_top", "2.0", 0.1, 20, "car gate: the cluster's top is at most this high (m)"),
+    field::Double("car_max_bottom", "1.6", 0, 20, "car gate: the cluster's lowest point is at most this high (m)"),
+    field::DoubleList("car_size", "[3.9, 1.6, 1.5]", 0.1, 20,
+                      "car prior length, width, height (m): unseen sides are grown to it"),
+    field::Double("car_min_length", "2.2", 0.1, 20, "a seen side shorter than this (m) is grown to the prior length"),
+    field::Double("car_min_width", "1.2", 0.1, 20, "a seen end narrower than this (m) is grown to the prior width"),
+    field::Double("uncertain_range", "40", 0.1, 1000, "boxes farther than this (m) are flagged uncertain"),
+    field::Int("uncertain_points", "25", 0, 1000000, "boxes with fewer points are flagged uncertain"),
+};
+
+Options readOptions(const beslam::sdk::Config& c) {
+  Options o;
+  o.min_range = c.getDouble("min_range");
+  o.max_range = c.getDouble("max_range");
+  o.camera_fov_only = c.getBool("camera_fov_only");
+  o.fov_margin_px = c.getDouble("fov_margin_px");
+  o.ground_method = c.getString("ground_method");
+  o.ground_threshold = c.getDouble("ground_threshold");
+  o.max_ground_tilt_deg = c.getDouble("max_ground_tilt_deg");
+  o.ransac_iterations = static_cast<int>(c.getInt("ransac_iterations"));
+  o.grid_cell = c.getDouble("grid_cell");
+  o.grid_radius = static_cast<int>(c.getInt("grid_radius"));
+  o.max_height = c.getDouble("max_height");
+  o.voxel_size = c.getDouble("voxel_size");
+  o.cluster_tolerance = c.getDouble("cluster_tolerance");
+  o.min_cluster_points = static_cast<int>(c.getInt("min_cluster_points"));
+  o.max_cluster_points = static_cast<int>(c.getInt("max_cluster_points"));
+  o.box_fit = c.getString("box_fit");
+  o.angle_step_deg = c.getDouble("angle_step_deg");
+  o.lshape_min_points = static_cast<int>(c.getInt("lshape_min_points"));
+  o.car_min_extent = c.getDouble("car_min_extent");
+  o.car_max_length = c.getDouble("car_max_length");
+  o.car_max_width = c.getDouble("car_max_width");
+  o.car_min_top = c.getDouble("car_min_top");
+  o.car_max_top = c.getDouble("car_max_top");
+  o.car_max_bottom = c.getDouble("car_max_bottom");
+  const std::vector<double> size = c.getList("car_size");
+  if (size.size() != 3) throw beslam::sdk::ConfigError("car_size: expected [length, width, height]");
+  o.car_size = {size[0], size[1], size[2]};
+  o.car_min_length = c.getDouble("car_min_length");
+  o.car_min_width = c.getDouble("car_min_width");
+  o.uncertain_range = c.getDouble("uncertain_range");
+  o.uncertain_points = static_cast<int>(c.getInt("uncertain_points"));
+  try {
+    o.validate();
+  } catch (const std::invalid_argument& e) {
+    throw beslam::sdk::ConfigError(e.what());
+  }
+  return o;
+}
+
+beslam::detector_lidar::LidarDetector makeDetector(const beslam::sdk::Context& context,
+                                                   const beslam::sdk::Config& config) {
+  if (!context.T_cam_lidar())
+    throw beslam::sdk::ConfigError(
+        "detector_lidar needs the LiDAR-to-camera extrinsics (T_cam_lidar), and the dataset gave none: use a "
+        "dataset with a LiDAR calibration (KITTI Tr_velo_to_cam) and `lidar: true`");
+  std::optional<beslam_camera> camera;
+  if (context.camera().width > 0 && context.camera().height > 0) camera = context.camera();
+  return beslam::detector_lidar::LidarDetector(readOptions(config), *context.T_cam_lidar(), camera);
+}
+
+class DetectorLidar : public beslam::sdk::Detector {
+ public:
+  DetectorLidar(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
+      : context_(context), detector_(makeDetector(context, config)) {}
+
+  std::vector<beslam_box3d> detect(const beslam::sdk::Frame& frame) override {
+    if (!frame.hasLidar()) {
+      if (!warned_no_scan_)
+        context_.warn("frame " + std::to_string(frame.index) +
+                      " has no LiDAR scan (is `lidar: true` set in the dataset?): no boxes until one arrives");
+      warned_no_scan_ = true;
+      return {};
+    }
+    if (frame.lidar.stride_bytes != 0 && (frame.lidar.stride_bytes < 16 || frame.lidar.stride_bytes % 4 != 0))
+      throw std::invalid_argument("LiDAR scan with stride " + std::to_string(frame.lidar.stride_bytes) +
+                                  " bytes (need a multiple of 4, at least 16)");
+    const std::size_t stride = frame.lidar.stride_bytes == 0 ? 4 : frame.lidar.stride_bytes / 4;
+    beslam::detector_lidar::Stats stats;
+    std::vector<beslam_box3d> boxes = detector_.detect(frame.lidar.data, frame.lidar.count, stride, &stats);
+    if (stats.invalid_points > 0 && !warned_invalid_)
+      context_.warn("frame " + std::to_string(frame.index) + ": " + std::to_string(stats.invalid_points) +
+                    " LiDAR points with NaN/inf coordinates were skipped (reported once)");
+    warned_invalid_ = warned_invalid_ || stats.invalid_points > 0;
+    return boxes;
+  }
+
+ private:
+  const beslam::sdk::Context& context_;
+  beslam::detector_lidar::LidarDetector detector_;
+  bool warned_no_scan_ = false, warned_invalid_ = false;
+};
+
+}  // namespace
+
+BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<DetectorLidar>(
+    {"detector_lidar", "LiDAR BEV car detector",
+     "Cars from one LiDAR scan: ground removal, Euclidean clustering, L-shape BEV boxes (PCL)", {1, 0, 0},
+     kFields}))

@@ -1,0 +1,229 @@
+// detector_lidar_eval: scores the LiDAR detector against KITTI labels.
+//
+//   detector_lidar_eval object   <kitti/object/training> <index> [match_m] [key=value...]
+//   detector_lidar_eval sequence <sequence folder> <tracking labels.txt> [max_distance_m] [match_m] [key=value...]
+//
+// key=value sets a detector option: car_size=4.6,1.8,1.5 ground_method=grid box_fit=min_area
+// lshape_min_points=N cluster_tolerance=X.
+//
+// `sequence` reads a KITTI-odometry-layout folder (velodyne/NNNNNN.bin, calib.txt with P0/P2, R0_rect or
+// R_rect, Tr_velo_to_cam or Tr) and KITTI tracking labels (label_02 rows; `beslam synth` writes this
+// layout). It prints per-frame and total recall of Car labels within max_distance (BEV centre error below
+// match_m, default 0.5), the median BEV error, and the false positives (detections > 2 m from any label).
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "beslam/datasets/image_io.hpp"
+#include "beslam/datasets/kitti_calib.hpp"
+#include "beslam/datasets/labels.hpp"
+#include "beslam/datasets/velodyne.hpp"
+#include "beslam/detector_lidar/lidar_detector.hpp"
+#include "box_match.hpp"
+
+namespace fs = std::filesystem;
+namespace ds = beslam::datasets;
+namespace eval = beslam::detector_lidar::eval;
+
+namespace {
+
+Eigen::Matrix3d rows3(const std::vector<double>& v) {
+  Eigen::Matrix3d m;
+  for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = v[static_cast<size_t>(i)];
+  return m;
+}
+
+struct Totals {
+  int truth = 0, found = 0, detections = 0, false_positives = 0;
+  std::vector<double> errors, milliseconds, cpu_milliseconds;
+};
+
+std::vector<beslam_box3d> timedDetect(const beslam::detector_lidar::LidarDetector& detector,
+                                      const std::vector<float>& scan, Totals& totals) {
+  auto cpu = [] {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  const double c0 = cpu();
+  std::vector<beslam_box3d> boxes = detector.detect(scan.data(), scan.size() / 4);
+  totals.cpu_milliseconds.push_back(cpu() - c0);
+  totals.milliseconds.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  return boxes;
+}
+
+void score(const std::vector<beslam_box3d>& truth_all, const std::vector<beslam_box3d>& detections,
+           double max_distance, double match, Totals& totals, const std::string& name) {
+  std::vector<beslam_box3d> truth;
+  for (const beslam_box3d& t : truth_all)
+    if (std::hypot(t.center_cam[0], t.center_cam[2]) <= max_distance) truth.push_back(t);
+  int found = 0;
+  for (const eval::Match& m : eval::matchBev(truth, detections, match))
+    if (m.detection >= 0) ++found, totals.errors.push_back(m.error);
+  int fp = 0;
+  for (const beslam_box3d& d : detections) {
+    double nearest = 1e9;
+    for (const beslam_box3d& t : truth_all) nearest = std::min(nearest, eval::bevDistance(d, t));
+    if (nearest > 2.0 && std::getenv("BESLAM_EVAL_VERBOSE") != nullptr)
+      std::printf("  unmatched detection at x %.2f z %.2f, %.2f x %.2f x %.2f m, score %.2f\n", d.center_cam[0],
+                  d.center_cam[2], d.size[0], d.size[1], d.size[2], d.score);
+    fp += nearest > 2.0;
+  }
+  std::printf("%s: %d/%zu cars found, %zu detections, %d false positives\n", name.c_str(), found, truth.size(),
+              detections.size(), fp);
+  totals.truth += static_cast<int>(truth.size());
+  totals.found += found;
+  totals.detections += static_cast<int>(detections.size());
+  totals.false_positives += fp;
+}
+
+void summary(Totals& t, double max_distance, double match) {
+  std::sort(t.errors.begin(), t.errors.end());
+  const double median = t.errors.empty() ? NAN : t.errors[t.errors.size() / 2];
+  std::sort(t.milliseconds.begin(), t.milliseconds.end());
+  const double ms = t.milliseconds.empty() ? NAN : t.milliseconds[t.milliseconds.size() / 2];
+  std::sort(t.cpu_milliseconds.begin(), t.cpu_milliseconds.end());
+  const double cpu_ms = t.cpu_milliseconds.empty() ? NAN : t.cpu_milliseconds[t.cpu_milliseconds.size() / 2];
+  std::printf("total: recall %.3f (%d/%d cars within %.0f m found within %.2f m), median BEV error %.3f m, "
+              "%d detections, %d false positives, median %.1f ms per scan (%.1f ms CPU, all threads)\n",
+              t.truth ? static_cast<double>(t.found) / t.truth : 0.0, t.found, t.truth, max_distance, match, median,
+              t.detections, t.false_positives, ms, cpu_ms);
+}
+
+// Applies trailing key=value arguments to the options; returns the number of positional arguments.
+int applyOptions(int argc, char** argv, beslam::detector_lidar::Options& o) {
+  int positional = argc;
+  for (int i = 2; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const size_t eq = arg.find('=');
+    if (eq == std::string::npos) continue;
+    positional = std::min(positional, i);
+    const std::string key = arg.substr(0, eq), value = arg.substr(eq + 1);
+    if (key == "car_size") {
+      std::vector<double> v;
+      size_t start = 0;
+      for (size_t comma; (comma = value.find(',', start)) != std::string::npos; start = comma + 1)
+        v.push_back(std::stod(value.substr(start, comma - start)));
+      v.push_back(std::stod(value.substr(start)));
+      if (v.size() != 3) throw std::invalid_argument("car_size needs three numbers");
+      o.car_size = {v[0], v[1], v[2]};
+    } else if (key == "ground_method") {
+      o.ground_method = value;
+    } else if (key == "box_fit") {
+      o.box_fit = value;
+    } else if (key == "lshape_min_points") {
+      o.lshape_min_points = std::stoi(value);
+    } else if (key == "cluster_tolerance") {
+      o.cluster_tolerance = std::stod(value);
+    } else {
+      throw std::invalid_argument("unknown option '" + key + "'");
+    }
+  }
+  o.validate();
+  return positional;
+}
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: detector_lidar_eval object <kitti/object/training> <index> [match_m] [key=value...]\n"
+               "       detector_lidar_eval sequence <folder> <tracking_labels.txt> [max_distance_m] [match_m] "
+               "[key=value...]\n");
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 4) return usage();
+  const std::string mode = argv[1];
+  try {
+    beslam::detector_lidar::Options options;
+    argc = applyOptions(argc, argv, options);
+    if (mode == "object") {
+      const std::string root = argv[2], index = argv[3];
+      const double match = argc > 4 ? std::stod(argv[4]) : 0.5;
+      const ds::KittiCalib calib = ds::readObjectCalib(root + "/calib/" + index + ".txt");
+      const cv::Size size = ds::readImageSize(root + "/image_2/" + index + ".png");
+      const ds::Camera c = ds::cameraFromProjection(*calib.P[2], size.width, size.height, "P2");
+      const beslam::detector_lidar::LidarDetector detector(
+          options, *ds::T_cami_velo(calib, 2), beslam_camera{sizeof(beslam_camera), c.width, c.height, 0, c.fx, c.fy, c.cx, c.cy});
+      const std::vector<float> scan = ds::readVelodyneBin(root + "/velodyne/" + index + ".bin");
+      std::vector<beslam_box3d> truth;
+      for (const ds::ObjectLabel& l : ds::readObjectLabels(root + "/label_2/" + index + ".txt"))
+        if (l.type == "Car") truth.push_back(eval::labelToBox(l, BESLAM_CLASS_CAR));
+      Totals totals;
+      for (int warm = 0; warm < 4; ++warm) timedDetect(detector, scan, totals);  // timing: one frame, five runs
+      score(truth, timedDetect(detector, scan, totals), 1e9, match, totals, index);
+      summary(totals, 1e9, match);
+      return 0;
+    }
+    if (mode == "sequence") {
+      const std::string folder = argv[2], labels = argv[3];
+      const double max_distance = argc > 4 ? std::stod(argv[4]) : 30.0;
+      const double match = argc > 5 ? std::stod(argv[5]) : 0.5;
+      const auto entries = ds::readCalibEntries(folder + "/calib.txt", {"P0", "P1", "P2", "P3", "Tr"});
+      auto find = [&](std::initializer_list<const char*> names) -> const ds::CalibEntry* {
+        for (const char* n : names) {
+          auto it = entries.find(n);
+          if (it != entries.end()) return &it->second;
+        }
+        return nullptr;
+      };
+      const ds::CalibEntry* tr = find({"Tr_velo_to_cam", "Tr_velo_cam", "Tr"});
+      const ds::CalibEntry* p = find({"P2", "P0"});
+      if (tr == nullptr || tr->values.size() != 12 || p == nullptr || p->values.size() != 12) {
+        std::fprintf(stderr, "%s/calib.txt: needs Tr_velo_to_cam (or Tr) and P2 (or P0) with 12 values\n", folder.c_str());
+        return 1;
+      }
+      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+      for (int i = 0; i < 12; ++i) T.matrix()(i / 4, i % 4) = tr->values[static_cast<size_t>(i)];
+      if (const ds::CalibEntry* r0 = find({"R0_rect", "R_rect"}); r0 != nullptr && r0->values.size() == 9) {
+        Eigen::Isometry3d R = Eigen::Isometry3d::Identity();
+        R.linear() = rows3(r0->values);
+        T = R * T;
+      }
+      ds::Matrix34d P;
+      for (int i = 0; i < 12; ++i) P(i / 4, i % 4) = p->values[static_cast<size_t>(i)];
+      T = ds::T_cami_rect0(P) * T;
+      std::optional<beslam_camera> camera;
+      for (const char* dir : {"image_2", "image_0"}) {
+        if (!fs::is_directory(folder + "/" + dir)) continue;
+        std::vector<fs::path> images;
+        for (const auto& e : fs::directory_iterator(folder + "/" + dir)) images.push_back(e.path());
+        if (images.empty()) continue;
+        const cv::Size size = ds::readImageSize(std::min_element(images.begin(), images.end())->string());
+        const ds::Camera c = ds::cameraFromProjection(P, size.width, size.height, "P");
+        camera = beslam_camera{sizeof(beslam_camera), c.width, c.height, 0, c.fx, c.fy, c.cx, c.cy};
+        break;
+      }
+      const beslam::detector_lidar::LidarDetector detector(options, T, camera);
+      std::map<int64_t, std::vector<beslam_box3d>> truth;
+      for (const ds::TrackingLabel& l : ds::readTrackingLabels(labels))
+        if (l.object.type == "Car") truth[l.frame].push_back(eval::labelToBox(l.object, BESLAM_CLASS_CAR));
+      std::vector<fs::path> scans;
+      for (const auto& e : fs::directory_iterator(folder + "/velodyne"))
+        if (e.path().extension() == ".bin") scans.push_back(e.path());
+      std::sort(scans.begin(), scans.end());
+      Totals totals;
+      for (const fs::path& s : scans) {
+        const int64_t frame = std::stoll(s.stem().string());
+        const std::vector<float> scan = ds::readVelodyneBin(s.string());
+        score(truth[frame], timedDetect(detector, scan, totals), max_distance, match, totals, s.stem().string());
+      }
+      summary(totals, max_distance, match);
+      return 0;
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "detector_lidar_eval: %s\n", e.what());
+    return 1;
+  }
+  return usage();
+}
