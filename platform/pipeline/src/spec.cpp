@@ -100,8 +100,8 @@ std::string resolvePath(const std::string& text, const std::string& base_dir) {
 
 std::vector<ConfigField> datasetFields() {
   return {
-      {"type", BESLAM_CONFIG_STRING, true, "", 1, 0, "kitti_odometry|kitti_tracking|kitti_raw|kitti_object|tum",
-       "dataset layout"},
+      {"type", BESLAM_CONFIG_STRING, true, "", 1, 0,
+       "kitti_odometry|kitti_tracking|kitti_raw|kitti_object|tum|synth", "dataset layout (synth: rendered, cached)"},
       {"root", BESLAM_CONFIG_PATH, true, "", 1, 0, "", "dataset folder (relative to the pipeline file)"},
       {"sequence", BESLAM_CONFIG_STRING, false, "\"\"", 1, 0, "", "sequence name: 06, 0007, ..."},
       {"camera", BESLAM_CONFIG_STRING, false, "auto", 1, 0, "auto|image_0|image_2", "which camera folder"},
@@ -111,6 +111,8 @@ std::vector<ConfigField> datasetFields() {
       {"lidar", BESLAM_CONFIG_BOOL, false, "false", 1, 0, "", "load LiDAR scans"},
       {"color", BESLAM_CONFIG_BOOL, false, "false", 1, 0, "", "load colour images beside grey"},
       {"ego_poses", BESLAM_CONFIG_PATH, false, "\"\"", 1, 0, "", "KITTI-format poses for layouts without them"},
+      {"synth_set", BESLAM_CONFIG_STRING, false, "\"\"", 1, 0, "",
+       "synth: config overrides 'key=value,key=value' applied to the preset named by sequence"},
   };
 }
 
@@ -296,6 +298,7 @@ PipelineSpec loadPipeline(const std::string& path, const std::vector<std::string
   spec.dataset.lidar = value(dataset, "lidar").number != 0;
   spec.dataset.color = value(dataset, "color").number != 0;
   spec.dataset.ego_poses = value(dataset, "ego_poses").text;
+  spec.dataset.synth_set = value(dataset, "synth_set").text;
   if (spec.dataset.last >= 0 && spec.dataset.last < spec.dataset.first)
     fail(path, doc["dataset"]["last"], "dataset.last", "is before dataset.first");
 

@@ -293,7 +293,11 @@ void writePreview(const SynthConfig& config, int frame, const std::string& dir) 
 }
 
 std::string ensureDefaultSequence(const std::string& cache_dir, const std::string& name, std::ostream* progress) {
-  const SynthConfig config = presetConfig(name);
+  return ensureSequence(cache_dir, presetConfig(name), name, progress);
+}
+
+std::string ensureSequence(const std::string& cache_dir, const SynthConfig& config, const std::string& name,
+                           std::ostream* progress) {
   const std::string text = synthConfigToYaml(config);
   char hash[20];
   std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(fnv1a(text + "beslam-synth-v1")));

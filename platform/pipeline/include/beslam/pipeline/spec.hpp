@@ -56,8 +56,10 @@ struct SlotSpec {
   PluginConfig config;                       // set by resolvePlugins
 };
 
+// type synth: root is a cache folder, sequence a synth preset name or config file; the sequence is
+// rendered there once (keyed by a hash of the full config) and then read as KITTI odometry.
 struct DatasetSpec {
-  std::string type, root, sequence, camera, ego_poses;
+  std::string type, root, sequence, camera, ego_poses, synth_set;
   int64_t first = 0, last = -1, step = 1;
   bool lidar = false, color = false;
 };

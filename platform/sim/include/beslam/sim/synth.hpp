@@ -221,6 +221,9 @@ void writePreview(const SynthConfig& config, int frame, const std::string& dir);
 // a KITTI odometry root (sequences/00, poses/00.txt).
 std::string ensureDefaultSequence(const std::string& cache_dir, const std::string& name = "urban_loop",
                                   std::ostream* progress = nullptr);
+// The same for any config: cache_dir/<name>-<hash of the full config>/, rendered once.
+std::string ensureSequence(const std::string& cache_dir, const SynthConfig& config, const std::string& name,
+                           std::ostream* progress = nullptr);
 
 // `beslam synth` (args exclude the program name and "synth"):
 //   --config FILE (or a preset name), --out DIR, --set k=v (repeatable), --preview DIR, --frame N, --help.
