@@ -1,0 +1,329 @@
+#include "beslam/mask_common/contour.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <ceres/ceres.h>
+#include <opencv2/imgproc.hpp>
+
+namespace beslam::mask {
+
+namespace {
+
+template <class T>
+T cubicAt(const T* c, double t) {
+  return c[0] + T(t) * (c[1] + T(t) * (c[2] + T(t) * c[3]));
+}
+template <class T>
+T cubicSlope(const T* c, double t, double half_width) {
+  return (c[1] + T(t) * (T(2) * c[2] + T(3 * t) * c[3])) / T(half_width);
+}
+
+// Distance (px, vertical) of an edge point to its rectangle's curve; linear in the coefficients.
+class PointCost : public ceres::SizedCostFunction<1, 4> {
+ public:
+  PointCost(double t, double y) : t_(t), y_(y) {}
+  bool Evaluate(double const* const* p, double* r, double** J) const override {
+    const double* c = p[0];
+    r[0] = c[0] + t_ * (c[1] + t_ * (c[2] + t_ * c[3])) - y_;
+    if (J && J[0]) J[0][0] = 1, J[0][1] = t_, J[0][2] = t_ * t_, J[0][3] = t_ * t_ * t_;
+    return true;
+  }
+
+ private:
+  double t_, y_;
+};
+
+// C0 join of two neighbouring curves at a shared x.
+struct JoinCost {
+  double ta, tb, w;
+  template <class T>
+  bool operator()(const T* a, const T* b, T* r) const {
+    r[0] = T(w) * (cubicAt(a, ta) - cubicAt(b, tb));
+    return true;
+  }
+};
+
+// Equation (3): the angle between the image gradient at an edge point (unit normal ne) and the normal of
+// the fitted curve at that x, as sin(angle) (edge polarity does not matter). With d = f'(x) the curve
+// normal is (-d, 1) / n, n = sqrt(1 + d^2), and r = w (nx / n + ny d / n), dr/dd = w (ny - nx d) / n^3.
+class SmoothCost : public ceres::SizedCostFunction<1, 4> {
+ public:
+  SmoothCost(double t, double half_width, double nx, double ny, double w)
+      : t_(t), hw_(half_width), nx_(nx), ny_(ny), w_(w) {}
+  bool Evaluate(double const* const* p, double* r, double** J) const override {
+    const double* c = p[0];
+    const double d = (c[1] + t_ * (2 * c[2] + 3 * t_ * c[3])) / hw_;
+    const double n2 = 1 + d * d, n = std::sqrt(n2);
+    r[0] = w_ * (nx_ + ny_ * d) / n;
+    if (J && J[0]) {
+      const double drdd = w_ * (ny_ - nx_ * d) / (n2 * n);
+      J[0][0] = 0, J[0][1] = drdd / hw_, J[0][2] = drdd * 2 * t_ / hw_, J[0][3] = drdd * 3 * t_ * t_ / hw_;
+    }
+    return true;
+  }
+
+ private:
+  double t_, hw_, nx_, ny_, w_;
+};
+
+struct EdgePoint {
+  int x, y;
+  double nx, ny;  // unit image gradient
+};
+
+}  // namespace
+
+ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, const cv::Mat& prior,
+                            const ContourParams& params) {
+  CV_Assert(gray_crop.type() == CV_8UC1 && region.type() == CV_8UC1 && gray_crop.size() == region.size());
+  CV_Assert(prior.empty() || (prior.type() == CV_8UC1 && prior.size() == region.size()));
+  ContourResult result;
+  const cv::Mat fallback = prior.empty() ? region : prior;
+  result.mask = fallback.clone();
+  const int W = region.cols, H = region.rows;
+  if (W < params.min_size_px || H < params.min_size_px) return result;
+
+  // Column extents of the region and of the fallback outline.
+  std::vector<int> rTop(W, -1), rBot(W, -1), fTop(W, -1), fBot(W, -1);
+  for (int y = 0; y < H; ++y) {
+    const uint8_t* r = region.ptr<uint8_t>(y);
+    const uint8_t* f = fallback.ptr<uint8_t>(y);
+    for (int x = 0; x < W; ++x) {
+      if (r[x]) {
+        if (rTop[x] < 0) rTop[x] = y;
+        rBot[x] = y;
+      }
+      if (f[x]) {
+        if (fTop[x] < 0) fTop[x] = y;
+        fBot[x] = y;
+      }
+    }
+  }
+  int xl = -1, xr = -1, y0 = H, y1 = -1;
+  for (int x = 0; x < W; ++x)
+    if (rTop[x] >= 0) {
+      if (xl < 0) xl = x;
+      xr = x;
+      y0 = std::min(y0, rTop[x]);
+      y1 = std::max(y1, rBot[x]);
+    }
+  if (xl < 0 || xr - xl + 1 < params.min_size_px || y1 - y0 + 1 < params.min_size_px) return result;
+  int fl = -1, fr = -1;
+  for (int x = 0; x < W; ++x)
+    if (fTop[x] >= 0) {
+      if (fl < 0) fl = x;
+      fr = x;
+    }
+  if (fl < 0) return result;
+
+  cv::Mat blurred, edges;
+  cv::GaussianBlur(gray_crop, blurred, cv::Size(3, 3), 0);
+  cv::Canny(blurred, edges, params.canny_low, params.canny_high, 3, true);
+  auto gradient = [&blurred, W, H](int x, int y, double& nx, double& ny) {
+    auto I = [&](int xx, int yy) {
+      return static_cast<double>(blurred.at<uint8_t>(std::clamp(yy, 0, H - 1), std::clamp(xx, 0, W - 1)));
+    };
+    const double gx = (I(x + 1, y - 1) + 2 * I(x + 1, y) + I(x + 1, y + 1)) - (I(x - 1, y - 1) + 2 * I(x - 1, y) + I(x - 1, y + 1));
+    const double gy = (I(x - 1, y + 1) + 2 * I(x, y + 1) + I(x + 1, y + 1)) - (I(x - 1, y - 1) + 2 * I(x, y - 1) + I(x + 1, y - 1));
+    const double n = std::hypot(gx, gy);
+    if (n < 1e-9) return false;
+    nx = gx / n, ny = gy / n;
+    return true;
+  };
+
+  // Six equal rectangles of the region's bounding rectangle, clockwise from the top left.
+  const double ymid = 0.5 * (y0 + y1);
+  const double xb[4] = {static_cast<double>(xl), xl + (xr - xl) / 3.0, xl + 2 * (xr - xl) / 3.0, static_cast<double>(xr)};
+  struct Piece {
+    double xa, xb;
+    bool top;
+  };
+  const Piece pieces[6] = {{xb[0], xb[1], true}, {xb[1], xb[2], true}, {xb[2], xb[3], true},
+                           {xb[2], xb[3], false}, {xb[1], xb[2], false}, {xb[0], xb[1], false}};
+  auto pieceOf = [&xb](int x, bool top) {
+    const int col = x < xb[1] ? 0 : (x < xb[2] ? 1 : 2);
+    return top ? col : 5 - col;
+  };
+
+  // Outline edge points per column.
+  std::array<std::vector<EdgePoint>, 6> pts;
+  const int tol = static_cast<int>(std::lround(params.prior_tolerance_px));
+  for (int x = xl; x <= xr; ++x) {
+    if (rTop[x] < 0) continue;
+    for (int side = 0; side < 2; ++side) {
+      const bool top = side == 0;
+      int found = -1;
+      if (!prior.empty()) {
+        const int ref = top ? fTop[x] : fBot[x];
+        if (ref < 0) continue;
+        int best = tol + 1;
+        for (int y = std::max(rTop[x], ref - tol); y <= std::min(rBot[x], ref + tol); ++y)
+          if (edges.at<uint8_t>(y, x) && std::abs(y - ref) < best) best = std::abs(y - ref), found = y;
+      } else if (top) {
+        for (int y = rTop[x]; y <= std::min<int>(rBot[x], static_cast<int>(ymid)); ++y)
+          if (edges.at<uint8_t>(y, x)) {
+            found = y;
+            break;
+          }
+      } else {
+        for (int y = rBot[x]; y >= std::max<int>(rTop[x], static_cast<int>(std::ceil(ymid))); --y)
+          if (edges.at<uint8_t>(y, x)) {
+            found = y;
+            break;
+          }
+      }
+      if (found < 0) continue;
+      EdgePoint e{x, found, 0, 0};
+      if (!gradient(x, found, e.nx, e.ny)) continue;
+      pts[pieceOf(x, top)].push_back(e);
+    }
+  }
+
+  // Support and fallback per rectangle.
+  int total_cols = 0, total_pts = 0;
+  std::array<int, 6> cols{};
+  for (int i = 0; i < 6; ++i) {
+    for (int x = static_cast<int>(std::ceil(pieces[i].xa)); x <= pieces[i].xb && x <= xr; ++x)
+      if (rTop[x] >= 0 && pieceOf(x, pieces[i].top) == i) ++cols[i];
+    total_cols += cols[i];
+    total_pts += static_cast<int>(pts[i].size());
+    result.from_edges[i] = cols[i] > 0 && pts[i].size() >= params.min_support * cols[i] && pts[i].size() >= 4;
+  }
+  result.support = total_cols ? static_cast<double>(total_pts) / total_cols : 0;
+  if (result.support < params.min_total_support) return result;
+
+  // Data of each rectangle: its edge points, or the fallback outline where edges are weak.
+  std::array<std::vector<cv::Point2d>, 6> data;
+  for (int i = 0; i < 6; ++i) {
+    if (result.from_edges[i]) {
+      for (const EdgePoint& e : pts[i]) data[i].emplace_back(e.x, e.y);
+    } else {
+      for (int x = static_cast<int>(std::ceil(pieces[i].xa)); x <= pieces[i].xb && x <= xr; ++x) {
+        const int y = pieces[i].top ? fTop[x] : fBot[x];
+        if (y >= 0) data[i].emplace_back(x, y);
+      }
+      pts[i].clear();
+    }
+    Cubic& c = result.curves[i];
+    c.x_mid = 0.5 * (pieces[i].xa + pieces[i].xb);
+    c.half_width = std::max(1.0, 0.5 * (pieces[i].xb - pieces[i].xa));
+    // Initial least-squares cubic (degree reduced when there are few points).
+    const int n = static_cast<int>(data[i].size());
+    const double y_default = pieces[i].top ? y0 : y1;
+    if (n == 0) {
+      c.c = {y_default, 0, 0, 0};
+      continue;
+    }
+    const int deg = std::min(3, n - 1);
+    cv::Mat A(n, deg + 1, CV_64F), b(n, 1, CV_64F), sol;
+    for (int k = 0; k < n; ++k) {
+      const double t = (data[i][k].x - c.x_mid) / c.half_width;
+      double p = 1;
+      for (int j = 0; j <= deg; ++j) A.at<double>(k, j) = p, p *= t;
+      b.at<double>(k) = data[i][k].y;
+    }
+    cv::solve(A, b, sol, cv::DECOMP_SVD);
+    c.c = {0, 0, 0, 0};
+    for (int j = 0; j <= deg; ++j) c.c[j] = sol.at<double>(j);
+  }
+
+  // Joint refinement with Ceres.
+  ceres::Problem::Options popt;
+  popt.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  popt.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(popt);
+  std::array<std::array<double, 4>, 6> coef;
+  for (int i = 0; i < 6; ++i) coef[i] = result.curves[i].c;
+  for (int i = 0; i < 6; ++i) {
+    problem.AddParameterBlock(coef[i].data(), 4);
+    const Cubic& c = result.curves[i];
+    // Evenly thinned to at most max_points_per_piece (the fit is over-determined long before that).
+    const size_t stride = std::max<size_t>(1, (data[i].size() + params.max_points_per_piece - 1) / params.max_points_per_piece);
+    const double weight = (result.from_edges[i] ? 1.0 : 0.5) * static_cast<double>(stride);
+    for (size_t k = 0; k < data[i].size(); k += stride) {
+      const cv::Point2d& p = data[i][k];
+      problem.AddResidualBlock(new PointCost((p.x - c.x_mid) / c.half_width, p.y),
+                               new ceres::ScaledLoss(new ceres::CauchyLoss(2.0), weight, ceres::TAKE_OWNERSHIP), coef[i].data());
+    }
+  }
+  // Neighbours sharing an end: R1-R2, R2-R3 (top row) and R4-R5, R5-R6 (bottom row) at the column
+  // boundaries. (R3-R4 and R6-R1 meet through the region's vertical sides.)
+  const int joins[4][2] = {{0, 1}, {1, 2}, {3, 4}, {4, 5}};
+  int smooth_terms = 0;
+  for (const auto& j : joins) {
+    const Cubic& a = result.curves[j[0]];
+    const Cubic& b = result.curves[j[1]];
+    const double x = (j[0] < 3) ? pieces[j[0]].xb : pieces[j[0]].xa;  // shared boundary
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<JoinCost, 1, 4, 4>(
+                                 new JoinCost{(x - a.x_mid) / a.half_width, (x - b.x_mid) / b.half_width, params.join_weight}),
+                             nullptr, coef[j[0]].data(), coef[j[1]].data());
+    // Equation (3): the M edge points of both rectangles near the shared boundary, against both curves.
+    const double band = std::max(2.0, 0.25 * (pieces[j[0]].xb - pieces[j[0]].xa));
+    for (int side = 0; side < 2; ++side) {
+      const size_t stride = std::max<size_t>(1, pts[j[side]].size() / params.max_points_per_piece);
+      for (size_t q = 0; q < pts[j[side]].size(); q += stride) {
+        const EdgePoint& e = pts[j[side]][q];
+        if (std::abs(e.x - x) > band) continue;
+        for (int k = 0; k < 2; ++k) {
+          const Cubic& c = result.curves[j[k]];
+          problem.AddResidualBlock(new SmoothCost((e.x - c.x_mid) / c.half_width, c.half_width, e.nx, e.ny, params.smooth_weight),
+                                   new ceres::SoftLOneLoss(0.1 * params.smooth_weight), coef[j[k]].data());
+          ++smooth_terms;
+        }
+      }
+    }
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 24 unknowns: J^T J is tiny
+  options.max_num_iterations = params.max_iterations;
+  options.logging_type = ceres::SILENT;
+  options.minimizer_progress_to_stdout = false;
+  options.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  for (int i = 0; i < 6; ++i) result.curves[i].c = coef[i];
+
+  // Equation (3) at the solution, for reporting.
+  double xi = 0;
+  int m = 0;
+  for (const auto& j : joins) {
+    const double x = (j[0] < 3) ? pieces[j[0]].xb : pieces[j[0]].xa;
+    const double band = std::max(2.0, 0.25 * (pieces[j[0]].xb - pieces[j[0]].xa));
+    for (int side = 0; side < 2; ++side)
+      for (const EdgePoint& e : pts[j[side]]) {
+        if (std::abs(e.x - x) > band) continue;
+        const double d = result.curves[j[side]].slope(e.x);
+        const double n = std::hypot(d, 1.0);
+        xi += std::abs(e.nx * (1 / n) - e.ny * (-d / n));
+        ++m;
+      }
+  }
+  result.smoothness = m ? xi / m : 0;
+
+  // The closed contour: top curve left to right, bottom curve right to left, within the region's and
+  // (with a prior) the prior's horizontal extent.
+  const int xa = prior.empty() ? xl : std::max(xl, fl), xz = prior.empty() ? xr : std::min(xr, fr);
+  std::vector<cv::Point> top, bottom;
+  for (int x = xa; x <= xz; ++x) {
+    if (rTop[x] < 0) continue;
+    double yt = result.curves[pieceOf(x, true)](x);
+    double yb = result.curves[pieceOf(x, false)](x);
+    yt = std::clamp(yt, static_cast<double>(rTop[x]), static_cast<double>(rBot[x]));
+    yb = std::clamp(yb, static_cast<double>(rTop[x]), static_cast<double>(rBot[x]));
+    if (yb < yt) continue;
+    top.emplace_back(x, static_cast<int>(std::lround(yt)));
+    bottom.emplace_back(x, static_cast<int>(std::lround(yb)));
+  }
+  if (top.size() < 3) return result;
+  std::vector<cv::Point> contour(top.begin(), top.end());
+  contour.insert(contour.end(), bottom.rbegin(), bottom.rend());
+  cv::Mat filled = cv::Mat::zeros(region.size(), CV_8UC1);
+  cv::fillPoly(filled, std::vector<std::vector<cv::Point>>{contour}, cv::Scalar(255));
+  cv::bitwise_and(filled, region, result.mask);
+  result.refined = true;
+  (void)smooth_terms;
+  return result;
+}
+
+}  // namespace beslam::mask

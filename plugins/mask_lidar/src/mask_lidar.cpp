@@ -1,0 +1,84 @@
+// mask_lidar: the paper's Algorithm 1 with LiDAR. The scan is brought into the rectified camera frame
+// (T_cam_lidar from the host: KITTI's R0_rect * Tr_velo_to_cam, with P's intrinsics), points in front of
+// the camera and inside the image are kept and viewed top down; each box is matched to its points in and
+// around it (BEV cluster), fine-tuned to them (centre and yaw; size and vertical extent kept) and
+// projected back. Where an object's projected points are dense enough they give its mask directly
+// (splatted, closed, hole-filled, clipped to the refined box); `contour` then refines the outline to the
+// image edges near it. A frame without a scan gets plain box projection (warned once).
+#include "beslam/mask_common/plugin_config.hpp"
+#include "beslam/sdk/sdk.hpp"
+
+namespace {
+
+namespace field = beslam::sdk::field;
+
+const beslam_config_field kFields[] = {
+    BESLAM_MASK_COMMON_FIELDS,
+    field::Bool("refine_boxes", "true", "fine-tune each box to its LiDAR points in the bird's-eye view"),
+    field::Bool("point_masks", "true", "per-object masks from the projected LiDAR points where dense enough"),
+    field::Double("search_margin", "1.0", 0, 10, "m around a box where its points are looked for"),
+    field::Double("ground_clearance", "0.3", 0, 2, "m above the box bottom below which points count as ground (road, kerb, pavement)"),
+    field::Double("yaw_range_deg", "15", 0, 90, "yaw searched around the input box's (degrees)"),
+    field::Int("min_points", "15", 3, 100000, "fewer matched points: the box is not fine-tuned"),
+    field::Int("mask_min_points", "40", 3, 100000, "fewer projected object points: no point mask"),
+    field::Int("splat_half_width", "2", 0, 50, "px: each projected point covers 2w+1 columns"),
+    field::Int("splat_half_height", "4", 0, 50, "px: each projected point covers 2h+1 rows (beam spacing)"),
+    field::Double("max_range", "80", 1, 500, "LiDAR points farther than this (m) are ignored"),
+};
+
+class MaskLidar : public beslam::sdk::MaskGenerator {
+ public:
+  MaskLidar(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
+      : context_(context), builder_(make(context, config)), box_only_(makeBoxOnly(context, config)) {}
+
+  void generate(const beslam::sdk::Frame& frame, const std::vector<beslam_box3d>& boxes, cv::Mat& mask) override {
+    if (!frame.hasLidar()) {
+      if (!warned_) context_.warn("frame " + std::to_string(frame.index) + " has no LiDAR scan: box projection only");
+      warned_ = true;
+      box_only_.generate(frame.gray, beslam_point_cloud_view{}, boxes, mask);
+      return;
+    }
+    builder_.generate(frame.gray, frame.lidar, boxes, mask);
+  }
+
+ private:
+  static beslam::mask::MaskOptions options(const beslam::sdk::Config& config) {
+    beslam::mask::MaskOptions o;
+    beslam::mask::readCommonOptions(config, o);
+    o.use_lidar = true;
+    o.refine_boxes = config.getBool("refine_boxes");
+    o.point_masks = config.getBool("point_masks");
+    o.bev.search_margin = config.getDouble("search_margin");
+    o.bev.ground_clearance = config.getDouble("ground_clearance");
+    o.bev.yaw_range_deg = config.getDouble("yaw_range_deg");
+    o.bev.min_points = static_cast<int>(config.getInt("min_points"));
+    o.points.min_points = static_cast<int>(config.getInt("mask_min_points"));
+    o.points.splat_half_width = static_cast<int>(config.getInt("splat_half_width"));
+    o.points.splat_half_height = static_cast<int>(config.getInt("splat_half_height"));
+    o.max_range = config.getDouble("max_range");
+    return o;
+  }
+  static beslam::mask::MaskBuilder make(const beslam::sdk::Context& context, const beslam::sdk::Config& config) {
+    if (!context.T_cam_lidar())
+      throw beslam::sdk::ConfigError(
+          "mask_lidar needs the LiDAR-to-camera extrinsics, and this dataset has none (use mask_box)");
+    return beslam::mask::MaskBuilder(beslam::mask::fromCamera(context.camera()), context.T_cam_lidar(), options(config));
+  }
+  static beslam::mask::MaskBuilder makeBoxOnly(const beslam::sdk::Context& context, const beslam::sdk::Config& config) {
+    beslam::mask::MaskOptions o = options(config);
+    o.use_lidar = false;
+    return beslam::mask::MaskBuilder(beslam::mask::fromCamera(context.camera()), std::nullopt, o);
+  }
+
+  const beslam::sdk::Context& context_;
+  beslam::mask::MaskBuilder builder_;
+  beslam::mask::MaskBuilder box_only_;
+  bool warned_ = false;
+};
+
+}  // namespace
+
+BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<MaskLidar>(
+    {"mask_lidar", "LiDAR-refined mask",
+     "Algorithm 1 with LiDAR: boxes fine-tuned to the scan in BEV, per-object point masks, optional contour refinement",
+     {1, 0, 0}, kFields}))
