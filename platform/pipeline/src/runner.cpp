@@ -205,6 +205,7 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
   std::vector<TimingRow> timings;
   std::vector<std::string> object_rows;
   std::vector<double> frame_ms;
+  std::vector<int64_t> frame_indices;
   const bool tty = options.progress && isatty(STDERR_FILENO);
   const size_t n = dataset->size();
 
@@ -260,8 +261,8 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
     const registry::TrackOutput tracked = backend->track(cf, mask_view, boxes);
     timing.stages.emplace_back("backend", msSince(t0));
     for (const auto& [name, ms] : tracked.stage_ms) timing.stages.emplace_back("backend." + name, ms);
-    if (tracked.result.state == BESLAM_TRACKING_OK) ++summary.tracked;
-    else summary.untracked.push_back(frame.index);
+    if (tracked.result.state == BESLAM_TRACKING_OK) ++summary.tracked_online;
+    frame_indices.push_back(frame.index);
 
     if (reconstructor && tracked.result.is_keyframe) {
       t0 = Clock::now();
@@ -300,6 +301,15 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
   const auto online_poses = backend->trajectory(BESLAM_TRAJECTORY_ONLINE);
   const auto keyframe_poses = backend->trajectory(BESLAM_TRAJECTORY_KEYFRAMES);
   summary.keyframes = static_cast<int64_t>(keyframe_poses.size());
+  {  // a frame counts as tracked when the backend's final trajectory has it (an initialisation
+     // reference frame gets its pose once the map exists)
+    std::vector<int64_t> in_final;
+    for (const auto& p : final_poses) in_final.push_back(p.frame_index);
+    std::sort(in_final.begin(), in_final.end());
+    for (int64_t index : frame_indices)
+      if (std::binary_search(in_final.begin(), in_final.end(), index)) ++summary.tracked;
+      else summary.untracked.push_back(index);
+  }
   writeTrajectory(out_dir, "trajectory", final_poses, true);
   writeTrajectory(out_dir, "trajectory_online", online_poses, false);
   writeTrajectory(out_dir, "keyframes", keyframe_poses, false);
@@ -350,6 +360,7 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
   json["dataset"] = dataset->describe();
   json["frames"] = summary.frames;
   json["tracked"] = summary.tracked;
+  json["tracked_when_seen"] = summary.tracked_online;
   json["untracked_frames"] = summary.untracked;
   json["keyframes"] = summary.keyframes;
   json["median_frame_ms"] = summary.median_frame_ms;

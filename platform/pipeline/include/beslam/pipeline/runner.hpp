@@ -28,9 +28,10 @@ struct RunOptions {
 struct RunSummary {
   std::string output_dir;
   int64_t frames = 0;
-  int64_t tracked = 0;
+  int64_t tracked = 0;                // frames in the backend's final trajectory
+  int64_t tracked_online = 0;         // frames the backend reported OK when it tracked them
   int64_t keyframes = 0;
-  std::vector<int64_t> untracked;     // frame indices the backend did not track
+  std::vector<int64_t> untracked;     // frame indices absent from the final trajectory
   bool has_ape = false;
   double ape_trans_rmse = 0;          // metres, with spec.evaluation.alignment
   double rpe_trans_rmse = 0;

@@ -1,0 +1,56 @@
+#include "features/feature_set.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace beslam::orb {
+
+FeatureGrid::FeatureGrid(const std::vector<cv::KeyPoint>& keypoints, int width, int height)
+    : inv_cell_w_(static_cast<float>(kCols) / static_cast<float>(std::max(width, 1))),
+      inv_cell_h_(static_cast<float>(kRows) / static_cast<float>(std::max(height, 1))) {
+  const int n_cells = kCols * kRows;
+  std::vector<int> cell_of(keypoints.size());
+  std::vector<int> count(n_cells + 1, 0);
+  for (size_t i = 0; i < keypoints.size(); ++i) {
+    const int cx = std::clamp(static_cast<int>(keypoints[i].pt.x * inv_cell_w_), 0, kCols - 1);
+    const int cy = std::clamp(static_cast<int>(keypoints[i].pt.y * inv_cell_h_), 0, kRows - 1);
+    cell_of[i] = cy * kCols + cx;
+    ++count[cell_of[i] + 1];
+  }
+  start_.assign(n_cells + 1, 0);
+  for (int c = 0; c < n_cells; ++c) start_[c + 1] = start_[c] + count[c + 1];
+  index_.resize(keypoints.size());
+  std::vector<int> fill(start_.begin(), start_.end() - 1);
+  for (size_t i = 0; i < keypoints.size(); ++i) index_[fill[cell_of[i]]++] = static_cast<int>(i);
+}
+
+void FeatureGrid::cellsInWindow(float x0, float y0, float x1, float y1, std::vector<int>& out) const {
+  if (start_.empty()) return;
+  const int c0 = std::max(0, static_cast<int>(std::floor(x0 * inv_cell_w_)));
+  const int c1 = std::min(kCols - 1, static_cast<int>(std::floor(x1 * inv_cell_w_)));
+  const int r0 = std::max(0, static_cast<int>(std::floor(y0 * inv_cell_h_)));
+  const int r1 = std::min(kRows - 1, static_cast<int>(std::floor(y1 * inv_cell_h_)));
+  for (int r = r0; r <= r1; ++r)
+    for (int c = c0; c <= c1; ++c) {
+      const int cell = r * kCols + c;
+      out.insert(out.end(), index_.begin() + start_[cell], index_.begin() + start_[cell + 1]);
+    }
+}
+
+std::vector<int> FeatureGrid::query(const std::vector<cv::KeyPoint>& keypoints, float u, float v, float r,
+                                    int min_level, int max_level) const {
+  std::vector<int> out;
+  std::vector<int> cand;
+  cellsInWindow(u - r, v - r, u + r, v + r, cand);
+  out.reserve(cand.size());
+  for (int i : cand) {
+    const cv::KeyPoint& kp = keypoints[i];
+    if (min_level >= 0 && kp.octave < min_level) continue;
+    if (max_level >= 0 && kp.octave > max_level) continue;
+    if (std::fabs(kp.pt.x - u) > r || std::fabs(kp.pt.y - v) > r) continue;
+    out.push_back(i);
+  }
+  return out;
+}
+
+}  // namespace beslam::orb

@@ -1,0 +1,47 @@
+// The features of one image: keypoints (level-0 pixels, octave = pyramid level), rBRIEF descriptors,
+// per-keypoint label/colour, and a 64 x 48 grid for constant-time "keypoints near (u, v)" queries.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace beslam::orb {
+
+class FeatureGrid {
+ public:
+  static constexpr int kCols = 64, kRows = 48;
+  FeatureGrid() = default;
+  FeatureGrid(const std::vector<cv::KeyPoint>& keypoints, int width, int height);
+  // Indices of keypoints within radius r (square window) of (u, v), with min_level <= octave <= max_level
+  // (a negative bound means unbounded).
+  std::vector<int> query(const std::vector<cv::KeyPoint>& keypoints, float u, float v, float r,
+                         int min_level = -1, int max_level = -1) const;
+  // Indices in the grid cells that intersect the window [x0,x1] x [y0,y1] (no distance test).
+  void cellsInWindow(float x0, float y0, float x1, float y1, std::vector<int>& out) const;
+
+ private:
+  float inv_cell_w_ = 0, inv_cell_h_ = 0;
+  std::vector<int> start_;   // kCols*kRows+1 offsets into index_
+  std::vector<int> index_;
+};
+
+struct FeatureSet {
+  int width = 0, height = 0;
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;                 // N x 32, CV_8U
+  std::vector<uint16_t> labels;        // mask value under each keypoint (0 without a mask)
+  std::vector<cv::Vec3b> colours;      // BGR (grey repeated for grey input)
+  FeatureGrid grid;
+
+  size_t size() const { return keypoints.size(); }
+  const uint8_t* descriptor(size_t i) const { return descriptors.ptr<uint8_t>(static_cast<int>(i)); }
+  bool onStaticObject(size_t i) const { return labels[i] >= 1000; }
+  void buildGrid() { grid = FeatureGrid(keypoints, width, height); }
+  std::vector<int> query(float u, float v, float r, int min_level = -1, int max_level = -1) const {
+    return grid.query(keypoints, u, v, r, min_level, max_level);
+  }
+};
+
+}  // namespace beslam::orb

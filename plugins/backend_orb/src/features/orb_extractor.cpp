@@ -1,0 +1,299 @@
+#include "features/orb_extractor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <list>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+namespace beslam::orb {
+namespace {
+
+constexpr int kHalfPatch = 15;
+
+struct QuadNode {
+  float x0, y0, x1, y1;
+  std::vector<int> idx;
+};
+
+}  // namespace
+
+OrbExtractor::OrbExtractor(const ExtractorOptions& options)
+    : options_(options), pyramid_(options.levels, options.scale_factor) {
+  // Half-width of a disc of radius 15 at each row offset v (symmetric by construction).
+  umax_.resize(kHalfPatch + 1);
+  for (int v = 0; v <= kHalfPatch; ++v)
+    umax_[v] = static_cast<int>(std::floor(std::sqrt(kHalfPatch * kHalfPatch - v * v + 0.5)));
+  describer_ = cv::ORB::create(options.features, static_cast<float>(options.scale_factor), options.levels,
+                               options.border, 0, 2, cv::ORB::FAST_SCORE, 31, 20);
+}
+
+std::vector<int> OrbExtractor::levelBudgets(int n) const {
+  const int levels = options_.levels;
+  const double inv = 1.0 / options_.scale_factor;
+  std::vector<int> budget(levels);
+  double per_level = n * (1 - inv) / (1 - std::pow(inv, levels));
+  int total = 0;
+  for (int l = 0; l < levels - 1; ++l) {
+    budget[l] = static_cast<int>(std::lround(per_level));
+    total += budget[l];
+    per_level *= inv;
+  }
+  budget[levels - 1] = std::max(n - total, 0);
+  return budget;
+}
+
+std::vector<int> OrbExtractor::distributeQuadtree(const std::vector<cv::KeyPoint>& candidates, float x0, float y0,
+                                                  float x1, float y1, int n) {
+  std::vector<int> out;
+  if (candidates.empty() || n <= 0) return out;
+  // Initial nodes: roughly square, side by side along the longer axis.
+  const float w = x1 - x0, h = y1 - y0;
+  const int n_init = std::max(1, static_cast<int>(std::lround(w / std::max(h, 1.0f))));
+  const float step = w / n_init;
+  std::list<QuadNode> nodes;
+  std::vector<QuadNode*> init;
+  for (int i = 0; i < n_init; ++i) {
+    nodes.push_back({x0 + step * i, y0, x0 + step * (i + 1), y1, {}});
+  }
+  std::vector<std::list<QuadNode>::iterator> by_col;
+  for (auto it = nodes.begin(); it != nodes.end(); ++it) by_col.push_back(it);
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const int c = std::clamp(static_cast<int>((candidates[i].pt.x - x0) / step), 0, n_init - 1);
+    by_col[c]->idx.push_back(static_cast<int>(i));
+  }
+  for (auto it = nodes.begin(); it != nodes.end();) it = it->idx.empty() ? nodes.erase(it) : std::next(it);
+
+  auto split = [&](const QuadNode& node, std::vector<QuadNode>& children) {
+    const float mx = 0.5f * (node.x0 + node.x1), my = 0.5f * (node.y0 + node.y1);
+    children = {{node.x0, node.y0, mx, my, {}}, {mx, node.y0, node.x1, my, {}},
+                {node.x0, my, mx, node.y1, {}}, {mx, my, node.x1, node.y1, {}}};
+    for (int i : node.idx) {
+      const cv::Point2f& p = candidates[i].pt;
+      children[(p.x < mx ? 0 : 1) + (p.y < my ? 0 : 2)].idx.push_back(i);
+    }
+  };
+  auto splittable = [](const QuadNode& node) { return node.idx.size() > 1 && node.x1 - node.x0 > 1.0f; };
+
+  while (static_cast<int>(nodes.size()) < n) {
+    // Nodes with the most keypoints are split first, so the last pass stops exactly at the budget.
+    std::vector<std::list<QuadNode>::iterator> order;
+    for (auto it = nodes.begin(); it != nodes.end(); ++it)
+      if (splittable(*it)) order.push_back(it);
+    if (order.empty()) break;
+    std::stable_sort(order.begin(), order.end(),
+                     [](const auto& a, const auto& b) { return a->idx.size() > b->idx.size(); });
+    std::vector<QuadNode> children;
+    for (auto it : order) {
+      split(*it, children);
+      for (auto& child : children)
+        if (!child.idx.empty()) nodes.insert(it, std::move(child));
+      nodes.erase(it);
+      if (static_cast<int>(nodes.size()) >= n) break;
+    }
+  }
+  out.reserve(nodes.size());
+  for (const QuadNode& node : nodes) {
+    int best = node.idx.front();
+    for (int i : node.idx)
+      if (candidates[i].response > candidates[best].response) best = i;
+    out.push_back(best);
+  }
+  if (static_cast<int>(out.size()) > n) {  // the last split may overshoot by up to 3
+    std::stable_sort(out.begin(), out.end(),
+                     [&](int a, int b) { return candidates[a].response > candidates[b].response; });
+    out.resize(n);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+float OrbExtractor::icAngle(const cv::Mat& image, const cv::Point2f& pt) const {
+  const int cx = cvRound(pt.x), cy = cvRound(pt.y);
+  const int step = static_cast<int>(image.step1());
+  const uint8_t* centre = image.ptr<uint8_t>(cy) + cx;
+  int m10 = 0, m01 = 0;
+  for (int u = -kHalfPatch; u <= kHalfPatch; ++u) m10 += u * centre[u];
+  for (int v = 1; v <= kHalfPatch; ++v) {
+    int row_sum = 0;
+    const int d = umax_[v];
+    for (int u = -d; u <= d; ++u) {
+      const int below = centre[u + v * step], above = centre[u - v * step];
+      row_sum += below - above;
+      m10 += u * (below + above);
+    }
+    m01 += v * row_sum;
+  }
+  float angle = cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
+  return angle;
+}
+
+std::shared_ptr<FeatureSet> OrbExtractor::extract(const cv::Mat& image, const cv::Mat& labels, int budget) const {
+  if (image.empty()) throw std::invalid_argument("OrbExtractor: empty image");
+  cv::Mat grey;
+  if (image.type() == CV_8UC3) {
+    cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  } else if (image.type() == CV_8UC1) {
+    grey = image;
+  } else {
+    throw std::invalid_argument("OrbExtractor: image must be CV_8UC1 or CV_8UC3");
+  }
+  const bool has_labels = !labels.empty();
+  if (has_labels && (labels.type() != CV_16UC1 || labels.size() != image.size()))
+    throw std::invalid_argument("OrbExtractor: label mask must be CV_16UC1 of the image size");
+
+  auto features = std::make_shared<FeatureSet>();
+  features->width = image.cols;
+  features->height = image.rows;
+  const std::vector<int> budgets = levelBudgets(budget > 0 ? budget : options_.features);
+  const int border = options_.border;
+  cv::Rect static_box;  // level-0 bounding box of static-object pixels
+  if (has_labels) {
+    cv::Mat static_mask = labels >= 1000;
+    if (cv::countNonZero(static_mask) > 0) static_box = cv::boundingRect(static_mask);
+  }
+
+  cv::Mat level_image = grey;
+  for (int level = 0; level < options_.levels; ++level) {
+    if (level > 0) {
+      const double s = pyramid_.scale[level];
+      cv::Size size(static_cast<int>(std::lround(grey.cols / s)), static_cast<int>(std::lround(grey.rows / s)));
+      cv::Mat next;
+      cv::resize(level_image, next, size, 0, 0, cv::INTER_LINEAR);
+      level_image = next;
+    }
+    const int w = level_image.cols, h = level_image.rows;
+    if (w <= 2 * border + 8 || h <= 2 * border + 8) break;
+    const double s = pyramid_.scale[level];
+
+    // FAST at the initial threshold over the whole level; cells left without a corner are searched
+    // again at the fallback threshold; static-object regions at their own (lower) threshold.
+    const int cells_x = std::max(1, (w - 2 * border) / options_.cell_size);
+    const int cells_y = std::max(1, (h - 2 * border) / options_.cell_size);
+    const float cell_w = static_cast<float>(w - 2 * border) / cells_x;
+    const float cell_h = static_cast<float>(h - 2 * border) / cells_y;
+    auto labelAt = [&](const cv::Point2f& p) -> uint16_t {
+      if (!has_labels) return 0;
+      const int x0 = std::min(static_cast<int>((p.x + 0.5) * s), labels.cols - 1);  // level-0 pixel
+      const int y0 = std::min(static_cast<int>((p.y + 0.5) * s), labels.rows - 1);
+      return labels.at<uint16_t>(y0, x0);
+    };
+    auto inside = [&](const cv::Point2f& p) {
+      return p.x >= border && p.y >= border && p.x < w - border && p.y < h - border;
+    };
+    std::vector<cv::KeyPoint> background, objects;
+    std::vector<uint16_t> bg_label, obj_label;
+    std::vector<uint8_t> cell_found(cells_x * cells_y, 0);
+    auto cellOf = [&](const cv::Point2f& p) {
+      const int cx = std::min(static_cast<int>((p.x - border) / cell_w), cells_x - 1);
+      const int cy = std::min(static_cast<int>((p.y - border) / cell_h), cells_y - 1);
+      return cy * cells_x + cx;
+    };
+    std::vector<cv::KeyPoint> raw;
+    cv::FAST(level_image, raw, options_.fast_initial, true);
+    for (const cv::KeyPoint& kp : raw) {
+      if (!inside(kp.pt)) continue;
+      const uint16_t label = labelAt(kp.pt);
+      if (label == 1 || label >= 1000) continue;  // dynamic: dropped; static objects: searched below
+      cell_found[cellOf(kp.pt)] = 1;
+      background.push_back(kp);
+      bg_label.push_back(label);
+    }
+    for (int cy = 0; cy < cells_y; ++cy)
+      for (int cx = 0; cx < cells_x; ++cx) {
+        if (cell_found[cy * cells_x + cx]) continue;
+        const int x0 = border + static_cast<int>(cx * cell_w), y0 = border + static_cast<int>(cy * cell_h);
+        const int x1 = border + static_cast<int>((cx + 1) * cell_w), y1 = border + static_cast<int>((cy + 1) * cell_h);
+        const cv::Rect roi(x0 - 3, y0 - 3, x1 - x0 + 6, y1 - y0 + 6);
+        raw.clear();
+        cv::FAST(level_image(roi), raw, options_.fast_fallback, true);
+        for (cv::KeyPoint kp : raw) {
+          kp.pt.x += roi.x;
+          kp.pt.y += roi.y;
+          if (kp.pt.x < x0 || kp.pt.y < y0 || kp.pt.x >= x1 || kp.pt.y >= y1 || !inside(kp.pt)) continue;
+          const uint16_t label = labelAt(kp.pt);
+          if (label == 1 || label >= 1000) continue;
+          background.push_back(kp);
+          bg_label.push_back(label);
+        }
+      }
+    if (!static_box.empty()) {
+      cv::Rect roi(static_cast<int>(static_box.x / s) - 3, static_cast<int>(static_box.y / s) - 3,
+                   static_cast<int>(static_box.width / s) + 8, static_cast<int>(static_box.height / s) + 8);
+      roi &= cv::Rect(0, 0, w, h);
+      if (roi.width > 7 && roi.height > 7) {
+        raw.clear();
+        cv::FAST(level_image(roi), raw, options_.static_object_fast, true);
+        for (cv::KeyPoint kp : raw) {
+          kp.pt.x += roi.x;
+          kp.pt.y += roi.y;
+          if (!inside(kp.pt)) continue;
+          const uint16_t label = labelAt(kp.pt);
+          if (label < 1000) continue;
+          objects.push_back(kp);
+          obj_label.push_back(label);
+        }
+      }
+    }
+
+    const int n_level = budgets[level];
+    const int n_obj_wanted = std::max(static_cast<int>(std::lround(options_.static_object_budget_share * n_level)),
+                                      n_level - static_cast<int>(background.size()));
+    const int n_obj = std::min(static_cast<int>(objects.size()), std::max(0, n_obj_wanted));
+    const int n_bg = n_level - n_obj;
+    std::vector<cv::KeyPoint> level_kps;
+    std::vector<uint16_t> level_labels;
+    for (int i : distributeQuadtree(background, border, border, w - border, h - border, n_bg)) {
+      level_kps.push_back(background[i]);
+      level_labels.push_back(bg_label[i]);
+    }
+    for (int i : distributeQuadtree(objects, border, border, w - border, h - border, n_obj)) {
+      level_kps.push_back(objects[i]);
+      level_labels.push_back(obj_label[i]);
+    }
+    if (level_kps.empty()) continue;
+
+    for (cv::KeyPoint& kp : level_kps) {
+      kp.angle = icAngle(level_image, kp.pt);
+      kp.octave = 0;
+      kp.size = 31.f;
+    }
+    for (size_t i = 0; i < level_kps.size(); ++i) {
+      cv::KeyPoint kp = level_kps[i];
+      // Level pixel centres to level-0 pixels as cv::resize samples them: (x + 0.5) s - 0.5.
+      kp.pt = (kp.pt + cv::Point2f(0.5f, 0.5f)) * static_cast<float>(s) - cv::Point2f(0.5f, 0.5f);
+      kp.octave = level;
+      kp.size = static_cast<float>(31.0 * s);
+      features->keypoints.push_back(kp);
+      features->labels.push_back(level_labels[i]);
+      const int x0 = std::min(static_cast<int>(kp.pt.x + 0.5f), image.cols - 1);
+      const int y0 = std::min(static_cast<int>(kp.pt.y + 0.5f), image.rows - 1);
+      if (image.type() == CV_8UC3) {
+        features->colours.push_back(image.at<cv::Vec3b>(y0, x0));
+      } else {
+        const uint8_t g = grey.at<uint8_t>(y0, x0);
+        features->colours.push_back(cv::Vec3b(g, g, g));
+      }
+    }
+  }
+  // rBRIEF for all levels in one call: OpenCV rebuilds the same pyramid (same sizes, linear
+  // interpolation), blurs each level (7 x 7, sigma 2) and reads each keypoint's octave.
+  if (features->keypoints.empty()) {
+    features->descriptors = cv::Mat(0, 32, CV_8U);
+  } else {
+    std::vector<cv::KeyPoint> described = features->keypoints;
+    describer_->compute(grey, described, features->descriptors);
+    if (described.size() != features->keypoints.size())
+      throw std::logic_error("OrbExtractor: cv::ORB::compute dropped keypoints");
+    for (size_t i = 0; i < described.size(); ++i)  // OpenCV keeps the order (grouped by level, ascending)
+      if (described[i].octave != features->keypoints[i].octave ||
+          std::fabs(described[i].pt.x - features->keypoints[i].pt.x) > 0.01f ||
+          std::fabs(described[i].angle - features->keypoints[i].angle) > 0.01f)
+        throw std::logic_error("OrbExtractor: cv::ORB::compute reordered keypoints");
+  }
+  features->buildGrid();
+  return features;
+}
+
+}  // namespace beslam::orb

@@ -1,0 +1,61 @@
+// ORB features the ORB-SLAM way: an 8-level pyramid (scale 1.2, linear interpolation), FAST per ~30 px
+// cell (threshold 20, 7 where a cell finds nothing), quadtree spreading to each level's geometric-series
+// budget, intensity-centroid orientation and rBRIEF descriptors (OpenCV's learned pattern via
+// cv::ORB::compute on our own keypoints).
+//
+// Label mask (CV_16UC1): pixels == 1 get no features; pixels >= 1000 (static objects) are searched with a
+// lower FAST threshold and get up to a configurable share of every level's budget.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+
+#include "features/feature_set.hpp"
+#include "features/scale_pyramid.hpp"
+
+namespace beslam::orb {
+
+struct ExtractorOptions {
+  int features = 2000;
+  double scale_factor = 1.2;
+  int levels = 8;
+  int fast_initial = 20;
+  int fast_fallback = 7;
+  int static_object_fast = 7;
+  double static_object_budget_share = 0.3;
+  int cell_size = 30;   // FAST cell (px)
+  int border = 19;      // keypoints keep this far from every level's border
+};
+
+class OrbExtractor {
+ public:
+  explicit OrbExtractor(const ExtractorOptions& options);
+
+  // image: CV_8UC1 or CV_8UC3 (BGR); labels: CV_16UC1 of the same size or empty.
+  // budget <= 0 means options.features.
+  std::shared_ptr<FeatureSet> extract(const cv::Mat& image, const cv::Mat& labels, int budget = 0) const;
+
+  const ScalePyramid& pyramid() const { return pyramid_; }
+  const ExtractorOptions& options() const { return options_; }
+
+  // Level budgets for n features: a geometric series summing to n.
+  std::vector<int> levelBudgets(int n) const;
+
+  // Keep at most n of the candidates, spread by a quadtree over [x0,x1) x [y0,y1): the strongest
+  // response per leaf. Returns indices into candidates.
+  static std::vector<int> distributeQuadtree(const std::vector<cv::KeyPoint>& candidates, float x0, float y0,
+                                             float x1, float y1, int n);
+
+ private:
+  float icAngle(const cv::Mat& image, const cv::Point2f& pt) const;
+
+  ExtractorOptions options_;
+  ScalePyramid pyramid_;
+  std::vector<int> umax_;      // half-widths of the circular orientation patch
+  cv::Ptr<cv::ORB> describer_;
+};
+
+}  // namespace beslam::orb

@@ -1,0 +1,39 @@
+// The frame being tracked: its features, matched map points, outlier flags and pose T_cw.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "features/feature_set.hpp"
+
+namespace beslam::orb {
+
+class KeyFrame;
+class MapPoint;
+
+struct Frame {
+  int64_t index = -1;
+  double timestamp = 0;
+  std::shared_ptr<const FeatureSet> features;
+  std::vector<MapPoint*> points;
+  std::vector<bool> outlier;
+  Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
+  bool has_pose = false;
+  KeyFrame* reference = nullptr;
+
+  Frame() = default;
+  Frame(int64_t idx, double ts, std::shared_ptr<const FeatureSet> f)
+      : index(idx), timestamp(ts), features(std::move(f)), points(features->size(), nullptr),
+        outlier(features->size(), false) {}
+  size_t size() const { return points.size(); }
+  Eigen::Vector3d centre() const { return T_cw.inverse().translation(); }
+  void clearMatches() {
+    std::fill(points.begin(), points.end(), nullptr);
+    std::fill(outlier.begin(), outlier.end(), false);
+  }
+};
+
+}  // namespace beslam::orb

@@ -1,0 +1,77 @@
+// A keyframe: a frame kept in the map with its features, matched map points, optimisable pose, its
+// covisibility links (shared map points) and its place in the spanning tree.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <set>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "beslam_orb/orb_slam.hpp"
+#include "features/feature_set.hpp"
+#include "features/scale_pyramid.hpp"
+#include "map/id_less.hpp"
+
+namespace beslam::orb {
+
+class MapPoint;
+class Map;
+struct Frame;
+
+class KeyFrame {
+ public:
+  KeyFrame(long id, const Frame& frame, const Camera& camera, const ScalePyramid& pyramid, Map* map);
+
+  const long id;
+  const int64_t frame_index;
+  const double timestamp;
+  const std::shared_ptr<const FeatureSet> features;
+  const Camera camera;
+  const ScalePyramid& pyramid;
+  Eigen::Isometry3d T_cw;
+  std::vector<MapPoint*> points;   // per keypoint, may be null
+  bool bad = false;
+  Eigen::Isometry3d T_cp = Eigen::Isometry3d::Identity();  // to parent, set when culled
+
+  // Spanning tree.
+  KeyFrame* parent = nullptr;
+  std::set<KeyFrame*, IdLess<KeyFrame>> children;
+
+  // Scratch.
+  int64_t track_ref_for_frame = -1;
+  long fuse_target_for_kf = -1, ba_local_for_kf = -1, ba_fixed_for_kf = -1;
+
+  Eigen::Vector3d centre() const { return T_cw.inverse().translation(); }
+  size_t size() const { return points.size(); }
+  const cv::KeyPoint& keypoint(size_t i) const { return features->keypoints[i]; }
+
+  void addPoint(MapPoint* mp, size_t idx) { points[idx] = mp; }
+  void erasePoint(size_t idx) { points[idx] = nullptr; }
+  void erasePoint(MapPoint* mp);
+  std::vector<MapPoint*> validPoints() const;  // non-null, not bad, each once
+  int trackedPoints(int min_observations) const;
+  double medianDepth(int q = 2) const;         // the 1/q quantile of point depths (2 = median)
+
+  // Covisibility.
+  void updateConnections();
+  void addConnection(KeyFrame* kf, int weight);
+  void eraseConnection(KeyFrame* kf);
+  std::vector<KeyFrame*> covisibles() const { return ordered_; }
+  std::vector<KeyFrame*> bestCovisibles(int n) const;
+  int weight(KeyFrame* kf) const;
+  const std::map<KeyFrame*, int, IdLess<KeyFrame>>& connections() const { return weights_; }
+
+  void setBad();  // culls the keyframe: links, observations, children re-parented
+
+ private:
+  void sortConnections();
+  std::map<KeyFrame*, int, IdLess<KeyFrame>> weights_;
+  std::vector<KeyFrame*> ordered_;
+  bool first_connection_ = true;
+  Map* map_;
+};
+
+}  // namespace beslam::orb

@@ -1,0 +1,65 @@
+// A 3D landmark: position, representative descriptor, mean viewing direction, the distance range over
+// which its scale makes it detectable, and the keyframes that observe it (keypoint index in each).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+
+#include <Eigen/Core>
+
+#include "map/id_less.hpp"
+
+namespace beslam::orb {
+
+class KeyFrame;
+class Map;
+struct ScalePyramid;
+
+using Descriptor = std::array<uint8_t, 32>;
+
+class MapPoint {
+ public:
+  MapPoint(long id, const Eigen::Vector3d& position, KeyFrame* reference, Map* map);
+
+  const long id;
+  Eigen::Vector3d position;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // mean unit viewing direction (point - camera)
+  float min_distance = 0, max_distance = 0;
+  Descriptor descriptor{};
+  std::map<KeyFrame*, size_t, IdLess<KeyFrame>> observations;
+  KeyFrame* reference;
+  const long first_keyframe_id;
+  int visible = 1, found = 1;          // frames where predicted visible / actually matched
+  bool bad = false;
+  MapPoint* replaced_by = nullptr;
+  bool trusted = false;                // created on a static object
+  uint8_t grey = 0, r = 0, g = 0, b = 0;
+
+  // Tracking scratch (per frame).
+  bool track_in_view = false;
+  float track_u = 0, track_v = 0, track_view_cos = 0;
+  int track_level = 0;
+  int64_t track_ref_for_frame = -1, last_seen_frame = -1;
+  // Mapping scratch (per keyframe).
+  long fuse_candidate_for_kf = -1, ba_local_for_kf = -1;
+
+  void addObservation(KeyFrame* kf, size_t idx);
+  void eraseObservation(KeyFrame* kf);   // sets bad when 2 or fewer remain
+  bool isIn(const KeyFrame* kf) const;
+  int index(const KeyFrame* kf) const;   // -1 if not observed
+  int numObservations() const { return static_cast<int>(observations.size()); }
+  void setBad();
+  void replaceWith(MapPoint* other);
+  MapPoint* latest();                    // follow the replacement chain
+  double foundRatio() const { return static_cast<double>(found) / visible; }
+
+  void computeDistinctiveDescriptor();
+  void updateNormalAndDepth();
+  int predictLevel(double distance, const ScalePyramid& pyramid) const;
+
+ private:
+  Map* map_;
+};
+
+}  // namespace beslam::orb

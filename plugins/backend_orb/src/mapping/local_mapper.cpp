@@ -1,0 +1,229 @@
+#include "mapping/local_mapper.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "init/two_view.hpp"
+#include "map/camera_model.hpp"
+#include "map/keyframe.hpp"
+#include "map/map.hpp"
+#include "map/map_point.hpp"
+#include "matching/matcher.hpp"
+
+namespace beslam::orb {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d S;
+  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return S;
+}
+
+}  // namespace
+
+LocalMapper::LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyramid,
+                         const LocalMapperOptions& options)
+    : map_(map), camera_(camera), pyramid_(pyramid), options_(options) {}
+
+void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
+  timings_.clear();
+  auto t0 = Clock::now();
+  registerKeyFrame(kf);
+  timings_.emplace_back("map_register", msSince(t0));
+  if (!run_ba) return;
+  t0 = Clock::now();
+  cullRecentPoints(kf);
+  timings_.emplace_back("map_point_culling", msSince(t0));
+  t0 = Clock::now();
+  last_new_points_ = createNewPoints(kf);
+  timings_.emplace_back("map_triangulate", msSince(t0));
+  t0 = Clock::now();
+  fuseWithNeighbours(kf);
+  timings_.emplace_back("map_fuse", msSince(t0));
+  t0 = Clock::now();
+  if (map_.numKeyFrames() > 2) optimize::localBundleAdjustment(kf, map_, options_.ba);
+  timings_.emplace_back("map_local_ba", msSince(t0));
+  t0 = Clock::now();
+  int culled = 0;
+  if (options_.keyframe_culling) culled = cullKeyFrames(kf);
+  timings_.emplace_back("map_kf_culling", msSince(t0));
+  if (std::getenv("BESLAM_ORB_DEBUG")) {  // one line per keyframe for developers
+    int obs_hist[6] = {0, 0, 0, 0, 0, 0};
+    for (MapPoint* mp : kf->validPoints()) ++obs_hist[std::min(mp->numObservations(), 5)];
+    std::fprintf(stderr,
+                 "  kf %ld frame %ld: points %zu (obs 2:%d 3:%d 4:%d 5+:%d) new %d covis %zu recent %zu culled %d "
+                 "map %zu/%zu\n",
+                 kf->id, static_cast<long>(kf->frame_index), kf->validPoints().size(), obs_hist[2], obs_hist[3],
+                 obs_hist[4], obs_hist[5], last_new_points_, kf->covisibles().size(), recent_.size(), culled,
+                 map_.numKeyFrames(), map_.points().size());
+  }
+}
+
+void LocalMapper::registerKeyFrame(KeyFrame* kf) {
+  for (size_t i = 0; i < kf->points.size(); ++i) {
+    MapPoint* mp = kf->points[i];
+    if (!mp) continue;
+    if (mp->bad) {
+      kf->erasePoint(i);
+      continue;
+    }
+    if (!mp->isIn(kf)) {
+      mp->addObservation(kf, i);
+      mp->updateNormalAndDepth();
+      mp->computeDistinctiveDescriptor();
+    }
+  }
+  kf->updateConnections();
+}
+
+void LocalMapper::cullRecentPoints(KeyFrame* kf) {
+  const int th_obs = 2;
+  for (auto it = recent_.begin(); it != recent_.end();) {
+    MapPoint* mp = *it;
+    const long age = kf->id - mp->first_keyframe_id;
+    if (mp->bad) {
+      it = recent_.erase(it);
+    } else if (!mp->trusted && mp->foundRatio() < 0.25) {
+      mp->setBad();
+      it = recent_.erase(it);
+    } else if (!mp->trusted && age >= 2 && mp->numObservations() <= th_obs) {
+      mp->setBad();
+      it = recent_.erase(it);
+    } else if (age >= 3) {
+      it = recent_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+int LocalMapper::createNewPoints(KeyFrame* kf) {
+  const auto neighbours = kf->bestCovisibles(options_.triangulation_neighbours);
+  const Eigen::Matrix3d K = intrinsics(camera_), Kinv = K.inverse();
+  const Eigen::Isometry3d T1 = kf->T_cw;
+  const Eigen::Vector3d O1 = kf->centre();
+  const Eigen::Matrix3d R1wc = T1.linear().transpose();
+  const double ratio_factor = 1.5 * pyramid_.factor;
+  int created = 0;
+  std::vector<std::pair<int, int>> matches;
+  for (KeyFrame* kf2 : neighbours) {
+    if (kf2->bad) continue;
+    const Eigen::Vector3d O2 = kf2->centre();
+    const double baseline = (O2 - O1).norm();
+    const double median2 = kf2->medianDepth(2);
+    if (median2 <= 0 || baseline / median2 < 0.01) continue;
+    const Eigen::Isometry3d T2 = kf2->T_cw;
+    const Eigen::Isometry3d T21 = T2 * T1.inverse();
+    const Eigen::Matrix3d F21 = Kinv.transpose() * skew(T21.translation()) * T21.linear() * Kinv;
+    matching::searchForTriangulation(kf, kf2, F21, matches, options_.triangulation_ratio,
+                                     options_.triangulation_check_orientation);
+    Eigen::Matrix<double, 3, 4> P1, P2;
+    P1 << T1.linear(), T1.translation();
+    P2 << T2.linear(), T2.translation();
+    const Eigen::Matrix3d R2wc = T2.linear().transpose();
+    for (auto [i1, i2] : matches) {
+      if (kf->points[i1] || kf2->points[i2]) continue;
+      const cv::KeyPoint& kp1 = kf->keypoint(i1);
+      const cv::KeyPoint& kp2 = kf2->keypoint(i2);
+      const Eigen::Vector3d xn1 = unproject(camera_, kp1.pt.x, kp1.pt.y);
+      const Eigen::Vector3d xn2 = unproject(camera_, kp2.pt.x, kp2.pt.y);
+      const Eigen::Vector3d ray1 = R1wc * xn1, ray2 = R2wc * xn2;
+      const double cos_rays = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
+      if (cos_rays <= 0 || cos_rays >= options_.max_cos_parallax) continue;
+      const Eigen::Vector3d X =
+          TwoViewInitializer::triangulate(xn1.head<2>(), xn2.head<2>(), P1, P2);
+      if (!X.allFinite()) continue;
+      const Eigen::Vector3d x1c = T1 * X, x2c = T2 * X;
+      if (x1c.z() <= 0 || x2c.z() <= 0) continue;
+      const Eigen::Vector2d u1 = project(camera_, x1c), u2 = project(camera_, x2c);
+      if ((u1 - Eigen::Vector2d(kp1.pt.x, kp1.pt.y)).squaredNorm() > 5.991 * pyramid_.sigma2[kp1.octave]) continue;
+      if ((u2 - Eigen::Vector2d(kp2.pt.x, kp2.pt.y)).squaredNorm() > 5.991 * pyramid_.sigma2[kp2.octave]) continue;
+      const double d1 = (X - O1).norm(), d2 = (X - O2).norm();
+      if (d1 <= 0 || d2 <= 0) continue;
+      const double ratio_dist = d2 / d1;
+      const double ratio_octave = pyramid_.scale[kp1.octave] / pyramid_.scale[kp2.octave];
+      if (ratio_dist * ratio_factor < ratio_octave || ratio_dist > ratio_octave * ratio_factor) continue;
+
+      MapPoint* mp = map_.createMapPoint(X, kf);
+      mp->addObservation(kf, i1);
+      mp->addObservation(kf2, i2);
+      kf->addPoint(mp, i1);
+      kf2->addPoint(mp, i2);
+      mp->trusted = kf->features->onStaticObject(i1) || kf2->features->onStaticObject(i2);
+      const cv::Vec3b c = kf->features->colours[i1];
+      mp->b = c[0]; mp->g = c[1]; mp->r = c[2];
+      mp->grey = static_cast<uint8_t>((c[0] + c[1] + c[2]) / 3);
+      mp->computeDistinctiveDescriptor();
+      mp->updateNormalAndDepth();
+      recent_.push_back(mp);
+      ++created;
+    }
+  }
+  return created;
+}
+
+void LocalMapper::fuseWithNeighbours(KeyFrame* kf) {
+  std::vector<KeyFrame*> targets;
+  for (KeyFrame* n : kf->bestCovisibles(options_.fuse_neighbours)) {
+    if (n->bad || n == kf || n->fuse_target_for_kf == kf->id) continue;
+    n->fuse_target_for_kf = kf->id;
+    targets.push_back(n);
+  }
+  const size_t first_order = targets.size();
+  for (size_t i = 0; i < first_order; ++i)
+    for (KeyFrame* n2 : targets[i]->bestCovisibles(options_.fuse_second_order)) {
+      if (n2->bad || n2 == kf || n2->fuse_target_for_kf == kf->id) continue;
+      n2->fuse_target_for_kf = kf->id;
+      targets.push_back(n2);
+    }
+  for (KeyFrame* t : targets) matching::fuse(t, kf->validPoints());
+  std::vector<MapPoint*> candidates;
+  for (KeyFrame* t : targets)
+    for (MapPoint* mp : t->points) {
+      if (!mp || mp->bad || mp->fuse_candidate_for_kf == kf->id) continue;
+      mp->fuse_candidate_for_kf = kf->id;
+      candidates.push_back(mp);
+    }
+  matching::fuse(kf, candidates);
+  for (MapPoint* mp : kf->validPoints()) {
+    mp->computeDistinctiveDescriptor();
+    mp->updateNormalAndDepth();
+  }
+  kf->updateConnections();
+}
+
+int LocalMapper::cullKeyFrames(KeyFrame* kf) {
+  const int th_obs = 3;
+  int culled = 0;
+  for (KeyFrame* k : kf->covisibles()) {
+    if (k->bad || k == map_.origin() || k == kf) continue;
+    int n_points = 0, redundant = 0;
+    for (size_t i = 0; i < k->points.size(); ++i) {
+      MapPoint* mp = k->points[i];
+      if (!mp || mp->bad) continue;
+      ++n_points;
+      if (mp->numObservations() <= th_obs) continue;
+      const int level = k->keypoint(i).octave;
+      int n_obs = 0;
+      for (auto& [other, idx] : mp->observations) {
+        if (other == k) continue;
+        if (other->keypoint(idx).octave <= level + 1 && ++n_obs >= th_obs) break;
+      }
+      if (n_obs >= th_obs) ++redundant;
+    }
+    if (redundant > 0.9 * n_points) {
+      k->setBad();
+      ++culled;
+    }
+  }
+  return culled;
+}
+
+}  // namespace beslam::orb

@@ -1,0 +1,378 @@
+#include "matching/matcher.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "map/camera_model.hpp"
+#include "map/frame.hpp"
+#include "map/keyframe.hpp"
+#include "map/map_point.hpp"
+#include "matching/hamming.hpp"
+
+namespace beslam::orb::matching {
+
+void RotationHistogram::add(float angle1, float angle2, int id) {
+  float rot = angle1 - angle2;
+  if (rot < 0) rot += 360.f;
+  const float bin_width = 360.f / kHistogramBins;
+  const int bin = static_cast<int>(std::floor(rot / bin_width + 0.5f)) % kHistogramBins;
+  bins_[bin].push_back(id);
+}
+
+std::vector<int> RotationHistogram::rejected() const {
+  int m[3] = {-1, -1, -1};
+  size_t c[3] = {0, 0, 0};
+  for (int i = 0; i < kHistogramBins; ++i) {
+    const size_t s = bins_[i].size();
+    if (s > c[0]) {
+      c[2] = c[1]; m[2] = m[1];
+      c[1] = c[0]; m[1] = m[0];
+      c[0] = s; m[0] = i;
+    } else if (s > c[1]) {
+      c[2] = c[1]; m[2] = m[1];
+      c[1] = s; m[1] = i;
+    } else if (s > c[2]) {
+      c[2] = s; m[2] = i;
+    }
+  }
+  // Weak second and third bins (under a tenth of the first) are not kept.
+  if (c[1] < 0.1 * c[0]) { m[1] = -1; m[2] = -1; }
+  if (c[2] < 0.1 * c[0]) m[2] = -1;
+  std::vector<int> out;
+  for (int i = 0; i < kHistogramBins; ++i) {
+    if (i == m[0] || i == m[1] || i == m[2]) continue;
+    out.insert(out.end(), bins_[i].begin(), bins_[i].end());
+  }
+  return out;
+}
+
+int searchForInitialization(const FeatureSet& f1, const FeatureSet& f2, std::vector<cv::Point2f>& prev_matched,
+                            std::vector<int>& matches12, int window, float ratio, int max_level) {
+  matches12.assign(f1.size(), -1);
+  std::vector<int> dist21(f2.size(), std::numeric_limits<int>::max());
+  std::vector<int> matches21(f2.size(), -1);
+  RotationHistogram hist;
+  int n = 0;
+  for (size_t i1 = 0; i1 < f1.size(); ++i1) {
+    const cv::KeyPoint& kp1 = f1.keypoints[i1];
+    if (kp1.octave > max_level) continue;
+    const auto cand = f2.query(prev_matched[i1].x, prev_matched[i1].y, static_cast<float>(window), kp1.octave,
+                               kp1.octave);
+    int best = 256, second = 256, best_i2 = -1;
+    const uint8_t* d1 = f1.descriptor(i1);
+    for (int i2 : cand) {
+      const int d = hamming(d1, f2.descriptor(i2));
+      if (dist21[i2] <= d) continue;
+      if (d < best) {
+        second = best;
+        best = d;
+        best_i2 = i2;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best_i2 < 0 || best > kThLow || best >= ratio * second) continue;
+    if (matches21[best_i2] >= 0) {  // a previous, worse match loses the keypoint
+      matches12[matches21[best_i2]] = -1;
+      --n;
+    }
+    matches12[i1] = best_i2;
+    matches21[best_i2] = static_cast<int>(i1);
+    dist21[best_i2] = best;
+    ++n;
+  }
+  for (size_t i1 = 0; i1 < f1.size(); ++i1)
+    if (matches12[i1] >= 0) hist.add(f1.keypoints[i1].angle, f2.keypoints[matches12[i1]].angle, static_cast<int>(i1));
+  for (int i1 : hist.rejected()) {
+    if (matches12[i1] >= 0) {
+      matches12[i1] = -1;
+      --n;
+    }
+  }
+  for (size_t i1 = 0; i1 < f1.size(); ++i1)
+    if (matches12[i1] >= 0) prev_matched[i1] = f2.keypoints[matches12[i1]].pt;
+  return n;
+}
+
+int searchByProjection(Frame& cur, const Frame& last, const Camera& camera, const ScalePyramid& pyramid,
+                       float th) {
+  const FeatureSet& f = *cur.features;
+  RotationHistogram hist;
+  int n = 0;
+  for (size_t i = 0; i < last.size(); ++i) {
+    MapPoint* mp = last.points[i];
+    if (!mp || last.outlier[i] || mp->bad) continue;
+    const Eigen::Vector3d pc = cur.T_cw * mp->position;
+    if (pc.z() <= 0) continue;
+    const Eigen::Vector2d uv = project(camera, pc);
+    if (!inImage(camera, uv.x(), uv.y())) continue;
+    const int octave = last.features->keypoints[i].octave;
+    const float radius = th * static_cast<float>(pyramid.scale[octave]);
+    const auto cand = f.query(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius,
+                              std::max(octave - 1, 0), std::min(octave + 1, pyramid.levels - 1));
+    int best = 256, best_idx = -1;
+    for (int j : cand) {
+      if (cur.points[j] && cur.points[j]->numObservations() > 0) continue;
+      const int d = hamming(mp->descriptor.data(), f.descriptor(j));
+      if (d < best) {
+        best = d;
+        best_idx = j;
+      }
+    }
+    if (best_idx < 0 || best > kThHigh) continue;
+    cur.points[best_idx] = mp;
+    cur.outlier[best_idx] = false;
+    ++n;
+    hist.add(last.features->keypoints[i].angle, f.keypoints[best_idx].angle, best_idx);
+  }
+  for (int j : hist.rejected()) {
+    if (cur.points[j]) {
+      cur.points[j] = nullptr;
+      --n;
+    }
+  }
+  return n;
+}
+
+int searchLocalPoints(Frame& cur, const std::vector<MapPoint*>& points, const ScalePyramid& pyramid, float th,
+                      float ratio) {
+  const FeatureSet& f = *cur.features;
+  int n = 0;
+  for (MapPoint* mp : points) {
+    if (!mp->track_in_view || mp->bad) continue;
+    const int level = mp->track_level;
+    const float r = th * (mp->track_view_cos > 0.998f ? 2.5f : 4.0f) * static_cast<float>(pyramid.scale[level]);
+    const auto cand = f.query(mp->track_u, mp->track_v, r, std::max(level - 1, 0), level);
+    int best = 256, second = 256, best_level = -1, second_level = -1, best_idx = -1;
+    for (int j : cand) {
+      if (cur.points[j] && cur.points[j]->numObservations() > 0) continue;
+      const int d = hamming(mp->descriptor.data(), f.descriptor(j));
+      if (d < best) {
+        second = best;
+        second_level = best_level;
+        best = d;
+        best_level = f.keypoints[j].octave;
+        best_idx = j;
+      } else if (d < second) {
+        second = d;
+        second_level = f.keypoints[j].octave;
+      }
+    }
+    if (best_idx < 0 || best > kThHigh) continue;
+    if (best_level == second_level && best > ratio * second) continue;
+    cur.points[best_idx] = mp;
+    cur.outlier[best_idx] = false;
+    ++n;
+  }
+  return n;
+}
+
+int searchByProjectionWide(Frame& cur, const std::vector<MapPoint*>& points, const Eigen::Isometry3d& T_cw,
+                           const Camera& camera, const ScalePyramid& pyramid, float radius, float ratio,
+                           int max_distance) {
+  const FeatureSet& f = *cur.features;
+  std::vector<int> best_dist(f.size(), 256);
+  RotationHistogram hist;
+  const Eigen::Vector3d centre = T_cw.inverse().translation();
+  for (MapPoint* mp : points) {
+    if (!mp || mp->bad) continue;
+    const Eigen::Vector3d pc = T_cw * mp->position;
+    if (pc.z() <= 0) continue;
+    const Eigen::Vector2d uv = project(camera, pc);
+    if (!inImage(camera, uv.x(), uv.y())) continue;
+    const double dist = (mp->position - centre).norm();
+    if (dist < 0.5 * mp->min_distance || dist > 2.0 * mp->max_distance) continue;
+    const int level = mp->predictLevel(dist, pyramid);
+    const auto cand = f.query(static_cast<float>(uv.x()), static_cast<float>(uv.y()),
+                              radius * static_cast<float>(pyramid.scale[level]), std::max(level - 2, 0),
+                              std::min(level + 2, pyramid.levels - 1));
+    int best = 256, second = 256, best_idx = -1;
+    for (int j : cand) {
+      const int d = hamming(mp->descriptor.data(), f.descriptor(j));
+      if (d < best) {
+        second = best;
+        best = d;
+        best_idx = j;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best_idx < 0 || best > max_distance || best > ratio * second) continue;
+    if (best >= best_dist[best_idx]) continue;
+    best_dist[best_idx] = best;
+    cur.points[best_idx] = mp;
+    cur.outlier[best_idx] = false;
+  }
+  int n = 0;
+  for (size_t j = 0; j < f.size(); ++j) {
+    if (!cur.points[j]) continue;
+    const int i = cur.points[j]->index(cur.points[j]->reference);
+    const float angle_ref = i >= 0 ? cur.points[j]->reference->keypoint(i).angle : f.keypoints[j].angle;
+    hist.add(angle_ref, f.keypoints[j].angle, static_cast<int>(j));
+    ++n;
+  }
+  for (int j : hist.rejected()) {
+    cur.points[j] = nullptr;
+    --n;
+  }
+  return n;
+}
+
+int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen::Matrix3d& F21,
+                           std::vector<std::pair<int, int>>& matches, float ratio, bool check_orientation) {
+  matches.clear();
+  const FeatureSet& f1 = *kf1->features;
+  const FeatureSet& f2 = *kf2->features;
+  const Camera& cam = kf2->camera;
+  const ScalePyramid& pyr = kf2->pyramid;
+
+  // Epipole in kf2 and the depth range along kf1's rays worth searching.
+  const Eigen::Isometry3d T21 = kf2->T_cw * kf1->T_cw.inverse();
+  const Eigen::Vector3d c1_in_2 = T21.translation();
+  if (c1_in_2.z() <= 1e-9 && c1_in_2.z() >= -1e-9) return 0;
+  const Eigen::Vector2d epipole = project(cam, c1_in_2);
+  double d_min = std::numeric_limits<double>::max(), d_max = 0;
+  for (MapPoint* mp : kf1->points) {
+    if (!mp || mp->bad) continue;
+    const double z = (kf1->T_cw * mp->position).z();
+    if (z <= 0) continue;
+    d_min = std::min(d_min, z);
+    d_max = std::max(d_max, z);
+  }
+  if (d_max <= 0) return 0;
+  d_min *= 0.5;
+  d_max *= 2.0;
+  const double band_max = std::sqrt(3.84 * pyr.sigma2[pyr.levels - 1]);
+  const float cell_h = static_cast<float>(cam.height) / FeatureGrid::kRows;
+
+  std::vector<int> matched2(f2.size(), -1), dist2(f2.size(), 256);
+  std::vector<int> match12(f1.size(), -1);
+  std::vector<int> stamp(f2.size(), -1), cand;
+  for (size_t i1 = 0; i1 < f1.size(); ++i1) {
+    if (kf1->points[i1]) continue;
+    const cv::KeyPoint& kp1 = f1.keypoints[i1];
+    const Eigen::Vector3d x1(kp1.pt.x, kp1.pt.y, 1.0);
+    const Eigen::Vector3d line = F21 * x1;
+    const double ln = std::hypot(line.x(), line.y());
+    if (ln < 1e-12) continue;
+    // Segment of the line between the depths d_min and d_max on kf1's ray.
+    const Eigen::Vector3d ray = T21.linear() * unproject(cam, kp1.pt.x, kp1.pt.y);
+    double a = d_min, b = d_max;
+    const double z_a = c1_in_2.z() + ray.z() * a, z_b = c1_in_2.z() + ray.z() * b;
+    const double z_eps = 1e-3 * d_min;
+    if (z_a <= z_eps && z_b <= z_eps) continue;
+    if (z_a <= z_eps) a = (z_eps - c1_in_2.z()) / ray.z();
+    if (z_b <= z_eps) b = (z_eps - c1_in_2.z()) / ray.z();
+    const Eigen::Vector2d pa = project(cam, c1_in_2 + ray * a), pb = project(cam, c1_in_2 + ray * b);
+    const double x_lo = std::max(0.0, std::min(pa.x(), pb.x()) - band_max);
+    const double x_hi = std::min(cam.width - 1.0, std::max(pa.x(), pb.x()) + band_max);
+    const double y_lo = std::max(0.0, std::min(pa.y(), pb.y()) - band_max);
+    const double y_hi = std::min(cam.height - 1.0, std::max(pa.y(), pb.y()) + band_max);
+    if (x_lo > x_hi || y_lo > y_hi) continue;
+
+    cand.clear();
+    const int row0 = static_cast<int>(y_lo / cell_h), row1 = static_cast<int>(y_hi / cell_h);
+    for (int row = row0; row <= row1; ++row) {
+      const double ry0 = std::max(y_lo, row * static_cast<double>(cell_h));
+      const double ry1 = std::min(y_hi, (row + 1) * static_cast<double>(cell_h) - 1e-3);
+      double xa = x_lo, xb = x_hi;
+      if (std::fabs(line.x()) > 1e-9) {  // x of the line at both row edges, widened by the band
+        const double xr0 = -(line.y() * ry0 + line.z()) / line.x();
+        const double xr1 = -(line.y() * ry1 + line.z()) / line.x();
+        const double widen = band_max * ln / std::fabs(line.x());
+        xa = std::max(x_lo, std::min(xr0, xr1) - widen);
+        xb = std::min(x_hi, std::max(xr0, xr1) + widen);
+      }
+      if (xa > xb) continue;
+      f2.grid.cellsInWindow(static_cast<float>(xa), static_cast<float>(ry0), static_cast<float>(xb),
+                            static_cast<float>(ry1), cand);
+    }
+    const uint8_t* d1 = f1.descriptor(i1);
+    int best = 256, second = 256, best_i2 = -1;
+    for (int i2 : cand) {
+      if (stamp[i2] == static_cast<int>(i1)) continue;
+      stamp[i2] = static_cast<int>(i1);
+      if (kf2->points[i2]) continue;
+      const cv::KeyPoint& kp2 = f2.keypoints[i2];
+      const double dl = line.x() * kp2.pt.x + line.y() * kp2.pt.y + line.z();
+      if (dl * dl / (ln * ln) >= 3.84 * pyr.sigma2[kp2.octave]) continue;
+      const double ex = epipole.x() - kp2.pt.x, ey = epipole.y() - kp2.pt.y;
+      if (ex * ex + ey * ey < 100.0 * pyr.scale[kp2.octave]) continue;
+      const int d = hamming(d1, f2.descriptor(i2));
+      if (d < best) {
+        second = best;
+        best = d;
+        best_i2 = i2;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best_i2 < 0 || best > kThLow || best > ratio * second) continue;
+    if (matched2[best_i2] >= 0) {
+      if (dist2[best_i2] <= best) continue;
+      match12[matched2[best_i2]] = -1;
+    }
+    matched2[best_i2] = static_cast<int>(i1);
+    dist2[best_i2] = best;
+    match12[i1] = best_i2;
+  }
+  if (check_orientation) {
+    RotationHistogram hist;
+    for (size_t i1 = 0; i1 < f1.size(); ++i1)
+      if (match12[i1] >= 0) hist.add(f1.keypoints[i1].angle, f2.keypoints[match12[i1]].angle, static_cast<int>(i1));
+    for (int i1 : hist.rejected()) match12[i1] = -1;
+  }
+  for (size_t i1 = 0; i1 < f1.size(); ++i1)
+    if (match12[i1] >= 0) matches.emplace_back(static_cast<int>(i1), match12[i1]);
+  return static_cast<int>(matches.size());
+}
+
+int fuse(KeyFrame* kf, const std::vector<MapPoint*>& points, float th) {
+  const FeatureSet& f = *kf->features;
+  const Camera& cam = kf->camera;
+  const ScalePyramid& pyr = kf->pyramid;
+  const Eigen::Vector3d centre = kf->centre();
+  int n = 0;
+  for (MapPoint* mp : points) {
+    if (!mp || mp->bad || mp->isIn(kf)) continue;
+    const Eigen::Vector3d pc = kf->T_cw * mp->position;
+    if (pc.z() <= 0) continue;
+    const Eigen::Vector2d uv = project(cam, pc);
+    if (!inImage(cam, uv.x(), uv.y())) continue;
+    const Eigen::Vector3d po = mp->position - centre;
+    const double dist = po.norm();
+    if (dist < 0.8 * mp->min_distance || dist > 1.2 * mp->max_distance) continue;
+    if (po.dot(mp->normal) < 0.5 * dist) continue;
+    const int level = mp->predictLevel(dist, pyr);
+    const float radius = th * static_cast<float>(pyr.scale[level]);
+    const auto cand = f.query(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius);
+    int best = 256, best_idx = -1;
+    for (int j : cand) {
+      const cv::KeyPoint& kp = f.keypoints[j];
+      if (kp.octave < level - 1 || kp.octave > level) continue;
+      const double ex = uv.x() - kp.pt.x, ey = uv.y() - kp.pt.y;
+      if ((ex * ex + ey * ey) * pyr.inv_sigma2[kp.octave] > 5.99) continue;
+      const int d = hamming(mp->descriptor.data(), f.descriptor(j));
+      if (d < best) {
+        best = d;
+        best_idx = j;
+      }
+    }
+    if (best_idx < 0 || best > kThLow) continue;
+    MapPoint* existing = kf->points[best_idx];
+    if (existing && !existing->bad) {
+      if (existing->numObservations() > mp->numObservations())
+        mp->replaceWith(existing);
+      else
+        existing->replaceWith(mp);
+    } else {
+      mp->addObservation(kf, best_idx);
+      kf->addPoint(mp, best_idx);
+    }
+    ++n;
+  }
+  return n;
+}
+
+}  // namespace beslam::orb::matching

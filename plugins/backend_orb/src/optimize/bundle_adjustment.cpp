@@ -1,0 +1,222 @@
+#include "optimize/bundle_adjustment.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include <ceres/ceres.h>
+
+#include "map/keyframe.hpp"
+#include "map/map.hpp"
+#include "map/map_point.hpp"
+#include "optimize/cost_functions.hpp"
+#include "optimize/se3.hpp"
+
+namespace beslam::orb::optimize {
+namespace {
+
+struct Edge {
+  KeyFrame* kf;
+  MapPoint* mp;
+  size_t idx;
+  double* pose;
+  double* point;
+  std::unique_ptr<ReprojectionCost> cost;
+  bool outlier = false;
+};
+
+// Parameter blocks live in two contiguous arrays in id order: Ceres orders blocks of an elimination
+// group by address, so this keeps the solve (and the whole run) deterministic.
+struct Problem {
+  std::vector<KeyFrame*> moving, fixed;
+  std::vector<MapPoint*> points;
+  std::map<KeyFrame*, double*, IdLess<KeyFrame>> poses;
+  std::map<MapPoint*, double*, IdLess<MapPoint>> positions;
+  std::vector<double> pose_storage, point_storage;
+  std::vector<Edge> edges;
+
+  void allocate() {
+    std::vector<KeyFrame*> kfs(moving);
+    kfs.insert(kfs.end(), fixed.begin(), fixed.end());
+    std::sort(kfs.begin(), kfs.end(), IdLess<KeyFrame>());
+    std::sort(points.begin(), points.end(), IdLess<MapPoint>());
+    pose_storage.assign(7 * kfs.size(), 0.0);
+    point_storage.assign(3 * points.size(), 0.0);
+    for (size_t i = 0; i < kfs.size(); ++i) {
+      poses[kfs[i]] = &pose_storage[7 * i];
+      poseToParams(kfs[i]->T_cw, poses[kfs[i]]);
+    }
+    for (size_t i = 0; i < points.size(); ++i) {
+      double* x = &point_storage[3 * i];
+      positions[points[i]] = x;
+      x[0] = points[i]->position.x();
+      x[1] = points[i]->position.y();
+      x[2] = points[i]->position.z();
+    }
+  }
+};
+
+double chi2(const Edge& e, bool* behind) {
+  double r[2];
+  const double* params[] = {e.pose, e.point};
+  e.cost->Evaluate(params, r, nullptr);
+  const Eigen::Quaterniond q(e.pose[3], e.pose[0], e.pose[1], e.pose[2]);
+  const double z = (q * Eigen::Vector3d(e.point[0], e.point[1], e.point[2])).z() + e.pose[6];
+  *behind = z <= 0;
+  return r[0] * r[0] + r[1] * r[1];
+}
+
+double solve(Problem& P, bool robust, int iterations, double chi2_threshold, bool fix_origin_only, KeyFrame* origin,
+             double* initial_cost) {
+  ceres::Problem::Options popts;
+  popts.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  popts.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(popts);
+  ceres::HuberLoss huber(std::sqrt(chi2_threshold));
+  SE3LeftManifold manifold;
+  int used = 0;
+  for (Edge& e : P.edges) {
+    if (e.outlier) continue;
+    problem.AddResidualBlock(e.cost.get(), robust ? &huber : nullptr, e.pose, e.point);
+    ++used;
+  }
+  if (used == 0) return 0;
+  // Points are eliminated first (Schur complement on the cameras).
+  auto* ordering = new ceres::ParameterBlockOrdering;
+  int n_poses = 0;
+  for (auto& [kf, p] : P.poses) {
+    if (!problem.HasParameterBlock(p)) continue;
+    problem.SetManifold(p, &manifold);
+    ordering->AddElementToGroup(p, 1);
+    ++n_poses;
+  }
+  for (auto& [mp, x] : P.positions)
+    if (problem.HasParameterBlock(x)) ordering->AddElementToGroup(x, 0);
+  for (KeyFrame* kf : P.fixed)
+    if (problem.HasParameterBlock(P.poses[kf])) problem.SetParameterBlockConstant(P.poses[kf]);
+  if (fix_origin_only || origin) {
+    auto it = P.poses.find(origin);
+    if (it != P.poses.end() && problem.HasParameterBlock(it->second)) problem.SetParameterBlockConstant(it->second);
+  }
+  ceres::Solver::Options sopts;
+  sopts.linear_solver_type = n_poses <= 60 ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+  sopts.linear_solver_ordering.reset(ordering);
+  sopts.max_num_iterations = iterations;
+  sopts.logging_type = ceres::SILENT;
+  sopts.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(sopts, &problem, &summary);
+  if (initial_cost) *initial_cost = summary.initial_cost;
+  return summary.final_cost;
+}
+
+void addEdges(Problem& P, double chi2_threshold, double trusted_weight) {
+  (void)chi2_threshold;
+  for (MapPoint* mp : P.points) {
+    double* x = P.positions[mp];
+    for (auto& [kf, idx] : mp->observations) {
+      auto it = P.poses.find(kf);
+      if (it == P.poses.end() || kf->bad) continue;
+      const cv::KeyPoint& kp = kf->keypoint(idx);
+      double inv_sigma = kf->pyramid.inv_scale[kp.octave];
+      if (mp->trusted) inv_sigma *= std::sqrt(trusted_weight);
+      Edge e;
+      e.kf = kf;
+      e.mp = mp;
+      e.idx = idx;
+      e.pose = it->second;
+      e.point = x;
+      e.cost = std::make_unique<ReprojectionCost>(Eigen::Vector2d(kp.pt.x, kp.pt.y), inv_sigma,
+                                                  Intrinsics{kf->camera.fx, kf->camera.fy, kf->camera.cx,
+                                                             kf->camera.cy});
+      P.edges.push_back(std::move(e));
+    }
+  }
+}
+
+void writeBack(Problem& P) {
+  for (KeyFrame* kf : P.moving) kf->T_cw = paramsToPose(P.poses[kf]);
+  for (MapPoint* mp : P.points) {
+    if (mp->bad) continue;
+    const double* x = P.positions[mp];
+    mp->position = Eigen::Vector3d(x[0], x[1], x[2]);
+    mp->updateNormalAndDepth();
+  }
+}
+
+}  // namespace
+
+BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const BundleAdjustmentOptions& options) {
+  BundleAdjustmentReport report;
+  Problem P;
+  const long stamp = kf->id;
+  P.moving.push_back(kf);
+  kf->ba_local_for_kf = stamp;
+  std::vector<KeyFrame*> neighbours = kf->covisibles();
+  if (options.max_local_keyframes > 0 && static_cast<int>(neighbours.size()) > options.max_local_keyframes - 1)
+    neighbours.resize(options.max_local_keyframes - 1);
+  for (KeyFrame* n : neighbours) {
+    if (n->bad) continue;
+    n->ba_local_for_kf = stamp;
+    P.moving.push_back(n);
+  }
+  for (KeyFrame* k : P.moving)
+    for (MapPoint* mp : k->points) {
+      if (!mp || mp->bad || mp->ba_local_for_kf == stamp) continue;
+      mp->ba_local_for_kf = stamp;
+      P.points.push_back(mp);
+    }
+  for (MapPoint* mp : P.points)
+    for (auto& [k, idx] : mp->observations) {
+      if (k->ba_local_for_kf == stamp || k->ba_fixed_for_kf == stamp || k->bad) continue;
+      k->ba_fixed_for_kf = stamp;
+      P.fixed.push_back(k);
+    }
+  P.allocate();
+  addEdges(P, options.chi2_threshold, options.trusted_weight);
+  report.keyframes = static_cast<int>(P.moving.size());
+  report.fixed_keyframes = static_cast<int>(P.fixed.size());
+  report.points = static_cast<int>(P.points.size());
+  report.observations = static_cast<int>(P.edges.size());
+  if (P.edges.empty()) return report;
+
+  solve(P, true, options.robust_iterations, options.chi2_threshold, false, map.origin(), &report.initial_cost);
+  for (Edge& e : P.edges) {
+    bool behind = false;
+    e.outlier = chi2(e, &behind) > options.chi2_threshold || behind;
+  }
+  report.final_cost = solve(P, false, options.refine_iterations, options.chi2_threshold, false, map.origin(), nullptr);
+  for (Edge& e : P.edges) {
+    bool behind = false;
+    if (chi2(e, &behind) > options.chi2_threshold || behind) {
+      if (e.mp->bad) continue;
+      if (e.kf->points[e.idx] == e.mp) e.kf->erasePoint(e.idx);
+      e.mp->eraseObservation(e.kf);
+      ++report.outliers_removed;
+    }
+  }
+  writeBack(P);
+  return report;
+}
+
+BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double chi2_threshold) {
+  BundleAdjustmentReport report;
+  Problem P;
+  for (KeyFrame* kf : map.keyframes()) P.moving.push_back(kf);
+  for (MapPoint* mp : map.points()) P.points.push_back(mp);
+  P.allocate();
+  addEdges(P, chi2_threshold, 1.0);
+  report.keyframes = static_cast<int>(P.moving.size());
+  report.points = static_cast<int>(P.points.size());
+  report.observations = static_cast<int>(P.edges.size());
+  if (P.edges.empty()) return report;
+  report.final_cost = solve(P, true, iterations, chi2_threshold, true, map.origin(), &report.initial_cost);
+  writeBack(P);
+  return report;
+}
+
+}  // namespace beslam::orb::optimize

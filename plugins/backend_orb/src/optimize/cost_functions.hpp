@@ -1,0 +1,93 @@
+// Reprojection errors with analytic Jacobians, whitened by the keypoint level's sigma
+// (residual = (projection - observation) / sigma, so the squared norm is the chi-square statistic).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <ceres/sized_cost_function.h>
+
+namespace beslam::orb::optimize {
+
+struct Intrinsics {
+  double fx, fy, cx, cy;
+};
+
+namespace detail {
+// p_c = R p_w + t and the whitened residual; J_proj = d residual / d p_c.
+inline bool reproject(const double* pose, const Eigen::Vector3d& pw, const Intrinsics& K, const Eigen::Vector2d& obs,
+                      double inv_sigma, double* residual, Eigen::Vector3d& pc, Eigen::Matrix<double, 2, 3>& J_proj,
+                      Eigen::Matrix3d& R, bool need_jacobian) {
+  const Eigen::Quaterniond q(pose[3], pose[0], pose[1], pose[2]);
+  R = q.toRotationMatrix();
+  pc = R * pw + Eigen::Vector3d(pose[4], pose[5], pose[6]);
+  double z = pc.z();
+  if (std::abs(z) < 1e-6) z = z < 0 ? -1e-6 : 1e-6;
+  const double iz = 1.0 / z;
+  residual[0] = (K.fx * pc.x() * iz + K.cx - obs.x()) * inv_sigma;
+  residual[1] = (K.fy * pc.y() * iz + K.cy - obs.y()) * inv_sigma;
+  if (need_jacobian) {
+    J_proj << K.fx * iz, 0, -K.fx * pc.x() * iz * iz, 0, K.fy * iz, -K.fy * pc.y() * iz * iz;
+    J_proj *= inv_sigma;
+  }
+  return true;
+}
+
+inline void poseJacobian(const Eigen::Matrix<double, 2, 3>& J_proj, const Eigen::Vector3d& pc, double* out) {
+  Eigen::Map<Eigen::Matrix<double, 2, 7, Eigen::RowMajor>> J(out);
+  Eigen::Matrix3d skew;
+  skew << 0, -pc.z(), pc.y(), pc.z(), 0, -pc.x(), -pc.y(), pc.x(), 0;
+  J.leftCols<3>() = J_proj;
+  J.block<2, 3>(0, 3) = -J_proj * skew;
+  J.col(6).setZero();
+}
+}  // namespace detail
+
+// Pose only: the map point is a constant.
+class PoseReprojectionCost : public ceres::SizedCostFunction<2, 7> {
+ public:
+  PoseReprojectionCost(const Eigen::Vector3d& pw, const Eigen::Vector2d& obs, double inv_sigma, const Intrinsics& K)
+      : pw_(pw), obs_(obs), inv_sigma_(inv_sigma), K_(K) {}
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    Eigen::Vector3d pc;
+    Eigen::Matrix<double, 2, 3> J_proj;
+    Eigen::Matrix3d R;
+    const bool need = jacobians && jacobians[0];
+    detail::reproject(params[0], pw_, K_, obs_, inv_sigma_, residuals, pc, J_proj, R, need);
+    if (need) detail::poseJacobian(J_proj, pc, jacobians[0]);
+    return true;
+  }
+
+ private:
+  Eigen::Vector3d pw_;
+  Eigen::Vector2d obs_;
+  double inv_sigma_;
+  Intrinsics K_;
+};
+
+// Bundle adjustment: pose and point.
+class ReprojectionCost : public ceres::SizedCostFunction<2, 7, 3> {
+ public:
+  ReprojectionCost(const Eigen::Vector2d& obs, double inv_sigma, const Intrinsics& K)
+      : obs_(obs), inv_sigma_(inv_sigma), K_(K) {}
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    Eigen::Vector3d pc;
+    Eigen::Matrix<double, 2, 3> J_proj;
+    Eigen::Matrix3d R;
+    const bool need = jacobians && (jacobians[0] || jacobians[1]);
+    detail::reproject(params[0], Eigen::Vector3d(params[1][0], params[1][1], params[1][2]), K_, obs_, inv_sigma_,
+                      residuals, pc, J_proj, R, need);
+    if (need && jacobians[0]) detail::poseJacobian(J_proj, pc, jacobians[0]);
+    if (need && jacobians[1]) {
+      Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> Jp(jacobians[1]);
+      Jp = J_proj * R;
+    }
+    return true;
+  }
+
+ private:
+  Eigen::Vector2d obs_;
+  double inv_sigma_;
+  Intrinsics K_;
+};
+
+}  // namespace beslam::orb::optimize

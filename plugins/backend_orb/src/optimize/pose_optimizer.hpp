@@ -1,0 +1,31 @@
+// Pose-only optimisation (motion-only BA): the camera pose against fixed map points, reprojection
+// errors weighted by 1 / level variance, Huber (sqrt 5.991) in the first two rounds, four rounds of 10
+// iterations; after each round observations above chi-square 5.991 become outliers and sit out the next
+// round (they may come back).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "beslam_orb/orb_slam.hpp"
+
+namespace beslam::orb::optimize {
+
+struct PoseObservation {
+  Eigen::Vector3d point_world;
+  Eigen::Vector2d pixel;
+  double inv_sigma = 1.0;  // 1 / (level scale), times sqrt(weight) for trusted points
+};
+
+struct PoseOptimizerOptions {
+  int rounds = 4;
+  int iterations = 10;
+  double chi2_threshold = 5.991;
+};
+
+// Optimises T_cw in place; outlier[i] tells the final classification. Returns the inlier count.
+int optimizePose(const Camera& camera, const std::vector<PoseObservation>& observations, Eigen::Isometry3d& T_cw,
+                 std::vector<bool>& outlier, const PoseOptimizerOptions& options = {});
+
+}  // namespace beslam::orb::optimize

@@ -1,0 +1,305 @@
+// OrbSlam facade: feature extraction, tracking and local mapping (inline or on a worker thread).
+#include "beslam_orb/orb_slam.hpp"
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "features/orb_extractor.hpp"
+#include "map/keyframe.hpp"
+#include "map/map.hpp"
+#include "map/map_point.hpp"
+#include "mapping/local_mapper.hpp"
+#include "optimize/bundle_adjustment.hpp"
+#include "tracking/tracker.hpp"
+
+namespace beslam::orb {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+ExtractorOptions extractorOptions(const Options& o) {
+  ExtractorOptions e;
+  e.features = o.features;
+  e.scale_factor = o.scale_factor;
+  e.levels = o.levels;
+  e.fast_initial = o.fast_initial;
+  e.fast_fallback = o.fast_fallback;
+  e.static_object_fast = o.static_object_fast;
+  e.static_object_budget_share = o.static_object_budget_share;
+  return e;
+}
+
+LocalMapperOptions mapperOptions(const Options& o) {
+  LocalMapperOptions m;
+  m.triangulation_neighbours = o.triangulation_neighbours;
+  m.triangulation_ratio = static_cast<float>(o.triangulation_ratio);
+  m.max_cos_parallax = o.triangulation_max_cos_parallax;
+  m.triangulation_check_orientation = o.triangulation_check_orientation;
+  m.keyframe_culling = o.keyframe_culling;
+  m.ba.robust_iterations = o.local_ba_iterations_robust;
+  m.ba.refine_iterations = o.local_ba_iterations_refine;
+  m.ba.max_local_keyframes = o.local_ba_max_keyframes;
+  m.ba.trusted_weight = o.static_object_weight;
+  return m;
+}
+
+}  // namespace
+
+bool Options::validate(std::string* error) const {
+  auto fail = [&](const std::string& m) {
+    if (error) *error = m;
+    return false;
+  };
+  if (features < 100) return fail("features must be >= 100");
+  if (init_features_factor < 1) return fail("init_features_factor must be >= 1");
+  if (!(scale_factor > 1.0 && scale_factor < 2.0)) return fail("scale_factor must be in (1, 2)");
+  if (levels < 1 || levels > 16) return fail("levels must be in [1, 16]");
+  if (fast_initial < 1 || fast_fallback < 1 || static_object_fast < 1) return fail("FAST thresholds must be >= 1");
+  if (fast_fallback > fast_initial) return fail("fast_fallback must be <= fast_initial");
+  if (static_object_budget_share < 0 || static_object_budget_share > 1)
+    return fail("static_object_budget_share must be in [0, 1]");
+  if (static_object_weight <= 0) return fail("static_object_weight must be > 0");
+  if (fps <= 0) return fail("fps must be > 0");
+  if (min_tracked_inliers < 10) return fail("min_tracked_inliers must be >= 10");
+  if (keyframe_min_gap < 1) return fail("keyframe_min_gap must be >= 1");
+  if (keyframe_ref_ratio <= 0 || keyframe_ref_ratio > 1) return fail("keyframe_ref_ratio must be in (0, 1]");
+  if (triangulation_ratio <= 0 || triangulation_ratio > 1) return fail("triangulation_ratio must be in (0, 1]");
+  if (triangulation_max_cos_parallax <= 0 || triangulation_max_cos_parallax >= 1)
+    return fail("triangulation_max_cos_parallax must be in (0, 1)");
+  if (triangulation_neighbours < 1) return fail("triangulation_neighbours must be >= 1");
+  if (local_ba_iterations_robust < 0 || local_ba_iterations_refine < 0) return fail("BA iterations must be >= 0");
+  if (local_ba_max_keyframes < 0) return fail("local_ba_max_keyframes must be >= 0");
+  if (init_min_parallax_deg <= 0) return fail("init_min_parallax_deg must be > 0");
+  if (ransac_iterations < 1) return fail("ransac_iterations must be >= 1");
+  return true;
+}
+
+struct OrbSlam::Impl {
+  Camera camera;
+  Options options;
+  OrbExtractor extractor;
+  Map map;
+  LocalMapper mapper;
+  Tracker tracker;
+  std::vector<ObjectLandmark> landmarks;
+  Statistics stats;
+
+  // Mapping thread.
+  std::thread worker;
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::deque<std::pair<KeyFrame*, bool>> queue;  // keyframes waiting for local mapping
+  std::vector<std::pair<KeyFrame*, bool>> pending;  // made during the current track() call
+  bool busy = false, stop = false;
+  double last_mapping_ms = 0;
+
+  Impl(const Camera& c, const Options& o)
+      : camera(c), options(o), extractor(extractorOptions(o)),
+        mapper(map, c, extractor.pyramid(), mapperOptions(o)),
+        tracker(c, o, extractor.pyramid(), map,
+                [this](KeyFrame* kf, bool initial) { pending.emplace_back(kf, initial); },
+                [this] { mapper.reset(); }) {
+    if (options.threaded_mapping) worker = std::thread([this] { run(); });
+  }
+
+  ~Impl() {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      stop = true;
+    }
+    cv.notify_all();
+    if (worker.joinable()) worker.join();
+  }
+
+  void process(KeyFrame* kf, bool initial) {
+    if (kf->bad) return;
+    mapper.processKeyFrame(kf, !initial);
+  }
+
+  void run() {
+    for (;;) {
+      std::pair<KeyFrame*, bool> job;
+      {
+        std::unique_lock<std::mutex> lock(mutex);
+        cv.wait(lock, [this] { return stop || !queue.empty(); });
+        if (queue.empty()) return;
+        job = queue.front();
+        queue.pop_front();
+        busy = true;
+      }
+      const auto t0 = Clock::now();
+      process(job.first, job.second);
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        last_mapping_ms += msSince(t0);
+        busy = false;
+      }
+      cv.notify_all();
+    }
+  }
+
+  void waitIdle() {
+    if (!options.threaded_mapping) return;
+    std::unique_lock<std::mutex> lock(mutex);
+    cv.wait(lock, [this] { return queue.empty() && !busy; });
+  }
+
+  TrackResult track(const cv::Mat& image, const cv::Mat& labels, double timestamp, int64_t index) {
+    const auto t_start = Clock::now();
+    auto t0 = Clock::now();
+    const int budget = tracker.initialising() ? options.features * options.init_features_factor : options.features;
+    auto features = extractor.extract(image, labels, budget);
+    const double extract_ms = msSince(t0);
+    t0 = Clock::now();
+    waitIdle();
+    const double wait_ms = msSince(t0);
+    double background_mapping_ms = 0;
+    if (options.threaded_mapping) {
+      std::lock_guard<std::mutex> lock(mutex);
+      background_mapping_ms = last_mapping_ms;
+      last_mapping_ms = 0;
+    }
+
+    TrackResult result = tracker.track(features, timestamp, index);
+    ++stats.frames;
+    if (result.state == TrackingState::Ok) ++stats.frames_tracked;
+    result.stage_ms.insert(result.stage_ms.begin(), {"extract", extract_ms});
+    if (options.threaded_mapping) {
+      result.stage_ms.emplace_back("wait_mapping", wait_ms);
+      result.stage_ms.emplace_back("mapping_background", background_mapping_ms);
+    }
+    result.stage_ms.emplace_back("tracking_total", msSince(t_start));
+
+    auto jobs = std::move(pending);
+    pending.clear();
+    if (options.threaded_mapping) {
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (auto& j : jobs) queue.push_back(j);
+      }
+      cv.notify_all();
+    } else {
+      std::vector<std::pair<std::string, double>> mapping_stages;
+      t0 = Clock::now();
+      for (auto& [kf, initial] : jobs) {
+        process(kf, initial);
+        for (auto& s : mapper.lastTimings()) mapping_stages.push_back(s);
+      }
+      if (!jobs.empty()) {
+        result.stage_ms.insert(result.stage_ms.end(), mapping_stages.begin(), mapping_stages.end());
+        result.stage_ms.emplace_back("mapping", msSince(t0));
+      }
+    }
+    result.stage_ms.emplace_back("total", msSince(t_start));
+    return result;
+  }
+
+  Eigen::Isometry3d composedPose(const FrameRecord& r) const {
+    Eigen::Isometry3d T_c_ref = r.T_c_ref;
+    KeyFrame* ref = r.reference;
+    while (ref && ref->bad && ref->parent) {
+      T_c_ref = T_c_ref * ref->T_cp;
+      ref = ref->parent;
+    }
+    return (T_c_ref * ref->T_cw).inverse();
+  }
+};
+
+OrbSlam::OrbSlam(const Camera& camera, const Options& options) {
+  std::string error;
+  if (!options.validate(&error)) throw std::invalid_argument("beslam::orb::Options: " + error);
+  if (camera.width <= 0 || camera.height <= 0 || camera.fx <= 0 || camera.fy <= 0)
+    throw std::invalid_argument("beslam::orb::Camera: width, height, fx and fy must be > 0");
+  impl_ = std::make_unique<Impl>(camera, options);
+}
+
+OrbSlam::~OrbSlam() = default;
+
+std::optional<Eigen::Isometry3d> OrbSlam::predictPose(double) const { return impl_->tracker.predictPose(); }
+
+TrackResult OrbSlam::track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index) {
+  return impl_->track(gray, label_mask, timestamp, frame_index);
+}
+
+void OrbSlam::finish() {
+  impl_->waitIdle();
+  KeyFrame* last = impl_->tracker.lastKeyFrame();
+  if (last && !last->bad && impl_->map.numKeyFrames() > 2)
+    optimize::localBundleAdjustment(last, impl_->map, mapperOptions(impl_->options).ba);
+}
+
+std::vector<FramePose> OrbSlam::trajectory() const {
+  impl_->waitIdle();
+  std::vector<FramePose> out;
+  for (const FrameRecord& r : impl_->tracker.records()) out.push_back({r.index, r.timestamp, impl_->composedPose(r)});
+  return out;
+}
+
+std::vector<FramePose> OrbSlam::onlineTrajectory() const {
+  impl_->waitIdle();
+  std::vector<FramePose> out;
+  for (const FrameRecord& r : impl_->tracker.records()) out.push_back({r.index, r.timestamp, r.T_cw_online.inverse()});
+  return out;
+}
+
+std::vector<FramePose> OrbSlam::keyframes() const {
+  impl_->waitIdle();
+  std::vector<FramePose> out;
+  for (KeyFrame* kf : impl_->map.keyframes()) out.push_back({kf->frame_index, kf->timestamp, kf->T_cw.inverse()});
+  return out;
+}
+
+std::vector<CloudPoint> OrbSlam::mapPoints() const {
+  impl_->waitIdle();
+  std::vector<CloudPoint> out;
+  for (MapPoint* mp : impl_->map.points()) {
+    if (mp->bad) continue;
+    CloudPoint p;
+    p.position = mp->position;
+    p.grey = mp->grey;
+    p.r = mp->r;
+    p.g = mp->g;
+    p.b = mp->b;
+    p.observations = mp->numObservations();
+    p.on_static_object = mp->trusted;
+    out.push_back(p);
+  }
+  return out;
+}
+
+void OrbSlam::addObjectLandmarks(const std::vector<ObjectLandmark>& landmarks) {
+  for (const ObjectLandmark& l : landmarks) {
+    bool replaced = false;
+    for (ObjectLandmark& mine : impl_->landmarks)
+      if (mine.id == l.id) {
+        mine = l;
+        replaced = true;
+      }
+    if (!replaced) impl_->landmarks.push_back(l);
+  }
+}
+
+std::vector<ObjectLandmark> OrbSlam::objectLandmarks() const { return impl_->landmarks; }
+
+Statistics OrbSlam::statistics() const {
+  impl_->waitIdle();
+  Statistics s = impl_->stats;
+  s.keyframes = static_cast<int>(impl_->map.numKeyFrames());
+  s.keyframes_culled = impl_->map.culledKeyFrames();
+  s.map_points = static_cast<int>(impl_->map.points().size());
+  s.resets = impl_->tracker.resets();
+  s.relocalisations = impl_->tracker.relocalisations();
+  s.initialised_at_frame = impl_->tracker.initialisedAt();
+  return s;
+}
+
+const Options& OrbSlam::options() const { return impl_->options; }
+
+}  // namespace beslam::orb

@@ -1,0 +1,146 @@
+// backend_orb as a BE-SLAM backend plugin: OrbSlam behind the SDK's Backend base class.
+#include <algorithm>
+
+#include "beslam/sdk/sdk.hpp"
+#include "beslam_orb/orb_slam.hpp"
+
+namespace {
+
+namespace field = beslam::sdk::field;
+using beslam::orb::OrbSlam;
+
+const beslam_config_field kFields[] = {
+    field::Int("features", "2000", 100, 20000, "ORB keypoints per frame (twice that while initialising)"),
+    field::Double("scale_factor", "1.2", 1.01, 2.0, "image pyramid scale step"),
+    field::Int("levels", "8", 1, 16, "image pyramid levels"),
+    field::Int("fast_initial", "20", 1, 255, "FAST threshold per cell"),
+    field::Int("fast_fallback", "7", 1, 255, "FAST threshold of a cell that found nothing"),
+    field::Int("static_object_fast", "7", 1, 255, "FAST threshold on static objects (mask label >= 1000)"),
+    field::Double("static_object_budget_share", "0.3", 0.0, 1.0, "share of each level's features reserved for static objects"),
+    field::Double("static_object_weight", "1.0", 0.01, 100.0, "optimisation weight of map points on static objects"),
+    field::Double("fps", "10", 0.1, 1000.0, "frame rate: at most this many frames between keyframes"),
+    field::Int("keyframe_min_gap", "2", 1, 100, "at least this many frames between keyframes"),
+    field::Bool("keyframe_culling", "true", "remove redundant keyframes"),
+    field::Int("local_ba_max_keyframes", "0", 0, 1000, "keyframes moved by local BA (0: all covisible)"),
+    field::Bool("threaded_mapping", "false", "local mapping on its own thread (same results, overlaps the next frame)"),
+    field::Int("seed", "42", 0, 2147483647.0, "seed of every random choice (RANSAC)"),
+};
+
+beslam::orb::Options readOptions(const beslam::sdk::Config& c) {
+  beslam::orb::Options o;
+  o.features = static_cast<int>(c.getInt("features"));
+  o.scale_factor = c.getDouble("scale_factor");
+  o.levels = static_cast<int>(c.getInt("levels"));
+  o.fast_initial = static_cast<int>(c.getInt("fast_initial"));
+  o.fast_fallback = static_cast<int>(c.getInt("fast_fallback"));
+  o.static_object_fast = static_cast<int>(c.getInt("static_object_fast"));
+  o.static_object_budget_share = c.getDouble("static_object_budget_share");
+  o.static_object_weight = c.getDouble("static_object_weight");
+  o.fps = c.getDouble("fps");
+  o.keyframe_min_gap = static_cast<int>(c.getInt("keyframe_min_gap"));
+  o.keyframe_culling = c.getBool("keyframe_culling");
+  o.local_ba_max_keyframes = static_cast<int>(c.getInt("local_ba_max_keyframes"));
+  o.threaded_mapping = c.getBool("threaded_mapping");
+  o.seed = static_cast<uint64_t>(c.getInt("seed"));
+  std::string error;
+  if (!o.validate(&error)) throw beslam::sdk::ConfigError(error);
+  return o;
+}
+
+beslam::orb::Camera readCamera(const beslam::sdk::Context& context) {
+  const beslam_camera& c = context.camera();
+  if (c.width <= 0 || c.height <= 0 || c.fx <= 0 || c.fy <= 0)
+    throw beslam::sdk::ConfigError("backend_orb needs the camera intrinsics (width, height, fx, fy > 0)");
+  return {c.width, c.height, c.fx, c.fy, c.cx, c.cy};
+}
+
+int32_t toState(beslam::orb::TrackingState s) {
+  switch (s) {
+    case beslam::orb::TrackingState::Ok: return BESLAM_TRACKING_OK;
+    case beslam::orb::TrackingState::Lost: return BESLAM_TRACKING_LOST;
+    default: return BESLAM_TRACKING_NOT_INITIALIZED;
+  }
+}
+
+class OrbBackend : public beslam::sdk::Backend {
+ public:
+  OrbBackend(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
+      : slam_(readCamera(context), readOptions(config)) {}
+
+  std::optional<Eigen::Isometry3d> predictPose(const beslam::sdk::Frame& frame) override {
+    return slam_.predictPose(frame.timestamp);
+  }
+
+  beslam::sdk::TrackResult track(const beslam::sdk::Frame& frame, const cv::Mat& mask,
+                                 const std::vector<beslam_box3d>& /*boxes*/) override {
+    // Colour (when given) only colours the map points; features come from the grey image.
+    const cv::Mat& image = frame.color.empty() ? frame.gray : frame.color;
+    const beslam::orb::TrackResult r = slam_.track(image, mask, frame.timestamp, frame.index);
+    beslam::sdk::TrackResult out;
+    out.state = toState(r.state);
+    out.is_keyframe = r.is_keyframe;
+    out.keyframe_id = r.keyframe_id;
+    out.tracked_points = r.tracked_points;
+    out.T_world_cam = r.T_world_cam;
+    out.stage_ms = r.stage_ms;
+    return out;
+  }
+
+  void addLandmarks(const std::vector<beslam::sdk::Landmark>& landmarks) override {
+    std::vector<beslam::orb::ObjectLandmark> mine;
+    for (const beslam::sdk::Landmark& l : landmarks) {
+      beslam::orb::ObjectLandmark o;
+      o.id = l.track_id;
+      o.T_world_object = l.T_world_object;
+      o.dimensions = l.scale;
+      for (size_t i = 0; i + 2 < l.surface_points.size(); i += 3)
+        o.points_object.emplace_back(l.surface_points[i], l.surface_points[i + 1], l.surface_points[i + 2]);
+      mine.push_back(std::move(o));
+    }
+    slam_.addObjectLandmarks(mine);
+  }
+
+  void finish() override { slam_.finish(); }
+
+  std::vector<beslam::sdk::TrajectoryEntry> trajectory(int32_t which) override {
+    std::vector<beslam::orb::FramePose> poses;
+    if (which == BESLAM_TRAJECTORY_ONLINE) {
+      poses = slam_.onlineTrajectory();
+    } else if (which == BESLAM_TRAJECTORY_KEYFRAMES) {
+      poses = slam_.keyframes();
+    } else if (which == BESLAM_TRAJECTORY_FINAL) {
+      poses = slam_.trajectory();
+    } else {
+      throw std::invalid_argument("trajectory: unknown kind " + std::to_string(which));
+    }
+    std::vector<beslam::sdk::TrajectoryEntry> out;
+    out.reserve(poses.size());
+    for (const auto& p : poses) out.push_back({p.frame_index, p.timestamp, p.T_world_cam});
+    return out;
+  }
+
+  std::vector<beslam_map_point> mapPoints() override {
+    std::vector<beslam_map_point> out;
+    for (const beslam::orb::CloudPoint& p : slam_.mapPoints()) {
+      beslam_map_point m{};
+      for (int i = 0; i < 3; ++i) m.p_world[i] = p.position[i];
+      m.color[0] = p.r;
+      m.color[1] = p.g;
+      m.color[2] = p.b;
+      m.observations = p.observations;
+      out.push_back(m);
+    }
+    return out;
+  }
+
+ private:
+  OrbSlam slam_;
+};
+
+}  // namespace
+
+BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<OrbBackend>(
+    {"backend_orb", "ORB monocular SLAM",
+     "ORB-SLAM2-class monocular tracking and local mapping (no loop closure); dynamic mask labels get no "
+     "features, static objects get more",
+     {0, 1, 0}, kFields}))

@@ -1,0 +1,100 @@
+// Tracking: monocular two-view initialisation, then per frame a constant-velocity prediction searched
+// by projection (reference-keyframe search as fallback), pose-only optimisation, local-map tracking and
+// the keyframe decision. States NotInitialized -> Ok <-> Lost; lost with a tiny map resets it.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "beslam_orb/orb_slam.hpp"
+#include "features/feature_set.hpp"
+#include "features/scale_pyramid.hpp"
+#include "init/two_view.hpp"
+#include "map/frame.hpp"
+
+namespace beslam::orb {
+
+class KeyFrame;
+class Map;
+class MapPoint;
+
+// One tracked frame, as stored for the trajectory.
+struct FrameRecord {
+  int64_t index;
+  double timestamp;
+  KeyFrame* reference;
+  Eigen::Isometry3d T_c_ref;     // camera from reference keyframe
+  Eigen::Isometry3d T_cw_online;
+};
+
+class Tracker {
+ public:
+  // on_keyframe(kf, initial): hand a new keyframe to local mapping (initial = the two initial keyframes).
+  using KeyFrameSink = std::function<void(KeyFrame*, bool initial)>;
+  Tracker(const Camera& camera, const Options& options, const ScalePyramid& pyramid, Map& map, KeyFrameSink sink,
+          std::function<void()> on_reset);
+
+  TrackResult track(std::shared_ptr<const FeatureSet> features, double timestamp, int64_t index);
+  bool initialising() const { return state_ == TrackingState::NotInitialized; }
+  TrackingState state() const { return state_; }
+  std::optional<Eigen::Isometry3d> predictPose() const;  // T_world_cam
+  const std::vector<FrameRecord>& records() const { return records_; }
+  int resets() const { return resets_; }
+  int relocalisations() const { return relocalisations_; }
+  int64_t initialisedAt() const { return initialised_at_; }
+  KeyFrame* lastKeyFrame() const { return last_kf_; }
+
+ private:
+  void initialise(TrackResult& result);
+  bool createInitialMap(const std::vector<int>& matches12, const TwoViewResult& r);
+  void reset();
+  void backfillInitialFrames(KeyFrame* kf_ini, KeyFrame* kf_cur);
+  bool trackWithMotionModel();
+  bool trackReferenceKeyFrame();
+  bool relocalise();
+  bool trackLocalMap();
+  void updateLocalKeyFrames();
+  void updateLocalPoints();
+  void searchLocalPoints();
+  bool isInFrustum(MapPoint* mp, float view_cos_limit) const;
+  int optimizeFramePose();
+  int discardOutliers();
+  bool needNewKeyFrame() const;
+  void createKeyFrame();
+  KeyFrame* validReference();
+
+  Camera camera_;
+  Options options_;
+  const ScalePyramid& pyramid_;
+  Map& map_;
+  KeyFrameSink sink_;
+  std::function<void()> on_reset_;
+
+  TrackingState state_ = TrackingState::NotInitialized;
+  Frame current_, last_;
+  std::optional<Eigen::Isometry3d> velocity_;  // T_cur_last
+  // Initialisation.
+  bool init_active_ = false;
+  Frame init_frame_;
+  std::vector<cv::Point2f> prev_matched_;
+  std::vector<Frame> init_between_;  // frames between the reference and the initialising frame
+  // Local map.
+  KeyFrame* reference_kf_ = nullptr;
+  KeyFrame* last_kf_ = nullptr;
+  int64_t last_kf_frame_ = -1, last_reloc_frame_ = -1000;
+  std::optional<Eigen::Isometry3d> last_good_pose_;
+  std::vector<KeyFrame*> local_kfs_;
+  std::vector<MapPoint*> local_points_;
+  int inliers_ = 0;
+
+  std::vector<FrameRecord> records_;
+  int resets_ = 0, relocalisations_ = 0;
+  int64_t initialised_at_ = -1;
+};
+
+}  // namespace beslam::orb

@@ -1,0 +1,122 @@
+// Map bookkeeping on a simulated map: covisibility weights, keyframe culling of redundant keyframes
+// with spanning-tree re-parenting, point replacement (fusion) and observation erasure.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "features/scale_pyramid.hpp"
+#include "map/frame.hpp"
+#include "map/keyframe.hpp"
+#include "map/map.hpp"
+#include "map/map_point.hpp"
+#include "mapping/local_mapper.hpp"
+
+namespace beslam::orb {
+namespace {
+
+const Camera kCam{1226, 370, 718.856, 718.856, 607.19, 185.22};
+
+// n keyframes 0.5 m apart, each observing every one of 150 points at level 0.
+struct SimMap {
+  ScalePyramid pyr{8, 1.2};
+  Map map;
+  std::vector<KeyFrame*> kfs;
+  std::vector<MapPoint*> points;
+
+  explicit SimMap(int n) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> ux(-6, 6), uy(-2, 2), uz(8, 30);
+    std::vector<Eigen::Vector3d> pw;
+    for (int i = 0; i < 150; ++i) pw.emplace_back(ux(rng), uy(rng), uz(rng));
+    for (int k = 0; k < n; ++k) {
+      Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
+      T_cw.translation() = Eigen::Vector3d(0, 0, -0.5 * k);
+      auto f = std::make_shared<FeatureSet>();
+      f->width = kCam.width;
+      f->height = kCam.height;
+      for (const auto& p : pw) {
+        const Eigen::Vector3d c = T_cw * p;
+        f->keypoints.emplace_back(static_cast<float>(kCam.fx * c.x() / c.z() + kCam.cx),
+                                  static_cast<float>(kCam.fy * c.y() / c.z() + kCam.cy), 31.f, 0.f, 1.f, 0);
+      }
+      f->descriptors = cv::Mat(static_cast<int>(pw.size()), 32, CV_8U, cv::Scalar(k));
+      f->labels.assign(pw.size(), 0);
+      f->colours.assign(pw.size(), cv::Vec3b(0, 0, 0));
+      f->buildGrid();
+      Frame frame(k, 0.1 * k, f);
+      frame.T_cw = T_cw;
+      kfs.push_back(map.createKeyFrame(frame, kCam, pyr));
+    }
+    for (size_t i = 0; i < pw.size(); ++i) {
+      MapPoint* mp = map.createMapPoint(pw[i], kfs[0]);
+      for (KeyFrame* kf : kfs) {
+        kf->addPoint(mp, i);
+        mp->addObservation(kf, i);
+      }
+      mp->updateNormalAndDepth();
+      points.push_back(mp);
+    }
+    for (KeyFrame* kf : kfs) kf->updateConnections();
+  }
+};
+
+TEST(Map, CovisibilityCountsSharedPoints) {
+  SimMap m(4);
+  EXPECT_EQ(m.kfs[3]->weight(m.kfs[0]), 150);
+  EXPECT_EQ(m.kfs[3]->covisibles().size(), 3u);
+  EXPECT_EQ(m.kfs[1]->parent, m.kfs[0]);
+  EXPECT_EQ(m.kfs[0]->parent, nullptr);
+}
+
+TEST(Map, RedundantKeyFramesAreCulledAndTheTreeStaysConnected) {
+  SimMap m(5);
+  std::vector<Eigen::Isometry3d> poses;
+  for (KeyFrame* kf : m.kfs) poses.push_back(kf->T_cw);
+  LocalMapper mapper(m.map, kCam, m.pyr, LocalMapperOptions{});
+  // Every point is seen by all five: keyframes 1 and 2 are redundant; after them the points have
+  // three observations left, so keyframe 3 is not; the origin and the current keyframe never go.
+  EXPECT_EQ(mapper.cullKeyFrames(m.kfs[4]), 2);
+  EXPECT_TRUE(m.kfs[1]->bad);
+  EXPECT_TRUE(m.kfs[2]->bad);
+  EXPECT_FALSE(m.kfs[0]->bad);
+  EXPECT_FALSE(m.kfs[3]->bad);
+  EXPECT_EQ(m.map.numKeyFrames(), 3u);
+  for (KeyFrame* kf : m.map.keyframes()) {
+    if (kf == m.map.origin()) continue;
+    ASSERT_NE(kf->parent, nullptr);
+    EXPECT_FALSE(kf->parent->bad);
+  }
+  // A culled keyframe's pose is still recoverable through its parent chain.
+  for (int k : {1, 2}) {
+    KeyFrame* kf = m.kfs[k];
+    Eigen::Isometry3d T = kf->T_cp;
+    KeyFrame* p = kf->parent;
+    while (p->bad) {
+      T = T * p->T_cp;
+      p = p->parent;
+    }
+    EXPECT_TRUE((T * p->T_cw).isApprox(poses[k], 1e-9));
+  }
+  for (MapPoint* mp : m.points) EXPECT_EQ(mp->numObservations(), 3);
+}
+
+TEST(Map, ReplacingAPointMovesItsObservations) {
+  SimMap m(3);
+  MapPoint* a = m.points[0];
+  MapPoint* b = m.map.createMapPoint(a->position, m.kfs[0]);
+  // b is seen only by keyframe 2 at another keypoint; replacing b by a keeps a's keypoint there.
+  m.kfs[2]->addPoint(b, 5);
+  b->addObservation(m.kfs[2], 5);
+  b->replaceWith(a);
+  EXPECT_TRUE(b->bad);
+  EXPECT_EQ(b->latest(), a);
+  EXPECT_EQ(m.kfs[2]->points[5], nullptr);  // a was already in keyframe 2
+  EXPECT_EQ(a->numObservations(), 3);
+  // Erasing observations down to two marks the point bad and clears it from every keyframe.
+  a->eraseObservation(m.kfs[0]);
+  EXPECT_TRUE(a->bad);
+  EXPECT_EQ(m.kfs[1]->points[0], nullptr);
+}
+
+}  // namespace
+}  // namespace beslam::orb

@@ -1,0 +1,113 @@
+// The whole system on a rendered corridor with exact ground truth: it initialises, tracks every frame,
+// its trajectory aligns (Sim(3)) to the truth, and runs are deterministic (same seed, same trajectory;
+// threaded mapping gives the same result as inline mapping).
+#include <gtest/gtest.h>
+
+#include "ape.hpp"
+#include "beslam_orb/orb_slam.hpp"
+#include "synthetic_world.hpp"
+
+namespace beslam::orb {
+namespace {
+
+constexpr int kFrames = 40;
+
+struct RunResult {
+  std::vector<FramePose> trajectory;
+  Statistics stats;
+};
+
+RunResult runCorridor(const Options& options, int frames = kFrames) {
+  static const test::CorridorWorld world;
+  static std::vector<cv::Mat> images;
+  if (images.empty())
+    for (int i = 0; i < kFrames; ++i) images.push_back(world.render(i));
+  OrbSlam slam(world.camera(), options);
+  for (int i = 0; i < frames; ++i) slam.track(images[i], cv::Mat(), 0.1 * i, i);
+  slam.finish();
+  return {slam.trajectory(), slam.statistics()};
+}
+
+Options smallOptions() {
+  Options o;
+  o.features = 1000;
+  return o;
+}
+
+TEST(SlamSynthetic, TracksTheCorridorAccurately) {
+  const test::CorridorWorld world;
+  const RunResult run = runCorridor(smallOptions());
+  EXPECT_GE(run.stats.initialised_at_frame, 0);
+  EXPECT_LE(run.stats.initialised_at_frame, 10);
+  EXPECT_EQ(run.stats.resets, 0);
+  EXPECT_GE(static_cast<int>(run.trajectory.size()), kFrames - run.stats.initialised_at_frame);
+  std::vector<Eigen::Vector3d> est, truth;
+  for (const FramePose& p : run.trajectory) {
+    est.push_back(p.T_world_cam.translation());
+    truth.push_back(world.pose(static_cast<int>(p.frame_index)).translation());
+  }
+  const auto ape = eval::apeTranslation(est, truth);
+  // 15.6 m driven: a few centimetres of error.
+  EXPECT_LT(ape.rmse, 0.10) << "APE " << ape.rmse;
+}
+
+TEST(SlamSynthetic, SameSeedSameTrajectory) {
+  const RunResult a = runCorridor(smallOptions(), 20), b = runCorridor(smallOptions(), 20);
+  ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
+  ASSERT_GT(a.trajectory.size(), 5u);
+  for (size_t i = 0; i < a.trajectory.size(); ++i) {
+    EXPECT_EQ(a.trajectory[i].frame_index, b.trajectory[i].frame_index);
+    EXPECT_EQ(a.trajectory[i].T_world_cam.matrix(), b.trajectory[i].T_world_cam.matrix());
+  }
+}
+
+TEST(SlamSynthetic, ThreadedMappingGivesTheSameTrajectory) {
+  Options threaded = smallOptions();
+  threaded.threaded_mapping = true;
+  const RunResult a = runCorridor(smallOptions(), 20), b = runCorridor(threaded, 20);
+  ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
+  for (size_t i = 0; i < a.trajectory.size(); ++i)
+    EXPECT_EQ(a.trajectory[i].T_world_cam.matrix(), b.trajectory[i].T_world_cam.matrix());
+}
+
+TEST(SlamSynthetic, DynamicMaskedRegionsGetNoMapPoints) {
+  const test::CorridorWorld world;
+  OrbSlam slam(world.camera(), smallOptions());
+  // Mask the whole floor as dynamic: no map point may lie on it (y = 1.5).
+  for (int i = 0; i < 20; ++i) {
+    cv::Mat labels(480, 640, CV_16UC1, cv::Scalar(0));
+    labels.rowRange(300, 480).setTo(1);
+    slam.track(world.render(i), labels, 0.1 * i, i);
+  }
+  slam.finish();
+  const auto traj = slam.trajectory();
+  ASSERT_GT(traj.size(), 5u);
+  // Scale the map to metres with the alignment of the trajectory, then check the floor is empty.
+  std::vector<Eigen::Vector3d> est, truth;
+  for (const FramePose& p : traj) {
+    est.push_back(p.T_world_cam.translation());
+    truth.push_back(world.pose(static_cast<int>(p.frame_index)).translation());
+  }
+  const auto ape = eval::apeTranslation(est, truth);
+  int on_floor = 0, total = 0;
+  for (const CloudPoint& p : slam.mapPoints()) {
+    ++total;
+    on_floor += std::abs(ape.alignment.apply(p.position).y() - 1.5) < 0.05;
+  }
+  EXPECT_GT(total, 100);
+  EXPECT_LT(on_floor, total / 50 + 1);
+}
+
+TEST(Options, ValidationNamesTheConstraint) {
+  Options o;
+  std::string error;
+  EXPECT_TRUE(o.validate(&error));
+  o.scale_factor = 0.9;
+  EXPECT_FALSE(o.validate(&error));
+  EXPECT_NE(error.find("scale_factor"), std::string::npos);
+  EXPECT_THROW(OrbSlam(Camera{640, 480, 500, 500, 320, 240}, o), std::invalid_argument);
+  EXPECT_THROW(OrbSlam(Camera{0, 480, 500, 500, 320, 240}, Options{}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace beslam::orb
