@@ -16,7 +16,7 @@
 #include "beslam/datasets/labels.hpp"
 #include "beslam/detector_image/image_detector.hpp"
 #include "beslam/sdk/views.hpp"
-#include "plugin_harness.hpp"
+#include "beslam/test/abi_harness.hpp"
 
 namespace fs = std::filesystem;
 using namespace beslam::detector_image;
@@ -271,7 +271,7 @@ TEST(ImageDetector, ModelFileErrorsNameThePath) {
 }
 
 TEST(DetectorImagePlugin, ConfigErrorsAndDetectionThroughTheAbi) {
-  beslam::test::PluginHarness plugin(PLUGIN_FILE, "detector_image");
+  beslam::test::AbiHarness plugin(PLUGIN_FILE, "detector_image");
   beslam_create_info info{};
   info.camera = kittiCamera();
   EXPECT_EQ(plugin.create({}, info), BESLAM_ERROR_INVALID_CONFIG);  // no model by default

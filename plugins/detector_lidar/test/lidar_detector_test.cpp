@@ -15,7 +15,7 @@
 #include "beslam/detector_lidar/lidar_detector.hpp"
 #include "beslam/sdk/views.hpp"
 #include "box_match.hpp"
-#include "plugin_harness.hpp"
+#include "beslam/test/abi_harness.hpp"
 #include "synthetic_scan.hpp"
 
 namespace fs = std::filesystem;
@@ -243,7 +243,7 @@ TEST(LidarDetector, RejectsBadOptions) {
 
 // The plugin through the C ABI, as the host drives it.
 TEST(DetectorLidarPlugin, NeedsExtrinsicsAndDetectsThroughTheAbi) {
-  beslam::test::PluginHarness plugin(PLUGIN_FILE, "detector_lidar");
+  beslam::test::AbiHarness plugin(PLUGIN_FILE, "detector_lidar");
   EXPECT_EQ(plugin.descriptor().kind, BESLAM_KIND_DETECTOR);
   beslam_create_info info{};
   info.camera = synth::kittiLikeCamera();

@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "beslam/detector_oracle/oracle.hpp"
-#include "plugin_harness.hpp"
+#include "beslam/test/plugin_harness.hpp"
 
 namespace fs = std::filesystem;
 using namespace beslam::detector_oracle;

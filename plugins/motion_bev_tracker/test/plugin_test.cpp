@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "beslam/common/error.hpp"
-#include "plugin_harness.hpp"
+#include "beslam/test/plugin_harness.hpp"
 
 namespace fs = std::filesystem;
 using beslam::test::PluginHarness;

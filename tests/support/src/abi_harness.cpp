@@ -1,4 +1,4 @@
-#include "plugin_harness.hpp"
+#include "beslam/test/abi_harness.hpp"
 
 #include <dlfcn.h>
 
@@ -23,7 +23,7 @@ std::vector<double> parseList(std::string s) {
 }
 }  // namespace
 
-PluginHarness::PluginHarness(const std::string& library, const std::string& plugin_id) {
+AbiHarness::AbiHarness(const std::string& library, const std::string& plugin_id) {
   library_ = dlopen(library.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (library_ == nullptr) throw std::runtime_error("dlopen " + library + ": " + dlerror());
   auto list = reinterpret_cast<beslam_plugin_list_fn>(dlsym(library_, BESLAM_PLUGIN_LIST_SYMBOL));
@@ -37,26 +37,26 @@ PluginHarness::PluginHarness(const std::string& library, const std::string& plug
   host_.struct_size = sizeof(host_);
   host_.abi_version = BESLAM_ABI_VERSION;
   host_.user_data = this;
-  host_.log = &PluginHarness::log;
+  host_.log = &AbiHarness::log;
 }
 
-PluginHarness::~PluginHarness() {
+AbiHarness::~AbiHarness() {
   destroyInstance();
   // The library stays loaded: static state of a module may still be referenced at exit.
 }
 
-void PluginHarness::destroyInstance() {
+void AbiHarness::destroyInstance() {
   if (instance_ != nullptr) descriptor_->destroy(instance_);
   instance_ = nullptr;
 }
 
-void PluginHarness::log(void* user, int32_t level, const char*, const char* message) {
-  auto* self = static_cast<PluginHarness*>(user);
+void AbiHarness::log(void* user, int32_t level, const char*, const char* message) {
+  auto* self = static_cast<AbiHarness*>(user);
   if (level >= BESLAM_LOG_ERROR) self->last_error_ = message;
   else if (level == BESLAM_LOG_WARNING) self->warnings_.push_back(message);
 }
 
-beslam_status PluginHarness::create(const std::map<std::string, std::string>& overrides,
+beslam_status AbiHarness::create(const std::map<std::string, std::string>& overrides,
                                     const beslam_create_info& base) {
   destroyInstance();
   texts_.clear(), lists_.clear(), values_.clear(), last_error_.clear();
@@ -91,7 +91,7 @@ beslam_status PluginHarness::create(const std::map<std::string, std::string>& ov
   return descriptor_->create(&info, &instance_);
 }
 
-beslam_status PluginHarness::detect(const beslam_frame& frame, beslam_box_list* out) {
+beslam_status AbiHarness::detect(const beslam_frame& frame, beslam_box_list* out) {
   if (instance_ == nullptr) throw std::runtime_error("detect before a successful create");
   last_error_.clear();
   const auto* table = static_cast<const beslam_detector_v1*>(descriptor_->functions);

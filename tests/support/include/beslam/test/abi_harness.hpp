@@ -11,12 +11,12 @@
 
 namespace beslam::test {
 
-class PluginHarness {
+class AbiHarness {
  public:
-  PluginHarness(const std::string& library, const std::string& plugin_id);  // throws std::runtime_error
-  ~PluginHarness();
-  PluginHarness(const PluginHarness&) = delete;
-  PluginHarness& operator=(const PluginHarness&) = delete;
+  AbiHarness(const std::string& library, const std::string& plugin_id);  // throws std::runtime_error
+  ~AbiHarness();
+  AbiHarness(const AbiHarness&) = delete;
+  AbiHarness& operator=(const AbiHarness&) = delete;
 
   const beslam_plugin_descriptor& descriptor() const { return *descriptor_; }
 
