@@ -6,42 +6,21 @@
 #include <Eigen/Geometry>
 
 #include "beslam/datasets/labels.hpp"
+#include "beslam/sdk/views.hpp"
 
 namespace beslam::pipeline {
 
 namespace {
 
-const char* typeName(int32_t class_id) {
-  switch (class_id) {
-    case BESLAM_CLASS_CAR: return "Car";
-    case BESLAM_CLASS_PEDESTRIAN: return "Pedestrian";
-    case BESLAM_CLASS_CYCLIST: return "Cyclist";
-    case BESLAM_CLASS_TRUCK: return "Truck";
-    case BESLAM_CLASS_VAN: return "Van";
-    default: return "Misc";
-  }
-}
-
-const char* stateName(int32_t state) {
-  switch (state) {
-    case BESLAM_MOTION_STATIC: return "static";
-    case BESLAM_MOTION_DYNAMIC: return "dynamic";
-    default: return "unknown";
-  }
-}
-
 double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
 // The image rectangle of the box's corners in front of the camera, clipped to the image.
 void projectBox(const beslam_box3d& box, const beslam_camera& camera, double bbox[4]) {
-  const double l = box.size[0] / 2, w = box.size[1] / 2, h = box.size[2] / 2;
-  const Eigen::Matrix3d R_cam_box = Eigen::AngleAxisd(box.yaw, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  const Eigen::Vector3d c(box.center_cam[0], box.center_cam[1], box.center_cam[2]);
+  const Eigen::Matrix<double, 3, 8> corners_cam = sdk::boxCorners(box);
   double u0 = 1e18, v0 = 1e18, u1 = -1e18, v1 = -1e18;
   bool any = false;
   for (int i = 0; i < 8; ++i) {
-    const Eigen::Vector3d p_box((i & 1) ? l : -l, (i & 2) ? h : -h, (i & 4) ? w : -w);
-    const Eigen::Vector3d p_cam = R_cam_box * p_box + c;
+    const Eigen::Vector3d p_cam = corners_cam.col(i);
     if (p_cam.z() < 0.1) continue;
     const double u = camera.fx * p_cam.x() / p_cam.z() + camera.cx;
     const double v = camera.fy * p_cam.y() / p_cam.z() + camera.cy;
@@ -66,7 +45,7 @@ std::string formatObjectRow(int64_t frame_index, const beslam_box3d& box, const 
   label.frame = frame_index;
   label.track_id = box.track_id;
   datasets::ObjectLabel& o = label.object;
-  o.type = typeName(box.class_id);
+  o.type = sdk::className(box.class_id);
   o.truncated = box.truncation;
   o.occluded = box.occlusion;
   double bbox[4] = {-1, -1, -1, -1};
@@ -80,7 +59,7 @@ std::string formatObjectRow(int64_t frame_index, const beslam_box3d& box, const 
   o.ry = box.yaw;
   o.alpha = wrapAngle(box.yaw - std::atan2(o.p_cam_bottom.x(), o.p_cam_bottom.z()));
   o.score = box.score;
-  return datasets::formatTrackingRow(label) + " " + stateName(box.motion_state);
+  return datasets::formatTrackingRow(label) + " " + sdk::motionName(box.motion_state);
 }
 
 }  // namespace beslam::pipeline

@@ -20,6 +20,7 @@
 #include "beslam/eval/eval.hpp"
 #include "beslam/pipeline/objects.hpp"
 #include "beslam/registry/instance.hpp"
+#include "beslam/sdk/views.hpp"  // the host uses the SDK's zero-copy view helpers too
 #include "beslam/sim/synth.hpp"
 #include "beslam/common/yaml_set.hpp"
 #include "beslam/trajectory/trajectory.hpp"
@@ -34,24 +35,6 @@ using Clock = std::chrono::steady_clock;
 
 double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-beslam_image_view view(const cv::Mat& mat, int32_t format) {
-  beslam_image_view v{};
-  if (mat.empty()) return v;
-  v.data = mat.data;
-  v.width = mat.cols;
-  v.height = mat.rows;
-  v.stride_bytes = static_cast<int32_t>(mat.step[0]);
-  v.format = format;
-  return v;
-}
-
-beslam_pose toPose(const Eigen::Isometry3d& T) {
-  beslam_pose p{};
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) p.m[r * 4 + c] = T.matrix()(r, c);
-  return p;
 }
 
 // Boxes from a detector must be finite and sized before any other plugin sees them.
@@ -172,7 +155,7 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
   base.camera.cy = camera.cy;
   if (const auto T = dataset->T_cam_lidar()) {
     base.has_lidar_extrinsics = 1;
-    base.T_cam_lidar = toPose(*T);
+    base.T_cam_lidar = sdk::toPose(*T);
   }
   const std::string abs_out = fs::absolute(out_dir).string();
   base.output_dir = abs_out.c_str();
@@ -221,8 +204,8 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
     cf.struct_size = sizeof(cf);
     cf.index = frame.index;
     cf.timestamp = frame.timestamp;
-    cf.gray = view(frame.gray, BESLAM_PIXEL_GRAY8);
-    cf.color = view(frame.color, BESLAM_PIXEL_BGR8);
+    cf.gray = sdk::toView(frame.gray, BESLAM_PIXEL_GRAY8);
+    cf.color = sdk::toView(frame.color, BESLAM_PIXEL_BGR8);
     if (!frame.lidar_xyzi.empty()) {
       cf.lidar.data = frame.lidar_xyzi.data();
       cf.lidar.count = frame.lidar_xyzi.size() / 4;
@@ -255,7 +238,7 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
       masker->generate(cf, boxes, buffer);
       timing.stages.emplace_back("mask_generator", msSince(t0));
     }
-    const beslam_image_view mask_view = view(mask, BESLAM_PIXEL_LABEL16);
+    const beslam_image_view mask_view = sdk::toView(mask, BESLAM_PIXEL_LABEL16);
 
     t0 = Clock::now();
     const registry::TrackOutput tracked = backend->track(cf, mask_view, boxes);
