@@ -121,32 +121,3 @@ TEST(IouFloors, PerturbedBoxesLidarHelps) {
   EXPECT_GE(median(iou.at("lidar_contour")), 0.80);
 }
 
-// Debugging aid (disabled): the contour fit of one object, crop and edges written to $BESLAM_MASK_DUMP.
-TEST(IouFloors, DISABLED_DumpContour) {
-  const fixture::Scene s = fixture::street(100, 0);
-  const char* dump = std::getenv("BESLAM_MASK_DUMP");
-  for (const auto& c : s.cars) {
-    const std::vector<cv::Point2f> poly = projectBoxPolygon(c.box, s.K, 0.3, 2.0);
-    const cv::Rect roi = cv::boundingRect(poly) & cv::Rect(0, 0, s.K.width, s.K.height);
-    cv::Mat region = cv::Mat::zeros(roi.size(), CV_8UC1);
-    std::vector<cv::Point> ip;
-    for (const auto& p : poly) ip.emplace_back(cvRound(p.x - roi.x), cvRound(p.y - roi.y));
-    cv::fillConvexPoly(region, ip, cv::Scalar(255));
-    const ContourResult r = refineContour(s.gray(roi), region, cv::Mat(), ContourParams{});
-    std::printf("car %d support %.2f smooth %.2f edges", c.box.track_id, r.support, r.smoothness);
-    for (int i = 0; i < 6; ++i) std::printf(" %d", r.from_edges[i] ? 1 : 0);
-    std::printf("\n");
-    cv::Mat blurred, edges, vis;
-    cv::GaussianBlur(s.gray(roi), blurred, cv::Size(3, 3), 0);
-    cv::Canny(blurred, edges, 30, 90, 3, true);
-    cv::cvtColor(s.gray(roi), vis, cv::COLOR_GRAY2BGR);
-    vis.setTo(cv::Scalar(0, 255, 0), edges);
-    for (int x = 0; x < roi.width; ++x)
-      for (int i = 0; i < 6; ++i) {
-        const double y = r.curves[i](x);
-        if (std::abs(x - r.curves[i].x_mid) <= r.curves[i].half_width && y >= 0 && y < roi.height)
-          vis.at<cv::Vec3b>(static_cast<int>(y), x) = cv::Vec3b(0, 0, 255);
-      }
-    if (dump) cv::imwrite(std::string(dump) + "/contour_" + std::to_string(c.box.track_id) + ".png", vis);
-  }
-}
