@@ -29,6 +29,17 @@ void normalise(const std::vector<Eigen::Vector2d>& p, std::vector<Eigen::Vector2
 
 }  // namespace
 
+void TwoViewInitializer::normaliseMatches(std::vector<Eigen::Vector2d>& n1, Eigen::Matrix3d& T1,
+                                          std::vector<Eigen::Vector2d>& n2, Eigen::Matrix3d& T2) const {
+  std::vector<Eigen::Vector2d> p1(matches_.size()), p2(matches_.size());
+  for (size_t i = 0; i < matches_.size(); ++i) {
+    p1[i] = {(*kps1_)[matches_[i].i1].pt.x, (*kps1_)[matches_[i].i1].pt.y};
+    p2[i] = {(*kps2_)[matches_[i].i2].pt.x, (*kps2_)[matches_[i].i2].pt.y};
+  }
+  normalise(p1, n1, T1);
+  normalise(p2, n2, T2);
+}
+
 TwoViewInitializer::TwoViewInitializer(const Camera& camera, const TwoViewOptions& options)
     : camera_(camera), options_(options) {
   K_ << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1;
@@ -126,14 +137,9 @@ bool TwoViewInitializer::reconstruct(const std::vector<cv::KeyPoint>& kps1, cons
 
 void TwoViewInitializer::findHomography(std::vector<bool>& inliers, double& score, Eigen::Matrix3d& H21) const {
   const int n = static_cast<int>(matches_.size());
-  std::vector<Eigen::Vector2d> p1(n), p2(n), n1, n2;
-  for (int i = 0; i < n; ++i) {
-    p1[i] = {(*kps1_)[matches_[i].i1].pt.x, (*kps1_)[matches_[i].i1].pt.y};
-    p2[i] = {(*kps2_)[matches_[i].i2].pt.x, (*kps2_)[matches_[i].i2].pt.y};
-  }
+  std::vector<Eigen::Vector2d> n1, n2;
   Eigen::Matrix3d T1, T2;
-  normalise(p1, n1, T1);
-  normalise(p2, n2, T2);
+  normaliseMatches(n1, T1, n2, T2);
   const Eigen::Matrix3d T2inv = T2.inverse();
   score = 0;
   inliers.assign(n, false);
@@ -159,14 +165,9 @@ void TwoViewInitializer::findHomography(std::vector<bool>& inliers, double& scor
 
 void TwoViewInitializer::findFundamental(std::vector<bool>& inliers, double& score, Eigen::Matrix3d& F21) const {
   const int n = static_cast<int>(matches_.size());
-  std::vector<Eigen::Vector2d> p1(n), p2(n), n1, n2;
-  for (int i = 0; i < n; ++i) {
-    p1[i] = {(*kps1_)[matches_[i].i1].pt.x, (*kps1_)[matches_[i].i1].pt.y};
-    p2[i] = {(*kps2_)[matches_[i].i2].pt.x, (*kps2_)[matches_[i].i2].pt.y};
-  }
+  std::vector<Eigen::Vector2d> n1, n2;
   Eigen::Matrix3d T1, T2;
-  normalise(p1, n1, T1);
-  normalise(p2, n2, T2);
+  normaliseMatches(n1, T1, n2, T2);
   score = 0;
   inliers.assign(n, false);
   std::vector<Eigen::Vector2d> s1(8), s2(8);

@@ -61,6 +61,9 @@ class TwoViewInitializer {
   Camera camera_;
   Eigen::Matrix3d K_;
   TwoViewOptions options_;
+  // Both views' matched keypoints, Hartley-normalised (n = T * p), shared by the H and F searches.
+  void normaliseMatches(std::vector<Eigen::Vector2d>& n1, Eigen::Matrix3d& T1, std::vector<Eigen::Vector2d>& n2,
+                        Eigen::Matrix3d& T2) const;
   const std::vector<cv::KeyPoint>* kps1_ = nullptr;
   const std::vector<cv::KeyPoint>* kps2_ = nullptr;
   std::vector<Match> matches_;
