@@ -12,7 +12,7 @@ using beslam::detector_lidar::Options;
 const beslam_config_field kFields[] = {
     field::Double("min_range", "1.5", 0, 200, "points closer to the LiDAR than this (m) are ignored"),
     field::Double("max_range", "60", 1, 300, "points farther than this (m) are ignored"),
-    field::Bool("camera_fov_only", "true", "keep only points in front of the camera that project into the image"),
+    field::Bool("camera_fov_only", "true", "report only cars with points that project into the image"),
     field::Double("fov_margin_px", "40", 0, 10000, "image grown by this many pixels for camera_fov_only"),
     field::String("ground_method", "ransac", "ransac|grid",
                   "ground removal: one RANSAC plane, or a BEV grid of local lowest points"),
@@ -38,8 +38,15 @@ const beslam_config_field kFields[] = {
     field::Double("car_max_bottom", "1.6", 0, 20, "car gate: the cluster's lowest point is at most this high (m)"),
     field::DoubleList("car_size", "[3.9, 1.6, 1.5]", 0.1, 20,
                       "car prior length, width, height (m): unseen sides are grown to it"),
-    field::Double("car_min_length", "2.2", 0.1, 20, "a seen side shorter than this (m) is grown to the prior length"),
-    field::Double("car_min_width", "1.2", 0.1, 20, "a seen end narrower than this (m) is grown to the prior width"),
+    field::Double("car_min_length", "2.2", 0.1, 20,
+                  "without free_space: a seen side shorter than this (m) is grown to the prior length"),
+    field::Double("car_min_width", "1.2", 0.1, 20,
+                  "without free_space: a seen end narrower than this (m) is grown to the prior width"),
+    field::Double("fov_context", "5.0", 0, 50, "points up to this far (m) outside the image's view still shape boxes"),
+    field::Bool("free_space", "true", "grow boxes only where no LiDAR ray passed through at body height"),
+    field::Double("free_space_min_height", "0.4", 0, 5, "free space: lowest body height above the ground (m)"),
+    field::Double("free_space_max_height", "0.9", 0.01, 5, "free space: highest body height above the ground (m)"),
+    field::Int("free_space_min_rays", "3", 1, 1000, "free space: rays needed to call a place free"),
     field::Double("uncertain_range", "40", 0.1, 1000, "boxes farther than this (m) are flagged uncertain"),
     field::Int("uncertain_points", "25", 0, 1000000, "boxes with fewer points are flagged uncertain"),
 };
@@ -75,6 +82,11 @@ Options readOptions(const beslam::sdk::Config& c) {
   o.car_size = {size[0], size[1], size[2]};
   o.car_min_length = c.getDouble("car_min_length");
   o.car_min_width = c.getDouble("car_min_width");
+  o.fov_context = c.getDouble("fov_context");
+  o.free_space = c.getBool("free_space");
+  o.free_space_min_height = c.getDouble("free_space_min_height");
+  o.free_space_max_height = c.getDouble("free_space_max_height");
+  o.free_space_min_rays = static_cast<int>(c.getInt("free_space_min_rays"));
   o.uncertain_range = c.getDouble("uncertain_range");
   o.uncertain_points = static_cast<int>(c.getInt("uncertain_points"));
   try {

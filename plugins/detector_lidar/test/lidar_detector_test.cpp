@@ -154,7 +154,7 @@ TEST(LidarDetector, Kitti000008FindsTheLabelledCars) {
     }
     std::printf("[%s] %d of 6 cars within 0.5 m; %zu boxes; %zu points used, %zu ground, %zu clusters\n", method,
                 found, boxes.size(), stats.used_points, stats.ground_points, stats.clusters);
-    // Target (issue 5): 5 of 6. Measured 5 of 6 (errors 0.46 0.14 0.04 0.18 0.46/0.34 0.67 m). The car at 20 m
+    // Target (issue 5): 5 of 6. Measured 5 of 6 (errors 0.46 0.11 0.04 0.16 0.46/0.34 0.68 m). The car at 20 m
     // shows only its rear (no returns from its side), so it is grown to the 3.9 m length prior while its label
     // says 2.47 m. Two of the five are close to the limit, and lshape_min_points (40) was chosen after
     // looking at this frame: the far car has 34 points and only the minimum-area fit gets its heading right.
@@ -168,16 +168,17 @@ TEST(LidarDetector, Kitti000008FindsTheLabelledCars) {
   }
 }
 
-// Target (issue 5): recall above 0.9 within 30 m: not met. Measured on these 12 streets (75 cars with >= 10
-// LiDAR points within 30 m), RANSAC ground: 0.79 with a 0.5 m BEV centre match, 0.89 with 1.0 m; on 30 other
-// streets (seeds 500-529, 214 cars) 0.81 and 0.87. The misses are cars hidden behind others but for their
-// roof or a corner, and diagonal cars whose length and width axes get swapped. The floors guard that level.
+// Target (issue 5): recall above 0.9 within 30 m. Measured on these 12 streets (75 cars with >= 10 LiDAR points
+// within 30 m), RANSAC ground: 0.84 with a 0.5 m BEV centre match, 0.92 with 1.0 m (0.79 and 0.89 before the
+// free-space completion and the image-border context); grid ground 0.80 at 1.0 m; seeds 500-529 (214 cars)
+// 0.86 and 0.89. Most remaining misses are cars behind other cars that show only their roof or a corner
+// (often under 8 points after thinning). The floors guard that level.
 TEST(LidarDetector, SyntheticStreetsRecallWithin30m) {
   struct Case {
     const char* method;
     double match, floor;
   };
-  for (const Case& c : {Case{"ransac", 0.5, 0.75}, Case{"ransac", 1.0, 0.85}, Case{"grid", 1.0, 0.72}}) {
+  for (const Case& c : {Case{"ransac", 0.5, 0.82}, Case{"ransac", 1.0, 0.90}, Case{"grid", 1.0, 0.78}}) {
     Options options;
     options.ground_method = c.method;
     const SynthScore s = scoreSynthetic(options, 12, 30.0, c.match);
@@ -189,6 +190,107 @@ TEST(LidarDetector, SyntheticStreetsRecallWithin30m) {
     EXPECT_GT(recall, c.floor) << c.method << " at " << c.match << " m";
     EXPECT_LE(s.false_positives, s.detections / 10) << c.method;
   }
+}
+
+// Hand-built scenes for the free-space completion: each returns the BEV centre error and the box of the
+// detection nearest the scene's first object (a car), or a large error when there is none.
+struct NearestBox {
+  double error = 1e9;
+  beslam_box3d box{}, truth{};
+};
+NearestBox detectFirstCar(const synth::Scene& scene, const Options& options, double fov_deg = 55) {
+  const Eigen::Isometry3d T = synth::kittiLikeTcamLidar();
+  const LidarDetector detector(options, T, synth::kittiLikeCamera());
+  const synth::Scan scan = synth::castScan(scene, 11, 0.16, fov_deg);
+  NearestBox out;
+  out.truth = synth::truthBoxes(scene, T).front();
+  for (const beslam_box3d& b : detectScan(detector, scan.xyzi)) {
+    const double e = eval::bevDistance(b, out.truth);
+    if (e < out.error) out.error = e, out.box = b;
+  }
+  return out;
+}
+
+double yawDifference(double a, double b) {  // modulo pi (one scan has no front and back)
+  double d = std::fmod(std::abs(a - b), 3.14159265358979);
+  return std::min(d, 3.14159265358979 - d);
+}
+
+synth::Object carAt(double x, double y, double yaw, double length = 4.4, double width = 1.8) {
+  synth::Object car;
+  car.center_xy = Eigen::Vector2d(x, y);
+  car.yaw = yaw, car.length = length, car.width = width, car.height = 1.5;
+  return car;
+}
+
+synth::Object wallAt(double x, double y, double length, double width) {  // too tall for the car gate
+  synth::Object wall;
+  wall.is_car = false;
+  wall.center_xy = Eigen::Vector2d(x, y);
+  wall.length = length, wall.width = width, wall.height = 2.6;
+  return wall;
+}
+
+// A car alongside the ego, cut by the right image border: the points just outside the image (fov_context)
+// give it its whole length; with only the in-image points its centre lands about a metre off.
+TEST(LidarFreeSpace, CarCutByTheImageBorderKeepsItsLength) {
+  synth::Scene scene;
+  scene.objects = {carAt(3.2, -3.0, 0.0)};
+  const NearestBox with_context = detectFirstCar(scene, Options{}, 90);
+  Options no_context;
+  no_context.fov_context = 0;
+  const NearestBox without = detectFirstCar(scene, no_context, 90);
+  std::printf("border car: error %.2f m with context (length %.2f), %.2f m without\n", with_context.error,
+              with_context.box.size[0], without.error);
+  EXPECT_LT(with_context.error, 0.3);
+  EXPECT_NEAR(with_context.box.size[0], 4.4, 0.3);
+  EXPECT_LT(yawDifference(with_context.box.yaw, with_context.truth.yaw), 0.1);
+  EXPECT_GT(without.error, with_context.error);
+}
+
+// A parked car ahead on the right whose rear half is hidden behind a tall board: the free space beyond its
+// front end (rays reaching the road past it) stops growth there, so it grows toward the sensor, into the
+// board's shadow. The old rule (grow away from the sensor) puts it about 2 m too far. Measured 0.52 m: the
+// far end first takes the slack before the first free ray (about 0.4 m), and the prior is 0.5 m short.
+TEST(LidarFreeSpace, CarWithHiddenNearEndGrowsIntoTheShadow) {
+  synth::Scene scene;
+  scene.objects = {carAt(15.0, -4.0, 0.0), wallAt(6.0, -1.95, 0.3, 1.4)};
+  const NearestBox fs = detectFirstCar(scene, Options{});
+  Options old;
+  old.free_space = false;
+  const NearestBox legacy = detectFirstCar(scene, old);
+  std::printf("hidden near end: error %.2f m (x %.2f z %.2f vs %.2f %.2f, %.2f x %.2f), %.2f m without free space\n", fs.error, fs.box.center_cam[0], fs.box.center_cam[2], fs.truth.center_cam[0], fs.truth.center_cam[2], fs.box.size[0], fs.box.size[1],
+              legacy.error);
+  EXPECT_LT(fs.error, 0.6);
+  EXPECT_LT(yawDifference(fs.box.yaw, fs.truth.yaw), 0.1);
+  EXPECT_GT(legacy.error, fs.error + 1.0);
+}
+
+// A diagonal car ahead whose one visible side is cut short by a board in front of it: the other visible side
+// is complete (rays pass beyond both its ends) and shorter than any car is long, so it must be the width.
+// (The old rule gets this scene right too; the test guards the size-prior choice of the length axis.)
+TEST(LidarFreeSpace, DiagonalCarPartlyHiddenGetsItsLengthAxisRight) {
+  const double kQuarter = 3.14159265358979 / 4;
+  synth::Scene scene;
+  scene.objects = {carAt(14.0, 2.0, kQuarter), wallAt(8.0, 2.1, 0.3, 1.2)};
+  const NearestBox fs = detectFirstCar(scene, Options{});
+  Options old;
+  old.free_space = false;
+  const NearestBox legacy = detectFirstCar(scene, old);
+  std::printf("diagonal: error %.2f m, yaw off %.2f rad; without free space %.2f m, yaw off %.2f rad\n", fs.error,
+              yawDifference(fs.box.yaw, fs.truth.yaw), legacy.error, yawDifference(legacy.box.yaw, legacy.truth.yaw));
+  EXPECT_LT(fs.error, 0.5);
+  EXPECT_LT(yawDifference(fs.box.yaw, fs.truth.yaw), 0.15);
+}
+
+// A car seen straight from behind still gets its length along the line of sight, grown away from the sensor.
+TEST(LidarFreeSpace, CarSeenFromBehindIsGrownAwayFromTheSensor) {
+  synth::Scene scene;
+  scene.objects = {carAt(12.0, 0.0, 0.0, 3.9, 1.6)};
+  const NearestBox fs = detectFirstCar(scene, Options{});
+  std::printf("from behind: error %.2f m, length %.2f\n", fs.error, fs.box.size[0]);
+  EXPECT_LT(fs.error, 0.3);
+  EXPECT_LT(yawDifference(fs.box.yaw, fs.truth.yaw), 0.1);
 }
 
 TEST(LidarDetector, EmptyAndNullScansGiveNoBoxes) {

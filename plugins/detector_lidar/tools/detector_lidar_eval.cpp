@@ -2,15 +2,19 @@
 //
 //   detector_lidar_eval object   <kitti/object/training> <index> [match_m] [key=value...]
 //   detector_lidar_eval sequence <sequence folder> <tracking labels.txt> [max_distance_m] [match_m] [key=value...]
+//   detector_lidar_eval streets  <first seed> <count> [max_distance_m] [match_m] [key=value...]
 //
 // key=value sets a detector option: car_size=4.6,1.8,1.5 ground_method=grid box_fit=min_area
-// lshape_min_points=N cluster_tolerance=X.
+// lshape_min_points=N cluster_tolerance=X fov_context=X free_space=true|false free_space_min_rays=N.
 //
 // `sequence` reads a KITTI-odometry-layout folder (velodyne/NNNNNN.bin, calib.txt with P0/P2, R0_rect or
 // R_rect, Tr_velo_to_cam or Tr) and KITTI tracking labels (label_02 rows; `beslam synth` writes this
 // layout). It prints per-frame and total recall of Car labels within max_distance (BEV centre error below
 // match_m, default 0.5), the median BEV error, and the false positives (detections > 2 m from any label).
+// `streets` scores the tests' ray-cast streets (test/synthetic_scan.cpp, 8 cars a street; cars with at least 10
+// points on them count). BESLAM_EVAL_VERBOSE=1 lists missed cars and unmatched detections.
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <ctime>
 #include <cmath>
@@ -27,6 +31,7 @@
 #include "beslam/datasets/velodyne.hpp"
 #include "beslam/detector_lidar/lidar_detector.hpp"
 #include "box_match.hpp"
+#include "synthetic_scan.hpp"
 
 namespace fs = std::filesystem;
 namespace ds = beslam::datasets;
@@ -60,18 +65,63 @@ std::vector<beslam_box3d> timedDetect(const beslam::detector_lidar::LidarDetecto
   return boxes;
 }
 
+// Scan points (camera frame) inside a label's box grown by margin: how much of the car the sensor saw.
+// With seen, the extent of those points along the box's length and width axes (relative to its centre).
+int pointsInBox(const std::vector<Eigen::Vector3d>& p_cam, const beslam_box3d& b, double margin,
+                std::array<double, 4>* seen = nullptr) {
+  const double c = std::cos(b.yaw), s = std::sin(b.yaw);
+  const Eigen::Vector2d heading(c, -s), side(s, c);  // (x, z) of the length and width axes
+  int n = 0;
+  std::array<double, 4> e = {1e9, -1e9, 1e9, -1e9};
+  for (const Eigen::Vector3d& q : p_cam) {
+    const Eigen::Vector2d d(q.x() - b.center_cam[0], q.z() - b.center_cam[2]);
+    if (std::abs(d.dot(heading)) <= b.size[0] / 2 + margin && std::abs(d.dot(side)) <= b.size[1] / 2 + margin &&
+        std::abs(q.y() - b.center_cam[1]) <= b.size[2] / 2 - 0.3) {  // above the ground's noise
+      ++n;
+      e[0] = std::min(e[0], d.dot(heading)), e[1] = std::max(e[1], d.dot(heading));
+      e[2] = std::min(e[2], d.dot(side)), e[3] = std::max(e[3], d.dot(side));
+    }
+  }
+  if (seen) *seen = e;
+  return n;
+}
+
 void score(const std::vector<beslam_box3d>& truth_all, const std::vector<beslam_box3d>& detections,
-           double max_distance, double match, Totals& totals, const std::string& name) {
+           double max_distance, double match, Totals& totals, const std::string& name,
+           const std::vector<Eigen::Vector3d>* p_cam = nullptr, const std::vector<beslam_box3d>* fp_truth = nullptr) {
   std::vector<beslam_box3d> truth;
   for (const beslam_box3d& t : truth_all)
     if (std::hypot(t.center_cam[0], t.center_cam[2]) <= max_distance) truth.push_back(t);
   int found = 0;
-  for (const eval::Match& m : eval::matchBev(truth, detections, match))
-    if (m.detection >= 0) ++found, totals.errors.push_back(m.error);
+  const bool verbose = std::getenv("BESLAM_EVAL_VERBOSE") != nullptr;
+  for (const eval::Match& m : eval::matchBev(truth, detections, match)) {
+    const beslam_box3d& t = truth[m.truth];
+    if (m.detection >= 0) {
+      ++found, totals.errors.push_back(m.error);
+      if (verbose && !p_cam)
+        std::printf("  car at x %.2f z %.2f: BEV error %.2f m\n", t.center_cam[0], t.center_cam[2], m.error);
+      continue;
+    }
+    if (!verbose) continue;
+    std::array<double, 4> seen{};
+    const int n = p_cam ? pointsInBox(*p_cam, t, 0.1, &seen) : -1;
+    std::printf("  missed car at x %.2f z %.2f, %.2f x %.2f, yaw %.2f, %d points (length %.2f..%.2f, width %.2f..%.2f)",
+                t.center_cam[0], t.center_cam[2], t.size[0], t.size[1], t.yaw, n, seen[0], seen[1], seen[2], seen[3]);
+    double nearest = 1e9;
+    int k = -1;
+    for (size_t d = 0; d < detections.size(); ++d)
+      if (eval::bevDistance(detections[d], t) < nearest) nearest = eval::bevDistance(detections[d], t), k = static_cast<int>(d);
+    if (k >= 0 && nearest < 3) {
+      const beslam_box3d& d = detections[static_cast<size_t>(k)];
+      std::printf("; nearest box %.2f m off at x %.2f z %.2f, %.2f x %.2f, yaw %.2f", nearest, d.center_cam[0],
+                  d.center_cam[2], d.size[0], d.size[1], d.yaw);
+    }
+    std::printf("\n");
+  }
   int fp = 0;
   for (const beslam_box3d& d : detections) {
     double nearest = 1e9;
-    for (const beslam_box3d& t : truth_all) nearest = std::min(nearest, eval::bevDistance(d, t));
+    for (const beslam_box3d& t : fp_truth ? *fp_truth : truth_all) nearest = std::min(nearest, eval::bevDistance(d, t));
     if (nearest > 2.0 && std::getenv("BESLAM_EVAL_VERBOSE") != nullptr)
       std::printf("  unmatched detection at x %.2f z %.2f, %.2f x %.2f x %.2f m, score %.2f\n", d.center_cam[0],
                   d.center_cam[2], d.size[0], d.size[1], d.size[2], d.score);
@@ -123,6 +173,12 @@ int applyOptions(int argc, char** argv, beslam::detector_lidar::Options& o) {
       o.lshape_min_points = std::stoi(value);
     } else if (key == "cluster_tolerance") {
       o.cluster_tolerance = std::stod(value);
+    } else if (key == "fov_context") {
+      o.fov_context = std::stod(value);
+    } else if (key == "free_space") {
+      o.free_space = value == "true" || value == "1";
+    } else if (key == "free_space_min_rays") {
+      o.free_space_min_rays = std::stoi(value);
     } else {
       throw std::invalid_argument("unknown option '" + key + "'");
     }
@@ -135,7 +191,8 @@ int usage() {
   std::fprintf(stderr,
                "usage: detector_lidar_eval object <kitti/object/training> <index> [match_m] [key=value...]\n"
                "       detector_lidar_eval sequence <folder> <tracking_labels.txt> [max_distance_m] [match_m] "
-               "[key=value...]\n");
+               "[key=value...]\n"
+               "       detector_lidar_eval streets <first_seed> <count> [max_distance_m] [match_m] [key=value...]\n");
   return 2;
 }
 
@@ -163,6 +220,36 @@ int main(int argc, char** argv) {
       for (int warm = 0; warm < 4; ++warm) timedDetect(detector, scan, totals);  // timing: one frame, five runs
       score(truth, timedDetect(detector, scan, totals), 1e9, match, totals, index);
       summary(totals, 1e9, match);
+      return 0;
+    }
+    if (mode == "streets") {
+      // The test's ray-caster (test/synthetic_scan.cpp): cars with >= 10 points within max_distance count.
+      const int first = std::stoi(argv[2]), count = std::stoi(argv[3]);
+      const double max_distance = argc > 4 ? std::stod(argv[4]) : 30.0;
+      const double match = argc > 5 ? std::stod(argv[5]) : 0.5;
+      namespace synth = beslam::detector_lidar::synth;
+      const Eigen::Isometry3d T = synth::kittiLikeTcamLidar();
+      const beslam::detector_lidar::LidarDetector detector(options, T, synth::kittiLikeCamera());
+      Totals totals;
+      for (int seed = first; seed < first + count; ++seed) {
+        const synth::Scene scene = synth::randomScene(static_cast<uint32_t>(seed), 8, max_distance);
+        const synth::Scan scan = synth::castScan(scene, static_cast<uint32_t>(seed));
+        const std::vector<beslam_box3d> truth_all = synth::truthBoxes(scene, T);
+        std::vector<beslam_box3d> truth;
+        size_t car = 0;
+        for (size_t k = 0; k < scene.objects.size(); ++k) {
+          if (!scene.objects[k].is_car) continue;
+          const beslam_box3d& b = truth_all[car++];
+          if (scan.hits_per_object[k] >= 10) truth.push_back(b);
+        }
+        std::vector<Eigen::Vector3d> p_cam;
+        for (size_t i = 0; i + 3 < scan.xyzi.size(); i += 4)
+          p_cam.push_back(T * Eigen::Vector3d(scan.xyzi[i], scan.xyzi[i + 1], scan.xyzi[i + 2]));
+        // False positives are scored against every car, the hidden ones included.
+        const std::vector<beslam_box3d> detections = timedDetect(detector, scan.xyzi, totals);
+        score(truth, detections, max_distance, match, totals, "seed " + std::to_string(seed), &p_cam, &truth_all);
+      }
+      summary(totals, max_distance, match);
       return 0;
     }
     if (mode == "sequence") {
@@ -216,7 +303,10 @@ int main(int argc, char** argv) {
       for (const fs::path& s : scans) {
         const int64_t frame = std::stoll(s.stem().string());
         const std::vector<float> scan = ds::readVelodyneBin(s.string());
-        score(truth[frame], timedDetect(detector, scan, totals), max_distance, match, totals, s.stem().string());
+        std::vector<Eigen::Vector3d> p_cam;
+        if (std::getenv("BESLAM_EVAL_VERBOSE") != nullptr)
+          for (size_t i = 0; i + 3 < scan.size(); i += 4) p_cam.push_back(T * Eigen::Vector3d(scan[i], scan[i + 1], scan[i + 2]));
+        score(truth[frame], timedDetect(detector, scan, totals), max_distance, match, totals, s.stem().string(), &p_cam);
       }
       summary(totals, max_distance, match);
       return 0;

@@ -3,14 +3,16 @@
 // One scan in (x y z intensity, LiDAR frame), 3D car boxes out in the rectified camera frame (x right,
 // y down, z forward; geometric centre, size = length width height, yaw = KITTI rotation_y):
 //   1. drop non-finite points and points outside [min_range, max_range]; with a camera, keep only points
-//      in front of it that project into the image (grown by fov_margin_px);
+//      in front of it that project into the image (grown by fov_margin_px) or lie within fov_context of
+//      its view (so cars cut by the image border keep their shape; only clusters seen in the image count);
 //   2. ground removal: one RANSAC plane kept near-perpendicular to the camera's y axis (PCL), or a BEV grid
 //      of local ground heights; points less than ground_threshold above the ground, or higher than
 //      max_height, are dropped;
 //   3. Euclidean clustering of what is left, thinned to one point per voxel (PCL, kd-tree);
 //   4. box fitting in the BEV (x, z) plane: L-shape search (closeness criterion over headings), or OpenCV's
-//      minimum-area rectangle for sparse clusters (or always); sides the sensor cannot have measured are
-//      grown away from it to the car size prior;
+//      minimum-area rectangle for sparse clusters (or always); sides are grown toward the car size prior
+//      only where no LiDAR ray passed through at body height (free space), and the rectangle side taken as
+//      the car's length is the one whose free-space-bounded completion fits the size prior best;
 //   5. car-sized clusters are kept (footprint, top and bottom height above ground), the rest dropped.
 // A single scan gives no velocity and no front/back: yaw is reported in (-pi/2, pi/2].
 #pragma once
@@ -32,8 +34,9 @@ struct Options {
   // Input selection.
   double min_range = 1.5;          // m, from the LiDAR
   double max_range = 60.0;         // m
-  bool camera_fov_only = true;     // keep points that project into the image (needs a camera)
+  bool camera_fov_only = true;     // report only cars seen in the image (needs a camera)
   double fov_margin_px = 40.0;     // image grown by this many pixels on each side
+  double fov_context = 5.0;        // m: points this far outside the image's view still shape the boxes
 
   // Ground removal.
   std::string ground_method = "ransac";  // "ransac" | "grid"
@@ -63,8 +66,15 @@ struct Options {
   double car_max_top = 2.0;          // m above ground: highest point of the cluster, at most
   double car_max_bottom = 1.6;       // m above ground: lowest point, at most (a car behind a car shows its roof)
   std::array<double, 3> car_size = {3.9, 1.6, 1.5};
-  double car_min_length = 2.2;  // m: a visible side shorter than this is taken as partly hidden and grown
+  double car_min_length = 2.2;  // m: without free_space, a visible side shorter than this is grown
   double car_min_width = 1.2;
+
+  // Free-space reasoning: a box may only grow where no LiDAR ray passed through at body height
+  // (free_space_min_height..free_space_max_height above the ground); also picks which side is the length.
+  bool free_space = true;
+  double free_space_min_height = 0.4;  // m
+  double free_space_max_height = 0.9;  // m
+  int free_space_min_rays = 3;         // rays needed to call a place free
 
   // Boxes farther than this or with fewer points get BESLAM_BOX_UNCERTAIN.
   double uncertain_range = 40.0;
@@ -77,7 +87,7 @@ struct Options {
 struct Stats {
   std::size_t input_points = 0;
   std::size_t invalid_points = 0;  // NaN / inf coordinates
-  std::size_t used_points = 0;     // after range and FOV selection
+  std::size_t used_points = 0;     // after range and FOV selection (context band included)
   std::size_t ground_points = 0;
   std::size_t object_points = 0;   // above ground, below max_height
   std::size_t clusters = 0;
