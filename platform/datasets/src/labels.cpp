@@ -119,6 +119,24 @@ std::vector<TrackingLabel> readTrackingLabels(const std::string& path) {
   return readRows<TrackingLabel>(path, parseTrackingRow);
 }
 
+std::map<std::pair<std::int64_t, std::int64_t>, bool> readObjectMotion(const std::string& path) {
+  const std::string text = readFile(path);
+  const auto lines = detail::splitLines(text);
+  std::map<std::pair<std::int64_t, std::int64_t>, bool> moving;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const auto tokens = detail::splitWhitespace(lines[i]);
+    if (tokens.empty() || tokens[0].front() == '#') continue;
+    std::int64_t frame = 0, track = 0;
+    double speed = 0;
+    if (tokens.size() != 4 || !parseInt(tokens[0], frame) || !parseInt(tokens[1], track) ||
+        (tokens[2] != "0" && tokens[2] != "1") || !parseDouble(tokens[3], speed) || !std::isfinite(speed))
+      throwAt(path, "expected 'frame track_id moving(0/1) speed', got '" + std::string(lines[i]) + "'",
+              static_cast<int>(i + 1));
+    moving[{frame, track}] = tokens[2] == "1";
+  }
+  return moving;
+}
+
 std::string formatObjectRow(const ObjectLabel& label) {
   std::string out;
   appendObjectFields(out, label, false);

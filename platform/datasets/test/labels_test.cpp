@@ -74,5 +74,21 @@ TEST(Labels, FileErrorsNameLine) {
   EXPECT_BESLAM_ERROR(readObjectLabels(dir / "none.txt"), dir / "none.txt");
 }
 
+TEST(Labels, ObjectMotionRowsAndErrors) {
+  TempDir dir;
+  const std::string path = dir / "objects_motion.txt";
+  test::writeText(path, "# frame track_id moving speed_m_s\n0 1 0 0.0\n\n  # note\n0 2 1 7.5\n1 2 1 7.4\n");
+  const auto moving = readObjectMotion(path);
+  ASSERT_EQ(moving.size(), 3u);
+  EXPECT_FALSE(moving.at({0, 1}));
+  EXPECT_TRUE(moving.at({0, 2}));
+  EXPECT_TRUE(moving.at({1, 2}));
+  for (const char* row : {"0 1 2 0.0", "0 1 1", "0 1 1 0.0 x", "0 1 1 nan", "0.5 1 1 0.0", "0 1 1.0 0.0"}) {
+    test::writeText(path, std::string("0 1 0 0.0\n") + row + "\n");
+    EXPECT_BESLAM_ERROR(readObjectMotion(path), path + ":2:", "expected 'frame track_id moving(0/1) speed'");
+  }
+  EXPECT_BESLAM_ERROR(readObjectMotion(dir / "none.txt"), dir / "none.txt");
+}
+
 }  // namespace
 }  // namespace beslam::datasets

@@ -106,26 +106,7 @@ std::vector<beslam_box3d> LabelOracle::detect(int64_t frame) const {
 
 std::vector<std::vector<TruthBox>> readTruth(const std::string& labels, const std::string& motion) {
   std::map<std::pair<int64_t, int64_t>, bool> moving;
-  if (!motion.empty()) {
-    std::ifstream in(motion);
-    if (!in) throw std::runtime_error(motion + ": cannot open motion file");
-    std::string line;
-    int line_no = 0;
-    while (std::getline(in, line)) {
-      ++line_no;
-      const auto first = line.find_first_not_of(" \t\r");
-      if (first == std::string::npos || line[first] == '#') continue;
-      std::istringstream ss(line);
-      long long frame = 0, track = 0;
-      int flag = 0;
-      double speed = 0;
-      std::string extra;
-      if (!(ss >> frame >> track >> flag >> speed) || (ss >> extra) || (flag != 0 && flag != 1) || !std::isfinite(speed))
-        throw std::runtime_error(motion + ":" + std::to_string(line_no) +
-                                 ": expected 'frame track_id moving(0/1) speed', got '" + line + "'");
-      moving[{frame, track}] = flag == 1;
-    }
-  }
+  if (!motion.empty()) moving = datasets::readObjectMotion(motion);
   std::vector<std::vector<TruthBox>> frames;
   std::ifstream in(labels);
   if (!in) throw std::runtime_error(labels + ": cannot open label file");

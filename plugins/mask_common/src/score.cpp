@@ -99,23 +99,9 @@ void summarise(ScoreSummary& s) {
   s.p10_iou = v[static_cast<size_t>(0.1 * (n - 1))];
 }
 
-std::map<std::pair<int64_t, int64_t>, bool> readObjectMotion(const std::string& path) {
-  std::map<std::pair<int64_t, int64_t>, bool> moving;
-  if (!fs::exists(path)) return moving;
-  std::ifstream in(path);
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream ss(line);
-    int64_t f, id;
-    int m;
-    if (!(ss >> f >> id >> m)) throw std::runtime_error(path + ":" + std::to_string(line_no) + ": expected 'frame track_id moving speed'");
-    moving[{f, id}] = m != 0;
-  }
-  return moving;
+std::map<std::pair<int64_t, int64_t>, bool> readObjectMotionIfPresent(const std::string& path) {
+  if (!fs::exists(path)) return {};
+  return datasets::readObjectMotion(path);
 }
 
 ScoreSummary scoreSequence(const std::string& masks_dir, const std::string& sequence_dir, const ScoreOptions& options) {
@@ -131,7 +117,7 @@ ScoreSummary scoreSequence(const std::string& masks_dir, const std::string& sequ
   std::map<int64_t, std::vector<datasets::TrackingLabel>> labels;
   for (auto& l : datasets::readTrackingLabels(label_file)) labels[l.frame].push_back(std::move(l));
 
-  const std::map<std::pair<int64_t, int64_t>, bool> moving = readObjectMotion((seq / "objects_motion.txt").string());
+  const std::map<std::pair<int64_t, int64_t>, bool> moving = readObjectMotionIfPresent((seq / "objects_motion.txt").string());
 
   ScoreSummary summary;
   for (const auto& e : fs::directory_iterator(masks_dir)) {

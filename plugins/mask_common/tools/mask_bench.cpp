@@ -170,7 +170,7 @@ int run(const std::vector<std::string>& args) {
   if (label_file.empty()) throw std::runtime_error((seq / "label_02").string() + ": no label file");
   std::map<int64_t, std::vector<datasets::TrackingLabel>> labels;
   for (auto& l : datasets::readTrackingLabels(label_file)) labels[l.frame].push_back(std::move(l));
-  const auto moving = mask::readObjectMotion((seq / "objects_motion.txt").string());
+  const auto moving = mask::readObjectMotionIfPresent((seq / "objects_motion.txt").string());
 
   const double perturb_m = num("perturb-m", 0), perturb_deg = num("perturb-deg", 0);
   const fs::path out_masks = fs::path(need("out")) / "masks";

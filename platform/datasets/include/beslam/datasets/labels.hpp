@@ -11,8 +11,10 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace beslam::datasets {
@@ -42,6 +44,10 @@ TrackingLabel parseTrackingRow(const std::string& line, const std::string& path 
 // Whole files; blank lines are skipped. Missing file -> beslam::Error naming it.
 std::vector<ObjectLabel> readObjectLabels(const std::string& path);
 std::vector<TrackingLabel> readTrackingLabels(const std::string& path);
+
+// objects_motion.txt as `beslam synth` writes it: "frame track_id moving(0/1) speed_m_s" rows, '#' comments.
+// Returns (frame, track id) -> moving. Missing file or a malformed row -> beslam::Error "file:line: ...".
+std::map<std::pair<std::int64_t, std::int64_t>, bool> readObjectMotion(const std::string& path);
 
 std::string formatObjectRow(const ObjectLabel& label);
 std::string formatTrackingRow(const TrackingLabel& label);

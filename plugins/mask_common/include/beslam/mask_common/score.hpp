@@ -58,8 +58,8 @@ ScoreSummary scoreSequence(const std::string& masks_dir, const std::string& sequ
 
 void summarise(ScoreSummary& summary);
 
-// objects_motion.txt: "frame track_id moving speed" rows ('#' comments); (frame, track id) -> moving.
-// An absent file gives an empty map; a malformed row throws std::runtime_error naming file and line.
-std::map<std::pair<int64_t, int64_t>, bool> readObjectMotion(const std::string& path);  // fills medians and label counts from objects
+// datasets::readObjectMotion (objects_motion.txt, (frame, track id) -> moving), except that an absent file
+// gives an empty map.
+std::map<std::pair<int64_t, int64_t>, bool> readObjectMotionIfPresent(const std::string& path);
 
 }  // namespace beslam::mask
