@@ -12,6 +12,28 @@
 
 namespace beslam::orb::matching {
 
+namespace {
+
+// The nearest and second-nearest descriptor distances among a query's candidates, with the nearest one's
+// index and the pyramid levels of both (for the same-level ratio test of local-map search).
+struct NearestTwo {
+  int best = 256, second = 256, index = -1, best_level = -1, second_level = -1;
+  void add(int distance, int candidate, int level = -1) {
+    if (distance < best) {
+      second = best;
+      second_level = best_level;
+      best = distance;
+      best_level = level;
+      index = candidate;
+    } else if (distance < second) {
+      second = distance;
+      second_level = level;
+    }
+  }
+};
+
+}  // namespace
+
 void RotationHistogram::add(float angle1, float angle2, int id) {
   float rot = angle1 - angle2;
   if (rot < 0) rot += 360.f;
@@ -59,27 +81,21 @@ int searchForInitialization(const FeatureSet& f1, const FeatureSet& f2, std::vec
     if (kp1.octave > max_level) continue;
     const auto cand = f2.query(prev_matched[i1].x, prev_matched[i1].y, static_cast<float>(window), kp1.octave,
                                kp1.octave);
-    int best = 256, second = 256, best_i2 = -1;
+    NearestTwo nn;
     const uint8_t* d1 = f1.descriptor(i1);
     for (int i2 : cand) {
       const int d = hamming(d1, f2.descriptor(i2));
       if (dist21[i2] <= d) continue;
-      if (d < best) {
-        second = best;
-        best = d;
-        best_i2 = i2;
-      } else if (d < second) {
-        second = d;
-      }
+      nn.add(d, i2);
     }
-    if (best_i2 < 0 || best > kThLow || best >= ratio * second) continue;
-    if (matches21[best_i2] >= 0) {  // a previous, worse match loses the keypoint
-      matches12[matches21[best_i2]] = -1;
+    if (nn.index < 0 || nn.best > kThLow || nn.best >= ratio * nn.second) continue;
+    if (matches21[nn.index] >= 0) {  // a previous, worse match loses the keypoint
+      matches12[matches21[nn.index]] = -1;
       --n;
     }
-    matches12[i1] = best_i2;
-    matches21[best_i2] = static_cast<int>(i1);
-    dist21[best_i2] = best;
+    matches12[i1] = nn.index;
+    matches21[nn.index] = static_cast<int>(i1);
+    dist21[nn.index] = nn.best;
     ++n;
   }
   for (size_t i1 = 0; i1 < f1.size(); ++i1)
@@ -111,20 +127,17 @@ int searchByProjection(Frame& cur, const Frame& last, const Camera& camera, cons
     const float radius = th * static_cast<float>(pyramid.scale[octave]);
     const auto cand = f.query(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius,
                               std::max(octave - 1, 0), std::min(octave + 1, pyramid.levels - 1));
-    int best = 256, best_idx = -1;
+    NearestTwo nn;
     for (int j : cand) {
       if (cur.points[j] && cur.points[j]->numObservations() > 0) continue;
       const int d = hamming(mp->descriptor.data(), f.descriptor(j));
-      if (d < best) {
-        best = d;
-        best_idx = j;
-      }
+      nn.add(d, j);
     }
-    if (best_idx < 0 || best > kThHigh) continue;
-    cur.points[best_idx] = mp;
-    cur.outlier[best_idx] = false;
+    if (nn.index < 0 || nn.best > kThHigh) continue;
+    cur.points[nn.index] = mp;
+    cur.outlier[nn.index] = false;
     ++n;
-    hist.add(last.features->keypoints[i].angle, f.keypoints[best_idx].angle, best_idx);
+    hist.add(last.features->keypoints[i].angle, f.keypoints[nn.index].angle, nn.index);
   }
   for (int j : hist.rejected()) {
     if (cur.points[j]) {
@@ -144,25 +157,16 @@ int searchLocalPoints(Frame& cur, const std::vector<MapPoint*>& points, const Sc
     const int level = mp->track_level;
     const float r = th * (mp->track_view_cos > 0.998f ? 2.5f : 4.0f) * static_cast<float>(pyramid.scale[level]);
     const auto cand = f.query(mp->track_u, mp->track_v, r, std::max(level - 1, 0), level);
-    int best = 256, second = 256, best_level = -1, second_level = -1, best_idx = -1;
+    NearestTwo nn;
     for (int j : cand) {
       if (cur.points[j] && cur.points[j]->numObservations() > 0) continue;
       const int d = hamming(mp->descriptor.data(), f.descriptor(j));
-      if (d < best) {
-        second = best;
-        second_level = best_level;
-        best = d;
-        best_level = f.keypoints[j].octave;
-        best_idx = j;
-      } else if (d < second) {
-        second = d;
-        second_level = f.keypoints[j].octave;
-      }
+      nn.add(d, j, f.keypoints[j].octave);
     }
-    if (best_idx < 0 || best > kThHigh) continue;
-    if (best_level == second_level && best > ratio * second) continue;
-    cur.points[best_idx] = mp;
-    cur.outlier[best_idx] = false;
+    if (nn.index < 0 || nn.best > kThHigh) continue;
+    if (nn.best_level == nn.second_level && nn.best > ratio * nn.second) continue;
+    cur.points[nn.index] = mp;
+    cur.outlier[nn.index] = false;
     ++n;
   }
   return n;
@@ -187,22 +191,16 @@ int searchByProjectionWide(Frame& cur, const std::vector<MapPoint*>& points, con
     const auto cand = f.query(static_cast<float>(uv.x()), static_cast<float>(uv.y()),
                               radius * static_cast<float>(pyramid.scale[level]), std::max(level - 2, 0),
                               std::min(level + 2, pyramid.levels - 1));
-    int best = 256, second = 256, best_idx = -1;
+    NearestTwo nn;
     for (int j : cand) {
       const int d = hamming(mp->descriptor.data(), f.descriptor(j));
-      if (d < best) {
-        second = best;
-        best = d;
-        best_idx = j;
-      } else if (d < second) {
-        second = d;
-      }
+      nn.add(d, j);
     }
-    if (best_idx < 0 || best > max_distance || best > ratio * second) continue;
-    if (best >= best_dist[best_idx]) continue;
-    best_dist[best_idx] = best;
-    cur.points[best_idx] = mp;
-    cur.outlier[best_idx] = false;
+    if (nn.index < 0 || nn.best > max_distance || nn.best > ratio * nn.second) continue;
+    if (nn.best >= best_dist[nn.index]) continue;
+    best_dist[nn.index] = nn.best;
+    cur.points[nn.index] = mp;
+    cur.outlier[nn.index] = false;
   }
   int n = 0;
   for (size_t j = 0; j < f.size(); ++j) {
@@ -289,7 +287,7 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
                             static_cast<float>(ry1), cand);
     }
     const uint8_t* d1 = f1.descriptor(i1);
-    int best = 256, second = 256, best_i2 = -1;
+    NearestTwo nn;
     for (int i2 : cand) {
       if (stamp[i2] == static_cast<int>(i1)) continue;
       stamp[i2] = static_cast<int>(i1);
@@ -300,22 +298,16 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
       const double ex = epipole.x() - kp2.pt.x, ey = epipole.y() - kp2.pt.y;
       if (ex * ex + ey * ey < 100.0 * pyr.scale[kp2.octave]) continue;
       const int d = hamming(d1, f2.descriptor(i2));
-      if (d < best) {
-        second = best;
-        best = d;
-        best_i2 = i2;
-      } else if (d < second) {
-        second = d;
-      }
+      nn.add(d, i2);
     }
-    if (best_i2 < 0 || best > kThLow || best > ratio * second) continue;
-    if (matched2[best_i2] >= 0) {
-      if (dist2[best_i2] <= best) continue;
-      match12[matched2[best_i2]] = -1;
+    if (nn.index < 0 || nn.best > kThLow || nn.best > ratio * nn.second) continue;
+    if (matched2[nn.index] >= 0) {
+      if (dist2[nn.index] <= nn.best) continue;
+      match12[matched2[nn.index]] = -1;
     }
-    matched2[best_i2] = static_cast<int>(i1);
-    dist2[best_i2] = best;
-    match12[i1] = best_i2;
+    matched2[nn.index] = static_cast<int>(i1);
+    dist2[nn.index] = nn.best;
+    match12[i1] = nn.index;
   }
   if (check_orientation) {
     RotationHistogram hist;
@@ -347,28 +339,25 @@ int fuse(KeyFrame* kf, const std::vector<MapPoint*>& points, float th) {
     const int level = mp->predictLevel(dist, pyr);
     const float radius = th * static_cast<float>(pyr.scale[level]);
     const auto cand = f.query(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius);
-    int best = 256, best_idx = -1;
+    NearestTwo nn;
     for (int j : cand) {
       const cv::KeyPoint& kp = f.keypoints[j];
       if (kp.octave < level - 1 || kp.octave > level) continue;
       const double ex = uv.x() - kp.pt.x, ey = uv.y() - kp.pt.y;
       if ((ex * ex + ey * ey) * pyr.inv_sigma2[kp.octave] > 5.99) continue;
       const int d = hamming(mp->descriptor.data(), f.descriptor(j));
-      if (d < best) {
-        best = d;
-        best_idx = j;
-      }
+      nn.add(d, j);
     }
-    if (best_idx < 0 || best > kThLow) continue;
-    MapPoint* existing = kf->points[best_idx];
+    if (nn.index < 0 || nn.best > kThLow) continue;
+    MapPoint* existing = kf->points[nn.index];
     if (existing && !existing->bad) {
       if (existing->numObservations() > mp->numObservations())
         mp->replaceWith(existing);
       else
         existing->replaceWith(mp);
     } else {
-      mp->addObservation(kf, best_idx);
-      kf->addPoint(mp, best_idx);
+      mp->addObservation(kf, nn.index);
+      kf->addPoint(mp, nn.index);
     }
     ++n;
   }
