@@ -80,34 +80,24 @@ const CellTile& cellTile() {
   return t;
 }
 
-inline float N(float u, float v) {
-  const Tile& t = tile();
-  const float x = u * kTile, y = v * kTile;
+// Bilinear lookup in a kTile x kTile periodic table at (x, y) table cells.
+inline float wrappedBilinear(const float* table, float x, float y) {
   int ix = static_cast<int>(x), iy = static_cast<int>(y);
   ix -= x < static_cast<float>(ix);
   iy -= y < static_cast<float>(iy);
   const float tx = x - static_cast<float>(ix), ty = y - static_cast<float>(iy);
   const int xi = ix & (kTile - 1), yi = iy & (kTile - 1);
   const int x1 = (xi + 1) & (kTile - 1), y1 = (yi + 1) & (kTile - 1);
-  const float a = t.v[yi * kTile + xi], b = t.v[yi * kTile + x1], c = t.v[y1 * kTile + xi], d = t.v[y1 * kTile + x1];
+  const float a = table[yi * kTile + xi], b = table[yi * kTile + x1], c = table[y1 * kTile + xi], d = table[y1 * kTile + x1];
   const float top = a + tx * (b - a), bot = c + tx * (d - c);
   return top + ty * (bot - top);
 }
 
+// Multi-octave tileable noise (the Tile above), bilinear between its cells.
+inline float N(float u, float v) { return wrappedBilinear(tile().v, u * kTile, v * kTile); }
+
 // Value noise with unit cells (period 64 cells), in [0, 1].
-inline float V(float u, float v) {
-  const CellTile& t = cellTile();
-  const float x = u * 4.f, y = v * 4.f;
-  int ix = static_cast<int>(x), iy = static_cast<int>(y);
-  ix -= x < static_cast<float>(ix);
-  iy -= y < static_cast<float>(iy);
-  const float tx = x - static_cast<float>(ix), ty = y - static_cast<float>(iy);
-  const int xi = ix & (kTile - 1), yi = iy & (kTile - 1);
-  const int x1 = (xi + 1) & (kTile - 1), y1 = (yi + 1) & (kTile - 1);
-  const float a = t.v[yi * kTile + xi], b = t.v[yi * kTile + x1], c = t.v[y1 * kTile + xi], d = t.v[y1 * kTile + x1];
-  const float top = a + tx * (b - a), bot = c + tx * (d - c);
-  return top + ty * (bot - top);
-}
+inline float V(float u, float v) { return wrappedBilinear(cellTile().v, u * 4.f, v * 4.f); }
 
 // Band-limited multi-octave detail in [-0.5, 0.5] per octave: cells of `cell`, 3 cell, 9 cell ...;
 // an octave fades in once its cells span more than about 2.5 pixels (so nothing aliases).
