@@ -135,57 +135,53 @@ bool TwoViewInitializer::reconstruct(const std::vector<cv::KeyPoint>& kps1, cons
   return reconstructF(inliers_f, F, result);
 }
 
-void TwoViewInitializer::findHomography(std::vector<bool>& inliers, double& score, Eigen::Matrix3d& H21) const {
-  const int n = static_cast<int>(matches_.size());
-  std::vector<Eigen::Vector2d> n1, n2;
-  Eigen::Matrix3d T1, T2;
-  normaliseMatches(n1, T1, n2, T2);
-  const Eigen::Matrix3d T2inv = T2.inverse();
+template <typename Fit>
+void TwoViewInitializer::bestOverSets(const std::vector<Eigen::Vector2d>& n1, const std::vector<Eigen::Vector2d>& n2,
+                                      Fit fit, std::vector<bool>& inliers, double& score,
+                                      Eigen::Matrix3d& model) const {
   score = 0;
-  inliers.assign(n, false);
+  inliers.assign(matches_.size(), false);
   std::vector<Eigen::Vector2d> s1(8), s2(8);
   std::vector<bool> cur;
+  Eigen::Matrix3d candidate;
   for (const auto& set : sets_) {
     for (int j = 0; j < 8; ++j) {
       s1[j] = n1[set[j]];
       s2[j] = n2[set[j]];
     }
-    const Eigen::Matrix3d Hn = homographyDLT(s1, s2);
-    const Eigen::Matrix3d h21 = T2inv * Hn * T1;
-    if (std::abs(h21.determinant()) < 1e-15) continue;
-    const Eigen::Matrix3d h12 = h21.inverse();
-    const double s = checkHomography(h21, h12, cur);
+    const double s = fit(s1, s2, cur, candidate);
     if (s > score) {
       score = s;
       inliers = cur;
-      H21 = h21;
+      model = candidate;
     }
   }
 }
 
-void TwoViewInitializer::findFundamental(std::vector<bool>& inliers, double& score, Eigen::Matrix3d& F21) const {
-  const int n = static_cast<int>(matches_.size());
+void TwoViewInitializer::findHomography(std::vector<bool>& inliers, double& score, Eigen::Matrix3d& H21) const {
   std::vector<Eigen::Vector2d> n1, n2;
   Eigen::Matrix3d T1, T2;
   normaliseMatches(n1, T1, n2, T2);
-  score = 0;
-  inliers.assign(n, false);
-  std::vector<Eigen::Vector2d> s1(8), s2(8);
-  std::vector<bool> cur;
-  for (const auto& set : sets_) {
-    for (int j = 0; j < 8; ++j) {
-      s1[j] = n1[set[j]];
-      s2[j] = n2[set[j]];
-    }
-    const Eigen::Matrix3d Fn = fundamental8(s1, s2);
-    const Eigen::Matrix3d f21 = T2.transpose() * Fn * T1;
-    const double s = checkFundamental(f21, cur);
-    if (s > score) {
-      score = s;
-      inliers = cur;
-      F21 = f21;
-    }
-  }
+  const Eigen::Matrix3d T2inv = T2.inverse();
+  auto fit = [&](const std::vector<Eigen::Vector2d>& s1, const std::vector<Eigen::Vector2d>& s2,
+                 std::vector<bool>& cur, Eigen::Matrix3d& h21) {
+    h21 = T2inv * homographyDLT(s1, s2) * T1;
+    if (std::abs(h21.determinant()) < 1e-15) return -1.0;  // degenerate sample: never the best
+    return checkHomography(h21, h21.inverse(), cur);
+  };
+  bestOverSets(n1, n2, fit, inliers, score, H21);
+}
+
+void TwoViewInitializer::findFundamental(std::vector<bool>& inliers, double& score, Eigen::Matrix3d& F21) const {
+  std::vector<Eigen::Vector2d> n1, n2;
+  Eigen::Matrix3d T1, T2;
+  normaliseMatches(n1, T1, n2, T2);
+  auto fit = [&](const std::vector<Eigen::Vector2d>& s1, const std::vector<Eigen::Vector2d>& s2,
+                 std::vector<bool>& cur, Eigen::Matrix3d& f21) {
+    f21 = T2.transpose() * fundamental8(s1, s2) * T1;
+    return checkFundamental(f21, cur);
+  };
+  bestOverSets(n1, n2, fit, inliers, score, F21);
 }
 
 double TwoViewInitializer::checkHomography(const Eigen::Matrix3d& H21, const Eigen::Matrix3d& H12,

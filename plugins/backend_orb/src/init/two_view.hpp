@@ -49,6 +49,11 @@ class TwoViewInitializer {
 
  private:
   struct Match { int i1, i2; };
+  // Fits a model to each RANSAC set of the normalised matches (fit returns its score, < 0 to skip) and keeps
+  // the best-scoring model and its inliers.
+  template <typename Fit>
+  void bestOverSets(const std::vector<Eigen::Vector2d>& n1, const std::vector<Eigen::Vector2d>& n2, Fit fit,
+                    std::vector<bool>& inliers, double& score, Eigen::Matrix3d& model) const;
   void findHomography(std::vector<bool>& inliers, double& score, Eigen::Matrix3d& H21) const;
   void findFundamental(std::vector<bool>& inliers, double& score, Eigen::Matrix3d& F21) const;
   double checkHomography(const Eigen::Matrix3d& H21, const Eigen::Matrix3d& H12, std::vector<bool>& inliers) const;
