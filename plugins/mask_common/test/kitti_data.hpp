@@ -8,6 +8,7 @@
 #include "beslam/datasets/kitti_calib.hpp"
 #include "beslam/datasets/labels.hpp"
 #include "beslam/datasets/velodyne.hpp"
+#include "beslam/mask_common/lidar.hpp"
 #include "beslam/sdk/detector.hpp"
 
 namespace beslam::mask::fixture {
@@ -18,6 +19,23 @@ inline bool haveKitti000008() {
   const std::string d = kittiObjectDir();
   return std::filesystem::exists(d + "/calib/000008.txt") && std::filesystem::exists(d + "/velodyne/000008.bin") &&
          std::filesystem::exists(d + "/label_2/000008.txt");
+}
+
+// 000008's scan in rectified camera 0 (the labels' frame) with P0's intrinsics, points 0.5-120 m ahead.
+struct Camera0Scan {
+  Intrinsics K;
+  CameraPoints pts;
+};
+inline Camera0Scan camera0Scan000008() {
+  const std::string dir = kittiObjectDir();
+  const datasets::KittiCalib calib = datasets::readObjectCalib(dir + "/calib/000008.txt");
+  const std::vector<float> scan = datasets::readVelodyneBin(dir + "/velodyne/000008.bin");
+  const datasets::Camera cam = datasets::cameraFromProjection(*calib.P[0], 1242, 375, "P0");
+  Camera0Scan out;
+  out.K.fx = cam.fx, out.K.fy = cam.fy, out.K.cx = cam.cx, out.K.cy = cam.cy;
+  out.K.width = cam.width, out.K.height = cam.height;
+  out.pts = lidarToCamera(scan.data(), scan.size() / 4, 4, *datasets::T_cami_velo(calib, 0), out.K, 0.5, 120);
+  return out;
 }
 
 // A KITTI label (bottom centre) as an ABI box (geometric centre).

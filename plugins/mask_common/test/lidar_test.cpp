@@ -60,13 +60,8 @@ TEST(LidarChain, MatchesKittiProjectionOf000008) {
 TEST(LidarChain, LabelledCarsOf000008HoldTheirPoints) {
   if (!fixture::haveKitti000008()) GTEST_SKIP() << "KITTI object 000008 not in " << fixture::kittiObjectDir();
   const std::string dir = fixture::kittiObjectDir();
-  const datasets::KittiCalib calib = datasets::readObjectCalib(dir + "/calib/000008.txt");
-  const std::vector<float> scan = datasets::readVelodyneBin(dir + "/velodyne/000008.bin");
-  const datasets::Camera cam = datasets::cameraFromProjection(*calib.P[0], 1242, 375, "P0");
-  Intrinsics K;
-  K.fx = cam.fx, K.fy = cam.fy, K.cx = cam.cx, K.cy = cam.cy, K.width = cam.width, K.height = cam.height;
   // Labels are in rectified camera 0: the chain up to R0_rect.
-  const CameraPoints pts = lidarToCamera(scan.data(), scan.size() / 4, 4, *datasets::T_cami_velo(calib, 0), K, 0.5, 120);
+  const CameraPoints pts = fixture::camera0Scan000008().pts;
   int id = 0, cars = 0;
   for (const auto& l : datasets::readObjectLabels(dir + "/label_2/000008.txt")) {
     if (l.type != "Car") continue;

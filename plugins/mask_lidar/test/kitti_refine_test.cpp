@@ -14,12 +14,7 @@ using namespace beslam::mask;
 TEST(KittiRefine, PerturbedBoxesMoveBackToTheLabels) {
   if (!fixture::haveKitti000008()) GTEST_SKIP() << "KITTI object 000008 not in " << fixture::kittiObjectDir();
   const std::string dir = fixture::kittiObjectDir();
-  const datasets::KittiCalib calib = datasets::readObjectCalib(dir + "/calib/000008.txt");
-  const std::vector<float> scan = datasets::readVelodyneBin(dir + "/velodyne/000008.bin");
-  const datasets::Camera cam = datasets::cameraFromProjection(*calib.P[0], 1242, 375, "P0");
-  Intrinsics K;
-  K.fx = cam.fx, K.fy = cam.fy, K.cx = cam.cx, K.cy = cam.cy, K.width = cam.width, K.height = cam.height;
-  const CameraPoints pts = lidarToCamera(scan.data(), scan.size() / 4, 4, *datasets::T_cami_velo(calib, 0), K, 0.5, 120);
+  const auto [K, pts] = fixture::camera0Scan000008();
 
   double before_t = 0, after_t = 0, before_r = 0, after_r = 0;
   int n = 0, id = 0, improved = 0;
