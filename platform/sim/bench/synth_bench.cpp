@@ -17,40 +17,26 @@ const beslam::sim::Synthesizer& synth(const char* preset, bool lidar) {
   return *slot;
 }
 
-void BM_RenderFrameWithLidar(benchmark::State& state) {
-  const auto& s = synth("urban_loop", true);
-  int frame = 0;
-  beslam::sim::FrameRender fr;
-  for (auto _ : state) {
-    s.render(frame, fr);
-    benchmark::DoNotOptimize(fr.lidar.data());
-    frame = (frame + 37) % s.frameCount();
-  }
-}
-BENCHMARK(BM_RenderFrameWithLidar)->Unit(benchmark::kMillisecond);
-
-void BM_RenderFrameCameraOnly(benchmark::State& state) {
-  const auto& s = synth("urban_loop", false);
+// Renders every 37th frame of a preset round and round (frames differ, so no cache helps).
+void renderFrames(benchmark::State& state, const char* preset, bool lidar) {
+  const auto& s = synth(preset, lidar);
   int frame = 0;
   beslam::sim::FrameRender fr;
   for (auto _ : state) {
     s.render(frame, fr);
     benchmark::DoNotOptimize(fr.grey.data);
-    frame = (frame + 37) % s.frameCount();
-  }
-}
-BENCHMARK(BM_RenderFrameCameraOnly)->Unit(benchmark::kMillisecond);
-
-void BM_RenderFrameDynamicStreet(benchmark::State& state) {
-  const auto& s = synth("dynamic_street", true);
-  int frame = 0;
-  beslam::sim::FrameRender fr;
-  for (auto _ : state) {
-    s.render(frame, fr);
     benchmark::DoNotOptimize(fr.lidar.data());
     frame = (frame + 37) % s.frameCount();
   }
 }
+
+void BM_RenderFrameWithLidar(benchmark::State& state) { renderFrames(state, "urban_loop", true); }
+BENCHMARK(BM_RenderFrameWithLidar)->Unit(benchmark::kMillisecond);
+
+void BM_RenderFrameCameraOnly(benchmark::State& state) { renderFrames(state, "urban_loop", false); }
+BENCHMARK(BM_RenderFrameCameraOnly)->Unit(benchmark::kMillisecond);
+
+void BM_RenderFrameDynamicStreet(benchmark::State& state) { renderFrames(state, "dynamic_street", true); }
 BENCHMARK(BM_RenderFrameDynamicStreet)->Unit(benchmark::kMillisecond);
 
 void BM_BuildWorld(benchmark::State& state) {
