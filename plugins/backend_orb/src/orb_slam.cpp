@@ -2,6 +2,7 @@
 #include "beslam_orb/orb_slam.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <deque>
 #include <mutex>
@@ -47,6 +48,10 @@ LocalMapperOptions mapperOptions(const Options& o) {
   m.ba.refine_iterations = o.local_ba_iterations_refine;
   m.ba.max_local_keyframes = o.local_ba_max_keyframes;
   m.ba.trusted_weight = o.static_object_weight;
+  m.ground.enabled = o.ground_prior;
+  m.ground.sigma_ratio = o.ground_prior_sigma;
+  m.ground.reference_keyframes = o.ground_reference_keyframes;
+  m.ground.min_inliers = o.ground_min_inliers;
   return m;
 }
 
@@ -74,6 +79,10 @@ bool Options::validate(std::string* error) const {
   if (triangulation_max_cos_parallax <= 0 || triangulation_max_cos_parallax >= 1)
     return fail("triangulation_max_cos_parallax must be in (0, 1)");
   if (triangulation_neighbours < 1) return fail("triangulation_neighbours must be >= 1");
+  if (!(ground_prior_sigma > 0) || !std::isfinite(ground_prior_sigma))
+    return fail("ground_prior_sigma must be > 0");
+  if (ground_reference_keyframes < 1) return fail("ground_reference_keyframes must be >= 1");
+  if (ground_min_inliers < 3) return fail("ground_min_inliers must be >= 3");
   if (local_ba_iterations_robust < 0 || local_ba_iterations_refine < 0) return fail("BA iterations must be >= 0");
   if (local_ba_max_keyframes < 0) return fail("local_ba_max_keyframes must be >= 0");
   if (init_min_parallax_deg <= 0) return fail("init_min_parallax_deg must be > 0");

@@ -22,6 +22,10 @@ const beslam_config_field kFields[] = {
     field::Int("keyframe_min_gap", "2", 1, 100, "at least this many frames between keyframes"),
     field::Bool("keyframe_culling", "true", "remove redundant keyframes"),
     field::Int("local_ba_max_keyframes", "0", 0, 1000, "keyframes moved by local BA (0: all covisible)"),
+    field::Bool("ground_prior", "false", "hold the camera height over the fitted ground plane in local BA (vehicle cameras)"),
+    field::Double("ground_prior_sigma", "0.2", 0.001, 10.0, "std-dev of one ground point's height, as a share of the camera height"),
+    field::Int("ground_reference_keyframes", "5", 1, 1000, "first keyframes whose median camera height is the reference"),
+    field::Int("ground_min_inliers", "25", 3, 100000, "map points a keyframe's ground plane needs"),
     field::Bool("threaded_mapping", "false", "local mapping on its own thread (same results, overlaps the next frame)"),
     field::Int("seed", "42", 0, 2147483647.0, "seed of every random choice (RANSAC)"),
 };
@@ -40,6 +44,10 @@ beslam::orb::Options readOptions(const beslam::sdk::Config& c) {
   o.keyframe_min_gap = static_cast<int>(c.getInt("keyframe_min_gap"));
   o.keyframe_culling = c.getBool("keyframe_culling");
   o.local_ba_max_keyframes = static_cast<int>(c.getInt("local_ba_max_keyframes"));
+  o.ground_prior = c.getBool("ground_prior");
+  o.ground_prior_sigma = c.getDouble("ground_prior_sigma");
+  o.ground_reference_keyframes = static_cast<int>(c.getInt("ground_reference_keyframes"));
+  o.ground_min_inliers = static_cast<int>(c.getInt("ground_min_inliers"));
   o.threaded_mapping = c.getBool("threaded_mapping");
   o.seed = static_cast<uint64_t>(c.getInt("seed"));
   std::string error;

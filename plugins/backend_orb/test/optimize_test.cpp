@@ -11,16 +11,14 @@
 #include "map/map_point.hpp"
 #include "optimize/bundle_adjustment.hpp"
 #include "optimize/pose_optimizer.hpp"
+#include "map_builder.hpp"
 
 namespace beslam::orb {
 namespace {
 
 const Camera kCam{1226, 370, 718.856, 718.856, 607.19, 185.22};
 
-Eigen::Vector2d proj(const Eigen::Isometry3d& T_cw, const Eigen::Vector3d& pw) {
-  const Eigen::Vector3d p = T_cw * pw;
-  return {kCam.fx * p.x() / p.z() + kCam.cx, kCam.fy * p.y() / p.z() + kCam.cy};
-}
+Eigen::Vector2d proj(const Eigen::Isometry3d& T_cw, const Eigen::Vector3d& pw) { return test::project(kCam, T_cw, pw); }
 
 Eigen::Isometry3d poseAt(double forward, double yaw) {
   Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
@@ -67,37 +65,15 @@ TEST(BundleAdjustment, LocalBaReducesReprojectionError) {
   std::vector<Eigen::Isometry3d> truth;
   for (int k = 0; k < 5; ++k) truth.push_back(poseAt(0.5 * k, 0.01 * k));
   std::mt19937 rng(8);
-  std::normal_distribution<double> noise(0, 0.5), perturb(0, 0.05);
-  std::vector<KeyFrame*> kfs;
-  for (int k = 0; k < 5; ++k) {
-    auto f = std::make_shared<FeatureSet>();
-    f->width = kCam.width;
-    f->height = kCam.height;
-    for (const auto& p : points) {
-      const Eigen::Vector2d uv = proj(truth[k], p) + Eigen::Vector2d(noise(rng), noise(rng));
-      f->keypoints.emplace_back(static_cast<float>(uv.x()), static_cast<float>(uv.y()), 31.f, 0.f, 1.f, 0);
-    }
-    f->descriptors = cv::Mat(static_cast<int>(points.size()), 32, CV_8U, cv::Scalar(0));
-    f->labels.assign(points.size(), 0);
-    f->colours.assign(points.size(), cv::Vec3b(0, 0, 0));
-    f->buildGrid();
-    Frame frame(k, 0.1 * k, f);
-    frame.T_cw = truth[k];
-    if (k > 0) {
-      frame.T_cw.translation() += Eigen::Vector3d(perturb(rng), perturb(rng), perturb(rng));
-      frame.T_cw.linear() = Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitX()).toRotationMatrix() * frame.T_cw.linear();
-    }
-    kfs.push_back(map.createKeyFrame(frame, kCam, pyr));
+  std::normal_distribution<double> perturb(0, 0.05);
+  std::vector<Eigen::Isometry3d> start(truth);
+  for (int k = 1; k < 5; ++k) {
+    start[k].translation() += Eigen::Vector3d(perturb(rng), perturb(rng), perturb(rng));
+    start[k].linear() = Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitX()).toRotationMatrix() * start[k].linear();
   }
-  for (size_t i = 0; i < points.size(); ++i) {
-    MapPoint* mp = map.createMapPoint(points[i] + Eigen::Vector3d(perturb(rng), perturb(rng), perturb(rng)), kfs[0]);
-    for (KeyFrame* kf : kfs) {
-      kf->addPoint(mp, i);
-      mp->addObservation(kf, i);
-    }
-    mp->updateNormalAndDepth();
-  }
-  for (KeyFrame* kf : kfs) kf->updateConnections();
+  std::vector<Eigen::Vector3d> start_points;
+  for (const auto& p : points) start_points.push_back(p + Eigen::Vector3d(perturb(rng), perturb(rng), perturb(rng)));
+  const std::vector<KeyFrame*> kfs = test::buildMap(map, kCam, pyr, truth, start, points, start_points, 0.5, 9);
   auto rms = [&] {
     double sum = 0;
     int n = 0;

@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
     std::cerr << "usage: orb_run_kitti <sequence_dir> <poses.txt|-> <out.txt> [--threaded] [--frames N] [--seed S]"
                  " [--quiet] [--kf-gap N] [--tri-ratio R] [--ba-max-kfs N] [--features N] [--no-kf-culling]"
                  " [--tri-cos C] [--ba-iters ROBUST REFINE] [--init-parallax DEG] [--init-levels L]"
-                 " [--cv-threads N] [--tri-orientation] [--fast INITIAL FALLBACK] [--kf-ratio R]\n";
+                 " [--cv-threads N] [--tri-orientation] [--fast INITIAL FALLBACK] [--kf-ratio R] [--ground SIGMA MIN_INLIERS]\n";
     return 2;
   }
   const std::string seq = argv[1], gt_path = argv[2], out_path = argv[3];
@@ -78,8 +78,13 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--fast") && i + 2 < argc) {
       options.fast_initial = std::stoi(argv[++i]);
       options.fast_fallback = std::stoi(argv[++i]);
-    } else if (!std::strcmp(argv[i], "--kf-ratio") && i + 1 < argc) options.keyframe_ref_ratio = std::stod(argv[++i]);
-    else if (!std::strcmp(argv[i], "--ba-iters") && i + 2 < argc) {
+    } else if (!std::strcmp(argv[i], "--kf-ratio") && i + 1 < argc) {
+      options.keyframe_ref_ratio = std::stod(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--ground") && i + 2 < argc) {
+      options.ground_prior = true;
+      options.ground_prior_sigma = std::stod(argv[++i]);
+      options.ground_min_inliers = std::stoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--ba-iters") && i + 2 < argc) {
       options.local_ba_iterations_robust = std::stoi(argv[++i]);
       options.local_ba_iterations_refine = std::stoi(argv[++i]);
     }

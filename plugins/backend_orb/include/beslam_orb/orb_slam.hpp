@@ -62,6 +62,13 @@ struct Options {
   int local_ba_iterations_refine = 10;       // round without robust loss, outliers removed
   int local_ba_max_keyframes = 0;            // 0 = all covisible keyframes move
   bool keyframe_culling = true;
+  // Ground-height prior (beyond ORB-SLAM2; for a camera on a vehicle over a road): local BA holds the
+  // camera's height above the plane fitted to each keyframe's low points at the height seen over the
+  // first keyframes, which ties the monocular scale along the run to its start. Off by default.
+  bool ground_prior = false;
+  double ground_prior_sigma = 0.2;           // std-dev of one ground point's height, share of the height
+  int ground_reference_keyframes = 5;        // keyframes whose median camera height is the reference
+  int ground_min_inliers = 25;               // a keyframe's ground plane needs this many points
   bool threaded_mapping = false;
   // Initialisation.
   int ransac_iterations = 200;

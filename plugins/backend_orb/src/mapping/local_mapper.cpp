@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "ground/ground_plane.hpp"
 #include "init/two_view.hpp"
 #include "map/camera_model.hpp"
 #include "map/keyframe.hpp"
@@ -30,7 +31,8 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 
 LocalMapper::LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyramid,
                          const LocalMapperOptions& options)
-    : map_(map), camera_(camera), pyramid_(pyramid), options_(options) {}
+    : map_(map), camera_(camera), pyramid_(pyramid), options_(options),
+      ground_reference_(options.ground.reference_keyframes) {}
 
 void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   timings_.clear();
@@ -48,7 +50,13 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   fuseWithNeighbours(kf);
   timings_.emplace_back("map_fuse", msSince(t0));
   t0 = Clock::now();
-  if (map_.numKeyFrames() > 2) optimize::localBundleAdjustment(kf, map_, options_.ba);
+  if (map_.numKeyFrames() > 2) {
+    optimize::GroundPrior ground{options_.ground, &ground_reference_};
+    last_ba_ = optimize::localBundleAdjustment(kf, map_, options_.ba, options_.ground.enabled ? &ground : nullptr);
+    if (options_.ground.enabled && !ground_reference_.ready())
+      if (const auto plane = fitGroundPlane(*kf, options_.ground, Eigen::Vector3d::UnitY(), options_.ground.max_tilt_deg))
+        ground_reference_.add(*plane);
+  }
   timings_.emplace_back("map_local_ba", msSince(t0));
   t0 = Clock::now();
   int culled = 0;
@@ -59,10 +67,11 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
     for (MapPoint* mp : kf->validPoints()) ++obs_hist[std::min(mp->numObservations(), 5)];
     std::fprintf(stderr,
                  "  kf %ld frame %ld: points %zu (obs 2:%d 3:%d 4:%d 5+:%d) new %d covis %zu recent %zu culled %d "
-                 "map %zu/%zu\n",
+                 "map %zu/%zu ground %d kfs %d res (h_ref %.4f)\n",
                  kf->id, static_cast<long>(kf->frame_index), kf->validPoints().size(), obs_hist[2], obs_hist[3],
                  obs_hist[4], obs_hist[5], last_new_points_, kf->covisibles().size(), recent_.size(), culled,
-                 map_.numKeyFrames(), map_.points().size());
+                 map_.numKeyFrames(), map_.points().size(), last_ba_.ground_keyframes, last_ba_.ground_residuals,
+                 groundReferenceHeight());
   }
 }
 

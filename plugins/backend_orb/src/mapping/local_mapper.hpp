@@ -26,6 +26,7 @@ struct LocalMapperOptions {
   int fuse_neighbours = 20, fuse_second_order = 5;
   bool keyframe_culling = true;
   optimize::BundleAdjustmentOptions ba;
+  GroundPlaneOptions ground;  // ground-height prior in local BA (off by default)
 };
 
 class LocalMapper {
@@ -34,7 +35,12 @@ class LocalMapper {
 
   // The whole pipeline for one keyframe. `run_ba` = false skips BA and culling (used for the initial map).
   void processKeyFrame(KeyFrame* kf, bool run_ba = true);
-  void reset() { recent_.clear(); }
+  void reset() {
+    recent_.clear();
+    ground_reference_ = GroundReference(options_.ground.reference_keyframes);
+  }
+  // Reference camera height of the ground prior (0 until the first fits have set it).
+  double groundReferenceHeight() const { return ground_reference_.ready() ? ground_reference_.height() : 0; }
 
   // Timings (ms) of the last processKeyFrame, by stage.
   const std::vector<std::pair<std::string, double>>& lastTimings() const { return timings_; }
@@ -55,6 +61,8 @@ class LocalMapper {
   std::list<MapPoint*> recent_;
   std::vector<std::pair<std::string, double>> timings_;
   int last_new_points_ = 0;
+  GroundReference ground_reference_;
+  optimize::BundleAdjustmentReport last_ba_;
 };
 
 }  // namespace beslam::orb

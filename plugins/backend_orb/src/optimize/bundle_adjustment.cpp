@@ -37,6 +37,12 @@ struct Problem {
   std::map<MapPoint*, double*, IdLess<MapPoint>> positions;
   std::vector<double> pose_storage, point_storage;
   std::vector<Edge> edges;
+  struct GroundEdge {
+    double* pose;
+    double* point;
+    std::unique_ptr<GroundHeightCost> cost;
+  };
+  std::vector<GroundEdge> ground_edges;
 
   void allocate() {
     std::vector<KeyFrame*> kfs(moving);
@@ -85,6 +91,10 @@ double solve(Problem& P, bool robust, int iterations, double chi2_threshold, boo
     ++used;
   }
   if (used == 0) return 0;
+  ceres::HuberLoss ground_huber(2.0);  // residuals are in sigmas
+  for (auto& g : P.ground_edges)
+    if (problem.HasParameterBlock(g.pose) && problem.HasParameterBlock(g.point))
+      problem.AddResidualBlock(g.cost.get(), &ground_huber, g.pose, g.point);
   // Points are eliminated first (Schur complement on the cameras).
   auto* ordering = new ceres::ParameterBlockOrdering;
   int n_poses = 0;
@@ -150,7 +160,26 @@ void writeBack(Problem& P) {
 
 }  // namespace
 
-BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const BundleAdjustmentOptions& options) {
+void addGroundEdges(Problem& P, const GroundPrior& ground, BundleAdjustmentReport* report) {
+  const GroundReference& ref = *ground.reference;
+  const double sigma = ground.plane.sigma_ratio * ref.height();
+  for (KeyFrame* kf : P.moving) {
+    const auto plane = fitGroundPlane(*kf, ground.plane, ref.normal(), ground.plane.max_tilt_from_reference_deg);
+    if (!plane || std::abs(plane->height / ref.height() - 1.0) > ground.plane.max_height_deviation) continue;
+    ++report->ground_keyframes;
+    double* pose = P.poses[kf];
+    for (MapPoint* mp : plane->inliers) {
+      auto it = P.positions.find(mp);
+      if (it == P.positions.end()) continue;
+      P.ground_edges.push_back({pose, it->second,
+                                std::make_unique<GroundHeightCost>(plane->normal_cam, ref.height(), sigma)});
+      ++report->ground_residuals;
+    }
+  }
+}
+
+BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const BundleAdjustmentOptions& options,
+                                             const GroundPrior* ground) {
   BundleAdjustmentReport report;
   Problem P;
   const long stamp = kf->id;
@@ -178,6 +207,7 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
     }
   P.allocate();
   addEdges(P, options.chi2_threshold, options.trusted_weight);
+  if (ground && ground->reference && ground->reference->ready()) addGroundEdges(P, *ground, &report);
   report.keyframes = static_cast<int>(P.moving.size());
   report.fixed_keyframes = static_cast<int>(P.fixed.size());
   report.points = static_cast<int>(P.points.size());
@@ -203,13 +233,15 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   return report;
 }
 
-BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double chi2_threshold) {
+BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double chi2_threshold,
+                                              const GroundPrior* ground) {
   BundleAdjustmentReport report;
   Problem P;
   for (KeyFrame* kf : map.keyframes()) P.moving.push_back(kf);
   for (MapPoint* mp : map.points()) P.points.push_back(mp);
   P.allocate();
   addEdges(P, chi2_threshold, 1.0);
+  if (ground && ground->reference && ground->reference->ready()) addGroundEdges(P, *ground, &report);
   report.keyframes = static_cast<int>(P.moving.size());
   report.points = static_cast<int>(P.points.size());
   report.observations = static_cast<int>(P.edges.size());

@@ -6,6 +6,8 @@
 
 #include <atomic>
 
+#include "ground/ground_plane.hpp"
+
 namespace beslam::orb {
 class KeyFrame;
 class Map;
@@ -23,12 +25,23 @@ struct BundleAdjustmentOptions {
 
 struct BundleAdjustmentReport {
   int keyframes = 0, fixed_keyframes = 0, points = 0, observations = 0, outliers_removed = 0;
+  int ground_keyframes = 0, ground_residuals = 0;
   double initial_cost = 0, final_cost = 0;
 };
 
-BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const BundleAdjustmentOptions& options);
+// Optional ground prior for local BA: every moving keyframe whose ground plane (fitGroundPlane, near the
+// reference normal, height within max_height_deviation of the reference) is found gets one Huber-robust
+// residual per plane inlier holding the point at the reference height below the camera.
+struct GroundPrior {
+  GroundPlaneOptions plane;
+  const GroundReference* reference = nullptr;  // must be ready()
+};
+
+BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const BundleAdjustmentOptions& options,
+                                             const GroundPrior* ground = nullptr);
 
 // Every keyframe and point; the origin keyframe fixed. Used right after initialisation.
-BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double chi2_threshold = 5.991);
+BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double chi2_threshold = 5.991,
+                                              const GroundPrior* ground = nullptr);
 
 }  // namespace beslam::orb::optimize

@@ -90,4 +90,36 @@ class ReprojectionCost : public ceres::SizedCostFunction<2, 7, 3> {
   Intrinsics K_;
 };
 
+// Ground prior: a ground point's height below the keyframe's camera, along the keyframe's fitted plane
+// normal n (camera frame, held constant), should be the reference camera height h:
+// residual = (n . (R p_w + t) - h) / sigma.
+class GroundHeightCost : public ceres::SizedCostFunction<1, 7, 3> {
+ public:
+  GroundHeightCost(const Eigen::Vector3d& normal_cam, double height, double sigma)
+      : n_(normal_cam), h_(height), inv_sigma_(1.0 / sigma) {}
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    const double* pose = params[0];
+    const Eigen::Quaterniond q(pose[3], pose[0], pose[1], pose[2]);
+    const Eigen::Matrix3d R = q.toRotationMatrix();
+    const Eigen::Vector3d pc = R * Eigen::Vector3d(params[1][0], params[1][1], params[1][2]) +
+                               Eigen::Vector3d(pose[4], pose[5], pose[6]);
+    residuals[0] = (n_.dot(pc) - h_) * inv_sigma_;
+    if (jacobians && jacobians[0]) {  // tangent [rho, phi] of the left update: d pc = rho + phi x pc
+      Eigen::Map<Eigen::Matrix<double, 1, 7, Eigen::RowMajor>> J(jacobians[0]);
+      J.leftCols<3>() = n_.transpose() * inv_sigma_;
+      J.block<1, 3>(0, 3) = pc.cross(n_).transpose() * inv_sigma_;
+      J(0, 6) = 0;
+    }
+    if (jacobians && jacobians[1]) {
+      Eigen::Map<Eigen::Matrix<double, 1, 3, Eigen::RowMajor>> Jp(jacobians[1]);
+      Jp = n_.transpose() * R * inv_sigma_;
+    }
+    return true;
+  }
+
+ private:
+  Eigen::Vector3d n_;
+  double h_, inv_sigma_;
+};
+
 }  // namespace beslam::orb::optimize
