@@ -233,15 +233,13 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   return report;
 }
 
-BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double chi2_threshold,
-                                              const GroundPrior* ground) {
+BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double chi2_threshold) {
   BundleAdjustmentReport report;
   Problem P;
   for (KeyFrame* kf : map.keyframes()) P.moving.push_back(kf);
   for (MapPoint* mp : map.points()) P.points.push_back(mp);
   P.allocate();
   addEdges(P, chi2_threshold, 1.0);
-  if (ground && ground->reference && ground->reference->ready()) addGroundEdges(P, *ground, &report);
   report.keyframes = static_cast<int>(P.moving.size());
   report.points = static_cast<int>(P.points.size());
   report.observations = static_cast<int>(P.edges.size());

@@ -41,7 +41,6 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
                                              const GroundPrior* ground = nullptr);
 
 // Every keyframe and point; the origin keyframe fixed. Used right after initialisation.
-BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double chi2_threshold = 5.991,
-                                              const GroundPrior* ground = nullptr);
+BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double chi2_threshold = 5.991);
 
 }  // namespace beslam::orb::optimize
