@@ -9,6 +9,7 @@
 #include "map/keyframe.hpp"
 #include "map/map.hpp"
 #include "map/map_point.hpp"
+#include "map_builder.hpp"
 #include "mapping/local_mapper.hpp"
 
 namespace beslam::orb {
@@ -28,35 +29,14 @@ struct SimMap {
     std::uniform_real_distribution<double> ux(-6, 6), uy(-2, 2), uz(8, 30);
     std::vector<Eigen::Vector3d> pw;
     for (int i = 0; i < 150; ++i) pw.emplace_back(ux(rng), uy(rng), uz(rng));
+    std::vector<Eigen::Isometry3d> poses;
     for (int k = 0; k < n; ++k) {
       Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
       T_cw.translation() = Eigen::Vector3d(0, 0, -0.5 * k);
-      auto f = std::make_shared<FeatureSet>();
-      f->width = kCam.width;
-      f->height = kCam.height;
-      for (const auto& p : pw) {
-        const Eigen::Vector3d c = T_cw * p;
-        f->keypoints.emplace_back(static_cast<float>(kCam.fx * c.x() / c.z() + kCam.cx),
-                                  static_cast<float>(kCam.fy * c.y() / c.z() + kCam.cy), 31.f, 0.f, 1.f, 0);
-      }
-      f->descriptors = cv::Mat(static_cast<int>(pw.size()), 32, CV_8U, cv::Scalar(k));
-      f->labels.assign(pw.size(), 0);
-      f->colours.assign(pw.size(), cv::Vec3b(0, 0, 0));
-      f->buildGrid();
-      Frame frame(k, 0.1 * k, f);
-      frame.T_cw = T_cw;
-      kfs.push_back(map.createKeyFrame(frame, kCam, pyr));
+      poses.push_back(T_cw);
     }
-    for (size_t i = 0; i < pw.size(); ++i) {
-      MapPoint* mp = map.createMapPoint(pw[i], kfs[0]);
-      for (KeyFrame* kf : kfs) {
-        kf->addPoint(mp, i);
-        mp->addObservation(kf, i);
-      }
-      mp->updateNormalAndDepth();
-      points.push_back(mp);
-    }
-    for (KeyFrame* kf : kfs) kf->updateConnections();
+    kfs = test::buildMap(map, kCam, pyr, poses, poses, pw, pw, 0.0, 1);
+    points.assign(map.points().begin(), map.points().end());  // id order = point order
   }
 };
 
