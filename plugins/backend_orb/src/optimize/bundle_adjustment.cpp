@@ -158,8 +158,6 @@ void writeBack(Problem& P) {
   }
 }
 
-}  // namespace
-
 void addGroundEdges(Problem& P, const GroundPrior& ground, BundleAdjustmentReport* report) {
   const GroundReference& ref = *ground.reference;
   const double sigma = ground.plane.sigma_ratio * ref.height();
@@ -177,6 +175,8 @@ void addGroundEdges(Problem& P, const GroundPrior& ground, BundleAdjustmentRepor
     }
   }
 }
+
+}  // namespace
 
 BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const BundleAdjustmentOptions& options,
                                              const GroundPrior* ground) {

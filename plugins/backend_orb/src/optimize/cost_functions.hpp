@@ -14,12 +14,16 @@ struct Intrinsics {
 
 namespace detail {
 // p_c = R p_w + t and the whitened residual; J_proj = d residual / d p_c.
+// p_c = R p_w + t for a pose block [qx qy qz qw tx ty tz]; R is returned for the point Jacobian.
+inline Eigen::Vector3d toCamera(const double* pose, const Eigen::Vector3d& pw, Eigen::Matrix3d& R) {
+  R = Eigen::Quaterniond(pose[3], pose[0], pose[1], pose[2]).toRotationMatrix();
+  return R * pw + Eigen::Vector3d(pose[4], pose[5], pose[6]);
+}
+
 inline bool reproject(const double* pose, const Eigen::Vector3d& pw, const Intrinsics& K, const Eigen::Vector2d& obs,
                       double inv_sigma, double* residual, Eigen::Vector3d& pc, Eigen::Matrix<double, 2, 3>& J_proj,
                       Eigen::Matrix3d& R, bool need_jacobian) {
-  const Eigen::Quaterniond q(pose[3], pose[0], pose[1], pose[2]);
-  R = q.toRotationMatrix();
-  pc = R * pw + Eigen::Vector3d(pose[4], pose[5], pose[6]);
+  pc = toCamera(pose, pw, R);
   double z = pc.z();
   if (std::abs(z) < 1e-6) z = z < 0 ? -1e-6 : 1e-6;
   const double iz = 1.0 / z;
@@ -98,11 +102,9 @@ class GroundHeightCost : public ceres::SizedCostFunction<1, 7, 3> {
   GroundHeightCost(const Eigen::Vector3d& normal_cam, double height, double sigma)
       : n_(normal_cam), h_(height), inv_sigma_(1.0 / sigma) {}
   bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
-    const double* pose = params[0];
-    const Eigen::Quaterniond q(pose[3], pose[0], pose[1], pose[2]);
-    const Eigen::Matrix3d R = q.toRotationMatrix();
-    const Eigen::Vector3d pc = R * Eigen::Vector3d(params[1][0], params[1][1], params[1][2]) +
-                               Eigen::Vector3d(pose[4], pose[5], pose[6]);
+    Eigen::Matrix3d R;
+    const Eigen::Vector3d pc =
+        detail::toCamera(params[0], Eigen::Vector3d(params[1][0], params[1][1], params[1][2]), R);
     residuals[0] = (n_.dot(pc) - h_) * inv_sigma_;
     if (jacobians && jacobians[0]) {  // tangent [rho, phi] of the left update: d pc = rho + phi x pc
       Eigen::Map<Eigen::Matrix<double, 1, 7, Eigen::RowMajor>> J(jacobians[0]);
