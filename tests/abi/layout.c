@@ -18,8 +18,11 @@ _Static_assert(sizeof(beslam_plugin_descriptor) == 88, "beslam_plugin_descriptor
 _Static_assert(sizeof(beslam_config_field) == 56, "beslam_config_field");
 _Static_assert(sizeof(beslam_config_value) == 48, "beslam_config_value");
 _Static_assert(sizeof(beslam_frame) == 104, "beslam_frame");
-_Static_assert(sizeof(beslam_create_info) == 184, "beslam_create_info");
-_Static_assert(sizeof(beslam_track_result) == 136, "beslam_track_result");
+_Static_assert(sizeof(beslam_create_info) == 192, "beslam_create_info");
+_Static_assert(offsetof(beslam_create_info, camera_height) == 184, "ABI 1.1 appends camera_height to 1.0's 184 bytes");
+_Static_assert(sizeof(beslam_track_result) == 152, "beslam_track_result");
+_Static_assert(offsetof(beslam_track_result, world_scale) == 136, "ABI 1.1 appends world_scale to 1.0's 136 bytes");
+_Static_assert(offsetof(beslam_keyframe, world_scale) == 128, "ABI 1.1 appends world_scale to 1.0's 128 bytes");
 _Static_assert(sizeof(beslam_backend_v1) == 56, "beslam_backend_v1");
 _Static_assert(sizeof(beslam_object_landmark) == 168, "beslam_object_landmark");
 

@@ -4,6 +4,23 @@
  * Frames and units: metres, seconds, radians. Camera frame x right, y down, z forward (KITTI).
  * beslam_pose m[] holds the top 3x4 of a 4x4 rigid transform, row-major; a field named T_a_b maps
  * points from frame b to frame a (p_a = T_a_b * p_b). "world" is the backend's map frame.
+ *
+ * The world unit. A monocular backend's map has no metric scale until it recovers one (camera height
+ * over the road, metric boxes, LiDAR): until then its world is "metres times an unknown factor". Since
+ * ABI 1.1 a backend says which it is (beslam_track_result.world_scale, BESLAM_WORLD_SCALE_*); the host
+ * hands world-frame poses to the motion checker and the reconstructor only once the world is metric.
+ * A backend built against ABI 1.0 never says so and counts as BESLAM_WORLD_SCALE_UNKNOWN.
+ *
+ * Two object frames, on purpose:
+ *  - a 3D box (beslam_box3d) is a detection in the CAMERA frame: geometric centre, size = length
+ *    (along the heading), width, height, and yaw about the camera y axis (KITTI rotation_y: 0 = heading
+ *    along camera +x). It is what detectors and datasets give.
+ *  - an object landmark (beslam_object_landmark) lives in the WORLD frame with a right-handed body frame
+ *    x forward (heading), y left, z up, origin at the box's geometric centre, so shape models and meshes
+ *    are written in the usual vehicle convention. For a level camera (world y down):
+ *    T_cam_object = [R_y(yaw) * M | centre_cam] with M mapping body (x fwd, y left, z up) to camera-style
+ *    axes (x right, y down, z forward) at yaw 0: body x -> cam +x, body y -> cam +z, body z -> cam -y.
+ *    The SDK's sdk::objectPose(box) (views.hpp) gives T_cam_object of a box.
  */
 #ifndef BESLAM_DATA_H
 #define BESLAM_DATA_H
@@ -79,6 +96,10 @@ typedef struct beslam_camera {
 #define BESLAM_BOX_HAS_BBOX2D 0x2u   /* bbox2d is set */
 #define BESLAM_BOX_UNCERTAIN 0x4u    /* the detector doubts this box (too far, too small) */
 
+/* The unit of a backend's world frame (ABI 1.1). */
+#define BESLAM_WORLD_SCALE_UNKNOWN 0 /* monocular map: metres times an unknown (drifting) factor */
+#define BESLAM_WORLD_SCALE_METRIC 1  /* metres */
+
 /* Arrays of boxes carry their element size: index with (const char*)boxes + i * element_size. */
 typedef struct beslam_box3d {
   int32_t class_id;        /* BESLAM_CLASS_* */
@@ -133,6 +154,9 @@ typedef struct beslam_create_info {
   beslam_camera camera;
   beslam_pose T_cam_lidar;           /* LiDAR frame -> camera frame */
   const char* output_dir;            /* the run's output folder (a plugin may write its own files there) */
+  /* ABI 1.1: the rig. A property of the dataset (KITTI: 1.65 m; synthetic: its manifest), which a
+   * pipeline may override with dataset.camera_height; handed to every plugin. */
+  double camera_height;              /* metres from the camera centre down to the road; 0: unknown */
 } beslam_create_info;
 
 /* ---- What the backend and reconstructor exchange ---- */
@@ -143,6 +167,8 @@ typedef struct beslam_keyframe {
   int64_t frame_index;
   double timestamp;
   beslam_pose T_world_cam;
+  int32_t world_scale;           /* ABI 1.1: BESLAM_WORLD_SCALE_* of T_world_cam */
+  int32_t reserved1;
 } beslam_keyframe;
 
 typedef struct beslam_keyframe_list {
@@ -177,6 +203,12 @@ typedef struct beslam_stage_time {
   const char* name;
   double milliseconds;
 } beslam_stage_time;
+
+/* A named number a plugin reports for one call, e.g. "features_static" (plugin-owned until its next call). */
+typedef struct beslam_named_value {
+  const char* name;
+  double value;
+} beslam_named_value;
 
 #ifdef __cplusplus
 }

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "beslam/common/error.hpp"
 #include "beslam/datasets/image_io.hpp"
@@ -51,6 +52,20 @@ Frame LoadedDataset::load(std::size_t i) const {
 }
 
 std::string joinPath(const std::string& a, const std::string& b) { return (fs::path(a) / b).string(); }
+
+double kittiCameraHeight(const std::string& sequence_dir) {
+  const std::string manifest = joinPath(sequence_dir, "manifest.yaml");
+  if (!isFile(manifest)) return 1.65;
+  double height = 0;
+  try {
+    const YAML::Node node = YAML::LoadFile(manifest)["config"]["camera"]["mount_height"];
+    if (node) height = node.as<double>();
+  } catch (const YAML::Exception& e) {
+    throw Error(manifest + ": cannot read config.camera.mount_height (" + e.what() + ")");
+  }
+  if (!(height > 0 && height < 100)) throw Error(manifest + ": config.camera.mount_height is missing or not a positive number of metres");
+  return height;
+}
 
 bool isDirectory(const std::string& path) {
   std::error_code ec;

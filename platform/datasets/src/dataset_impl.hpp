@@ -26,6 +26,7 @@ struct DatasetContents {
   std::optional<Eigen::Isometry3d> T_cam_lidar;
   std::optional<trajectory::Trajectory> ground_truth;
   std::string label_path;
+  std::optional<double> camera_height;  // metres over the road
   std::vector<FrameEntry> frames;
   bool load_color = false, load_lidar = false;
   cv::Mat undistort_map1, undistort_map2;  // applied to gray and color when not empty (TUM fr1/fr2)
@@ -41,12 +42,18 @@ class LoadedDataset final : public Dataset {
   std::optional<Eigen::Isometry3d> T_cam_lidar() const override { return c_.T_cam_lidar; }
   std::optional<trajectory::Trajectory> groundTruth() const override { return c_.ground_truth; }
   std::string labelPath() const override { return c_.label_path; }
+  std::optional<double> cameraHeight() const override { return c_.camera_height; }
 
  private:
   DatasetContents c_;
 };
 
 std::string joinPath(const std::string& a, const std::string& b);
+
+// KITTI's cameras sit 1.65 m over the road (Geiger et al. 2013, the recording platform); a sequence that
+// `beslam synth` rendered says its own in sequence_dir/manifest.yaml (config.camera.mount_height).
+// A manifest without a readable, positive height is an error naming the file.
+double kittiCameraHeight(const std::string& sequence_dir);
 bool isDirectory(const std::string& path);
 bool isFile(const std::string& path);
 void requireDirectory(const std::string& path, const std::string& what);

@@ -50,6 +50,7 @@ std::unique_ptr<Dataset> openKittiObject(const DatasetOptions& options) {
   const std::string velodyne_dir = joinPath(options.root, "velodyne");
   const bool has_lidar = isDirectory(velodyne_dir);
   DatasetContents c;
+  c.camera_height = 1.65;  // KITTI's recording platform
   std::string first_calib;
   for (std::size_t p : selectFrames(indices, options, image_dir)) {
     FrameEntry f;

@@ -59,6 +59,7 @@ std::unique_ptr<Dataset> openKittiOdometry(const DatasetOptions& options) {
   const bool has_lidar = isDirectory(velodyne_dir);
 
   DatasetContents c;
+  c.camera_height = kittiCameraHeight(sequence_dir);
   for (std::size_t p : selectFrames(indices, options, image_dir)) {
     FrameEntry f;
     f.index = images[p].first;

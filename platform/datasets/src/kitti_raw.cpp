@@ -88,6 +88,7 @@ std::unique_ptr<Dataset> openKittiRaw(const DatasetOptions& options) {
   const bool has_lidar = isDirectory(velodyne_dir);
 
   DatasetContents c;
+  c.camera_height = 1.65;  // KITTI's recording platform
   for (std::size_t p : selectFrames(indices, options, image_dir)) {
     FrameEntry f;
     f.index = images[p].first;

@@ -47,6 +47,7 @@ std::unique_ptr<Dataset> openKittiTracking(const DatasetOptions& options) {
   const bool has_labels = isFile(label_path);
 
   DatasetContents c;
+  c.camera_height = 1.65;  // KITTI's recording platform
   for (std::size_t p : selectFrames(indices, options, image_dir)) {
     FrameEntry f;
     f.index = images[p].first;

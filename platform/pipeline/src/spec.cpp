@@ -113,6 +113,9 @@ std::vector<ConfigField> datasetFields() {
       {"ego_poses", BESLAM_CONFIG_PATH, false, "\"\"", 1, 0, "", "KITTI-format poses for layouts without them"},
       {"synth_set", BESLAM_CONFIG_STRING, false, "\"\"", 1, 0, "",
        "synth: config overrides 'key=value,key=value' applied to the preset named by sequence"},
+      {"camera_height", BESLAM_CONFIG_DOUBLE, false, "0", 0, 100, "",
+       "m from the camera down to the road, handed to every plugin (0: the dataset's own: KITTI 1.65, "
+       "synth: its manifest)"},
   };
 }
 
@@ -298,6 +301,7 @@ PipelineSpec loadPipeline(const std::string& path, const std::vector<std::string
   spec.dataset.lidar = value(dataset, "lidar").number != 0;
   spec.dataset.color = value(dataset, "color").number != 0;
   spec.dataset.ego_poses = value(dataset, "ego_poses").text;
+  spec.dataset.camera_height = value(dataset, "camera_height").number;
   spec.dataset.synth_set = value(dataset, "synth_set").text;
   if (spec.dataset.last >= 0 && spec.dataset.last < spec.dataset.first)
     fail(path, doc["dataset"]["last"], "dataset.last", "is before dataset.first");

@@ -150,8 +150,13 @@ TrackOutput BackendInstance::track(const beslam_frame& frame, const beslam_image
   for (uint32_t i = 0; i < out.result.stage_count && out.result.stage_times; ++i)
     out.stage_ms.emplace_back(out.result.stage_times[i].name ? out.result.stage_times[i].name : "?",
                               out.result.stage_times[i].milliseconds);
+  for (uint32_t i = 0; i < out.result.counter_count && out.result.counters; ++i)
+    out.counters.emplace_back(out.result.counters[i].name ? out.result.counters[i].name : "?",
+                              out.result.counters[i].value);
   out.result.stage_times = nullptr;  // plugin memory: not to be kept
   out.result.stage_count = 0;
+  out.result.counters = nullptr;
+  out.result.counter_count = 0;
   return out;
 }
 

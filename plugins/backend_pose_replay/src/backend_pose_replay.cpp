@@ -20,6 +20,7 @@ const beslam_config_field kFields[] = {
     field::String("format", "auto", "auto|kitti|tum", "file format; auto decides by the column count"),
     field::Double("max_time_diff", "0.02", 0, 10, "TUM: largest |t_frame - t_pose| accepted (s)"),
     field::Int("keyframe_interval", "5", 1, 1000, "every n-th tracked frame becomes a keyframe"),
+    field::Bool("metric", "true", "the poses are in metres (ground truth, stereo, LiDAR); false for a monocular estimate"),
 };
 
 struct PoseFile {
@@ -44,7 +45,7 @@ class PoseReplay : public beslam::sdk::Backend {
   PoseReplay(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
       : file_(readPoses(config.getString("poses"), config.getString("format"))),
         max_time_diff_(config.getDouble("max_time_diff")),
-        keyframe_interval_(config.getInt("keyframe_interval")) {
+        keyframe_interval_(config.getInt("keyframe_interval")), metric_(config.getBool("metric")) {
     context.info("replaying " + std::to_string(file_.poses.size()) + " poses from " + config.getString("poses"));
   }
 
@@ -57,6 +58,7 @@ class PoseReplay : public beslam::sdk::Backend {
   beslam::sdk::TrackResult track(const beslam::sdk::Frame& frame, const cv::Mat&,
                                  const std::vector<beslam_box3d>&) override {
     beslam::sdk::TrackResult result;
+    result.world_is_metric = metric_;
     const long i = lookup(frame);
     if (i < 0) {
       result.state = tracked_.empty() ? BESLAM_TRACKING_NOT_INITIALIZED : BESLAM_TRACKING_LOST;
@@ -97,6 +99,7 @@ class PoseReplay : public beslam::sdk::Backend {
   PoseFile file_;
   double max_time_diff_;
   int64_t keyframe_interval_;
+  bool metric_;
   std::vector<TrajectoryEntry> tracked_, keyframes_;
 };
 

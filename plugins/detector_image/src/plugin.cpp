@@ -25,7 +25,6 @@ const beslam_config_field kFields[] = {
     field::DoubleList("pedestrian_classes", "[0]", 0, 10000, "model class ids of persons (COCO: 0)"),
     field::DoubleList("cycle_classes", "[1, 3]", 0, 10000,
                       "bicycle/motorbike class ids: a person on one is a cyclist (COCO: 1, 3)"),
-    field::Double("camera_height", "1.65", 0.1, 10, "camera height above the road (m)"),
     field::Double("camera_pitch", "0", -0.5, 0.5, "camera pitch (rad, positive looking down)"),
     field::Double("max_distance", "40", 1, 1000, "boxes farther than this (m) are flagged uncertain"),
     field::Double("max_relative_uncertainty", "0.15", 0.001, 10,
@@ -69,7 +68,12 @@ class DetectorImage : public beslam::sdk::Detector {
       : context_(context),
         lifter_(asConfigError([&] {
           LiftOptions o;
-          o.camera_height = c.getDouble("camera_height");
+          // The rig's height is the dataset's (or the pipeline's dataset.camera_height), not a detector setting.
+          if (!context.cameraHeight())
+            throw beslam::sdk::ConfigError(
+                "detector_image needs the camera's height over the road: the dataset does not know it, "
+                "set dataset.camera_height in the pipeline");
+          o.camera_height = *context.cameraHeight();
           o.camera_pitch = c.getDouble("camera_pitch");
           o.max_distance = c.getDouble("max_distance");
           o.max_relative_uncertainty = c.getDouble("max_relative_uncertainty");

@@ -1,6 +1,8 @@
 /* Backend kind: the SLAM (or odometry) that turns frames into camera poses and a map.
  * Per frame the host calls predict_pose (so the motion checker can place boxes in the world frame),
- * then track with the frame's label mask and boxes; after a keyframe the reconstructor's landmarks come
+ * then track with the frame's label mask and boxes. track() says in world_scale whether the world is in
+ * metres (then and for every later prediction, until a track() says otherwise: a backend that resets its
+ * map starts an unknown world again); while it is not, the host gives the motion checker no pose; after a keyframe the reconstructor's landmarks come
  * back through add_landmarks. finish() ends the run (final optimisation); then the host reads the
  * trajectories and map points. Frames a backend did not track are absent from its trajectories. */
 #ifndef BESLAM_KINDS_BACKEND_H
@@ -26,6 +28,13 @@ typedef struct beslam_track_result {
   const beslam_stage_time* stage_times; /* instance-owned until its next call; may be NULL */
   uint32_t stage_count;
   uint32_t reserved;
+  /* ABI 1.1. */
+  int32_t world_scale;             /* BESLAM_WORLD_SCALE_* of T_world_cam and of every later prediction */
+  uint32_t counter_count;
+  /* Per-frame counts the host sums into the run summary; names the host knows: "features",
+   * "features_static" (keypoints on static-object labels), "tracked_static" (map points on static objects
+   * matched in this frame). Instance-owned until its next call; may be NULL. */
+  const beslam_named_value* counters;
 } beslam_track_result;
 
 #define BESLAM_TRAJECTORY_FINAL 0     /* every tracked frame, relative to its keyframe after optimisation */
@@ -44,10 +53,12 @@ typedef struct beslam_trajectory_list {
   uint32_t element_size;
 } beslam_trajectory_list;
 
+#define BESLAM_MAP_POINT_STATIC_OBJECT 0x1u /* made on a static (parked) object: trusted */
+
 typedef struct beslam_map_point {
   double p_world[3];
   uint8_t color[3];   /* RGB */
-  uint8_t reserved;
+  uint8_t flags;      /* BESLAM_MAP_POINT_* (ABI 1.0 plugins leave 0) */
   int32_t observations;
 } beslam_map_point;
 

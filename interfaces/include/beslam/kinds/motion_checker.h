@@ -13,7 +13,9 @@ extern "C" {
 typedef struct beslam_motion_checker_v1 {
   uint32_t struct_size;
   uint32_t reserved;
-  /* T_world_cam: the backend's prediction for this frame, or NULL when it has none yet. */
+  /* T_world_cam: the backend's prediction for this frame, in metres; NULL when it has none or when the
+   * backend's world is not metric yet (a monocular map before its scale is known): a checker then
+   * answers BESLAM_MOTION_UNKNOWN, or decides only by a test that needs no scale. */
   beslam_status (*classify)(void* instance, const beslam_frame* frame, const beslam_pose* T_world_cam,
                             beslam_box_array* boxes);
 } beslam_motion_checker_v1;

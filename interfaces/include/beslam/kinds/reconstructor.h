@@ -1,5 +1,6 @@
 /* Reconstructor kind (the paper's Algorithm 2): on each new keyframe, estimates shape code, pose and
- * scale of the static objects it sees and returns them as world-frame landmarks for the backend. */
+ * scale of the static objects it sees and returns them as world-frame landmarks for the backend. The host
+ * calls it only once the backend's world is metric (keyframe->world_scale == BESLAM_WORLD_SCALE_METRIC). */
 #ifndef BESLAM_KINDS_RECONSTRUCTOR_H
 #define BESLAM_KINDS_RECONSTRUCTOR_H
 

@@ -15,6 +15,10 @@ struct TrackResult {
   int32_t tracked_points = 0;
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
   std::vector<std::pair<std::string, double>> stage_ms;  // named wall times of this call
+  // The world is in metres from this frame on (the backend never goes back to unknown scale).
+  bool world_is_metric = false;
+  // Named per-frame counts the host sums into summary.json ("features", "features_static", "tracked_static").
+  std::vector<std::pair<std::string, double>> counters;
 };
 
 struct TrajectoryEntry {
@@ -74,6 +78,14 @@ class Backend {
             c.T_world_cam = toPose(r.T_world_cam);
             c.stage_times = b.abi_stages_.empty() ? nullptr : b.abi_stages_.data();
             c.stage_count = static_cast<uint32_t>(b.abi_stages_.size());
+            c.world_scale = r.world_is_metric ? BESLAM_WORLD_SCALE_METRIC : BESLAM_WORLD_SCALE_UNKNOWN;
+            b.abi_counter_names_.clear();
+            b.abi_counters_.clear();
+            for (const auto& [name, value] : r.counters) b.abi_counter_names_.push_back(name);
+            for (size_t i = 0; i < r.counters.size(); ++i)
+              b.abi_counters_.push_back({b.abi_counter_names_[i].c_str(), r.counters[i].second});
+            c.counters = b.abi_counters_.empty() ? nullptr : b.abi_counters_.data();
+            c.counter_count = static_cast<uint32_t>(b.abi_counters_.size());
             std::memcpy(result, &c, std::min<size_t>(result->struct_size ? result->struct_size : sizeof(c), sizeof(c)));
           });
         },
@@ -125,6 +137,8 @@ class Backend {
  private:
   std::vector<std::string> abi_stage_names_;
   std::vector<beslam_stage_time> abi_stages_;
+  std::vector<std::string> abi_counter_names_;
+  std::vector<beslam_named_value> abi_counters_;
   std::vector<beslam_trajectory_entry> abi_trajectory_;
   std::vector<beslam_map_point> abi_points_;
 };

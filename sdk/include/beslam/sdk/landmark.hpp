@@ -10,6 +10,7 @@ struct Keyframe {
   int64_t frame_index = -1;
   double timestamp = 0;
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
+  bool world_is_metric = false;  // T_world_cam in metres (BESLAM_WORLD_SCALE_METRIC)
 };
 
 struct Landmark {
@@ -25,7 +26,7 @@ struct Landmark {
 inline Keyframe toKeyframe(const beslam_keyframe& kf) {
   beslam_keyframe k{};
   std::memcpy(&k, &kf, std::min<size_t>(kf.struct_size, sizeof(k)));
-  return {k.id, k.frame_index, k.timestamp, toIsometry(k.T_world_cam)};
+  return {k.id, k.frame_index, k.timestamp, toIsometry(k.T_world_cam), k.world_scale == BESLAM_WORLD_SCALE_METRIC};
 }
 
 inline beslam_keyframe toC(const Keyframe& kf) {
@@ -35,6 +36,7 @@ inline beslam_keyframe toC(const Keyframe& kf) {
   k.frame_index = kf.frame_index;
   k.timestamp = kf.timestamp;
   k.T_world_cam = toPose(kf.T_world_cam);
+  k.world_scale = kf.world_is_metric ? BESLAM_WORLD_SCALE_METRIC : BESLAM_WORLD_SCALE_UNKNOWN;
   return k;
 }
 

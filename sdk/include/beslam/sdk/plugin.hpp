@@ -33,11 +33,14 @@ class Context {
     camera_ = local.camera;
     if (local.has_lidar_extrinsics) T_cam_lidar_ = toIsometry(local.T_cam_lidar);
     output_dir_ = local.output_dir ? local.output_dir : "";
+    if (local.camera_height > 0) camera_height_ = local.camera_height;  // ABI 1.1; 0 from older hosts
   }
 
   const beslam_camera& camera() const { return camera_; }
   const std::optional<Eigen::Isometry3d>& T_cam_lidar() const { return T_cam_lidar_; }
   const std::string& outputDir() const { return output_dir_; }
+  // The rig: the camera centre's height over the road in metres, when the dataset (or pipeline) knows it.
+  const std::optional<double>& cameraHeight() const { return camera_height_; }
   const std::string& pluginId() const { return plugin_id_; }
 
   void log(int32_t level, const std::string& message) const {
@@ -52,6 +55,7 @@ class Context {
   beslam_camera camera_{};
   std::optional<Eigen::Isometry3d> T_cam_lidar_;
   std::string output_dir_;
+  std::optional<double> camera_height_;
 };
 
 // One input frame as OpenCV/Eigen views over the host's memory (borrowed for the call).

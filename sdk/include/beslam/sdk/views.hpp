@@ -109,6 +109,17 @@ inline Eigen::Isometry3d boxPose(const beslam_box3d& box) {
   return T_cam_box;
 }
 
+// Pose of a box as an object landmark's body frame (x forward, y left, z up; data.h): T_cam_object.
+inline Eigen::Isometry3d objectPose(const beslam_box3d& box) {
+  Eigen::Matrix3d M;  // columns: body x, y, z in box axes (x heading, y down, z across)
+  M << 1, 0, 0,  //
+      0, 0, -1,  //
+      0, 1, 0;
+  Eigen::Isometry3d T_cam_object = boxPose(box);
+  T_cam_object.linear() = T_cam_object.linear() * M;
+  return T_cam_object;
+}
+
 // The eight corners of a box in the camera frame (columns), bottom face first.
 inline Eigen::Matrix<double, 3, 8> boxCorners(const beslam_box3d& box) {
   const double l = box.size[0] / 2, w = box.size[1] / 2, h = box.size[2] / 2;

@@ -74,6 +74,9 @@ class Dataset {
   // timestamp (KITTI: world = the chosen camera at frame 0 of the sequence).
   virtual std::optional<trajectory::Trajectory> groundTruth() const = 0;
   virtual std::string labelPath() const { return {}; }  // tracking labels file if present (oracle detectors)
+  // The rig: the chosen camera's height over the road in metres, where the layout knows it (KITTI's
+  // cameras: 1.65 m; a `beslam synth` sequence: camera.mount_height from its manifest.yaml; TUM: none).
+  virtual std::optional<double> cameraHeight() const { return std::nullopt; }
 };
 
 // Opens and validates a dataset; throws beslam::Error naming the missing file or folder, the malformed

@@ -62,6 +62,7 @@ struct DatasetSpec {
   std::string type, root, sequence, camera, ego_poses, synth_set;
   int64_t first = 0, last = -1, step = 1;
   bool lidar = false, color = false;
+  double camera_height = 0;  // metres over the road; 0: the dataset's own value (Dataset::cameraHeight)
 };
 
 struct OutputSpec {

@@ -83,8 +83,10 @@ class ReconstructorInstance : public Instance {
 };
 
 struct TrackOutput {
-  beslam_track_result result{};
+  beslam_track_result result{};  // stage_times and counters cleared (plugin memory): read the copies below
   std::vector<std::pair<std::string, double>> stage_ms;
+  std::vector<std::pair<std::string, double>> counters;
+  bool worldIsMetric() const { return result.world_scale == BESLAM_WORLD_SCALE_METRIC; }
 };
 
 struct PoseEntry {
