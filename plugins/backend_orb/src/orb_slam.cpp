@@ -48,7 +48,9 @@ LocalMapperOptions mapperOptions(const Options& o) {
   m.ba.refine_iterations = o.local_ba_iterations_refine;
   m.ba.max_local_keyframes = o.local_ba_max_keyframes;
   m.ba.trusted_weight = o.static_object_weight;
-  m.ground.enabled = o.ground_prior;
+  m.ground.enabled = o.ground_prior || o.metric_scale;
+  m.metric_camera_height = o.metric_scale ? o.camera_height : 0;
+  m.metric_max_spread = o.metric_max_spread;
   m.ground.sigma_ratio = o.ground_prior_sigma;
   m.ground.reference_keyframes = o.ground_reference_keyframes;
   m.ground.min_inliers = o.ground_min_inliers;
@@ -83,6 +85,9 @@ bool Options::validate(std::string* error) const {
     return fail("ground_prior_sigma must be > 0");
   if (ground_reference_keyframes < 1) return fail("ground_reference_keyframes must be >= 1");
   if (ground_min_inliers < 3) return fail("ground_min_inliers must be >= 3");
+  if (metric_scale && !(camera_height > 0 && camera_height < 100))
+    return fail("metric_scale needs the camera's height over the road (dataset camera_height), in (0, 100) m");
+  if (!(metric_max_spread > 0)) return fail("metric_max_spread must be > 0");
   if (local_ba_iterations_robust < 0 || local_ba_iterations_refine < 0) return fail("BA iterations must be >= 0");
   if (local_ba_max_keyframes < 0) return fail("local_ba_max_keyframes must be >= 0");
   if (init_min_parallax_deg <= 0) return fail("init_min_parallax_deg must be > 0");
@@ -169,6 +174,15 @@ struct OrbSlam::Impl {
     t0 = Clock::now();
     waitIdle();
     const double wait_ms = msSince(t0);
+    // Mapping is idle here in both modes: a metric scale the mapper found is applied to everything at
+    // once, before this frame is tracked (the same frame in the threaded and the inline mode).
+    if (const auto s = mapper.takePendingScale()) {
+      map.rescale(*s);
+      tracker.rescale(*s);
+      mapper.rescale(*s);
+      stats.metric_from_frame = index;
+      stats.metric_scale_factor = *s;
+    }
     double background_mapping_ms = 0;
     if (options.threaded_mapping) {
       std::lock_guard<std::mutex> lock(mutex);
@@ -176,7 +190,14 @@ struct OrbSlam::Impl {
       last_mapping_ms = 0;
     }
 
+    int features_static = 0;
+    for (size_t i = 0; i < features->size(); ++i) features_static += features->onStaticObject(i) ? 1 : 0;
+    const int feature_count = static_cast<int>(features->size());
     TrackResult result = tracker.track(features, timestamp, index);
+    result.world_is_metric = mapper.metric();
+    result.features = feature_count;
+    result.features_static = features_static;
+    result.tracked_static = tracker.trackedOnStaticObjects();
     ++stats.frames;
     if (result.state == TrackingState::Ok) ++stats.frames_tracked;
     result.stage_ms.insert(result.stage_ms.begin(), {"extract", extract_ms});
@@ -296,6 +317,11 @@ void OrbSlam::addObjectLandmarks(const std::vector<ObjectLandmark>& landmarks) {
 }
 
 std::vector<ObjectLandmark> OrbSlam::objectLandmarks() const { return impl_->landmarks; }
+
+void OrbSlam::dropObject(int32_t object_id) {
+  impl_->waitIdle();
+  impl_->stats.object_points_dropped += impl_->map.dropObjectPoints(object_id);
+}
 
 Statistics OrbSlam::statistics() const {
   impl_->waitIdle();

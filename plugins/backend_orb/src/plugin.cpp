@@ -1,5 +1,6 @@
 // backend_orb as a BE-SLAM backend plugin: OrbSlam behind the SDK's Backend base class.
 #include <algorithm>
+#include <set>
 
 #include "beslam/sdk/sdk.hpp"
 #include "beslam_orb/orb_slam.hpp"
@@ -26,12 +27,17 @@ const beslam_config_field kFields[] = {
     field::Double("ground_prior_sigma", "0.2", 0.001, 10.0, "std-dev of one ground point's height, as a share of the camera height"),
     field::Int("ground_reference_keyframes", "5", 1, 1000, "first keyframes whose median camera height is the reference"),
     field::Int("ground_min_inliers", "25", 3, 100000, "map points a keyframe's ground plane needs"),
+    field::Bool("metric_scale", "false", "recover metres from the rig's camera height over the road (dataset camera_height) and hold them with the ground prior"),
+    field::Double("metric_max_spread", "0.1", 0.001, 10.0, "metric scale: the reference ground fits' heights must agree this well (relative MAD)"),
     field::Bool("threaded_mapping", "false", "local mapping on its own thread (same results, overlaps the next frame)"),
     field::Int("seed", "42", 0, 2147483647.0, "seed of every random choice (RANSAC)"),
 };
 
-beslam::orb::Options readOptions(const beslam::sdk::Config& c) {
+beslam::orb::Options readOptions(const beslam::sdk::Config& c, const beslam::sdk::Context& context) {
   beslam::orb::Options o;
+  o.metric_scale = c.getBool("metric_scale");
+  o.metric_max_spread = c.getDouble("metric_max_spread");
+  o.camera_height = context.cameraHeight().value_or(0);
   o.features = static_cast<int>(c.getInt("features"));
   o.scale_factor = c.getDouble("scale_factor");
   o.levels = static_cast<int>(c.getInt("levels"));
@@ -73,14 +79,23 @@ int32_t toState(beslam::orb::TrackingState s) {
 class OrbBackend : public beslam::sdk::Backend {
  public:
   OrbBackend(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
-      : slam_(readCamera(context), readOptions(config)) {}
+      : slam_(readCamera(context), readOptions(config, context)) {}
 
   std::optional<Eigen::Isometry3d> predictPose(const beslam::sdk::Frame& frame) override {
     return slam_.predictPose(frame.timestamp);
   }
 
   beslam::sdk::TrackResult track(const beslam::sdk::Frame& frame, const cv::Mat& mask,
-                                 const std::vector<beslam_box3d>& /*boxes*/) override {
+                                 const std::vector<beslam_box3d>& boxes) override {
+    // An object once parked (its points trusted) that the motion checker now calls moving: its points go.
+    for (const beslam_box3d& b : boxes) {
+      if (b.track_id < 0) continue;
+      if (b.motion_state == BESLAM_MOTION_STATIC) {
+        static_tracks_.insert(b.track_id);
+      } else if (b.motion_state == BESLAM_MOTION_DYNAMIC && static_tracks_.erase(b.track_id)) {
+        slam_.dropObject(b.track_id);
+      }
+    }
     // Colour (when given) only colours the map points; features come from the grey image.
     const cv::Mat& image = frame.color.empty() ? frame.gray : frame.color;
     const beslam::orb::TrackResult r = slam_.track(image, mask, frame.timestamp, frame.index);
@@ -91,6 +106,8 @@ class OrbBackend : public beslam::sdk::Backend {
     out.tracked_points = r.tracked_points;
     out.T_world_cam = r.T_world_cam;
     out.stage_ms = r.stage_ms;
+    out.world_is_metric = r.world_is_metric;
+    out.counters = {{"features", r.features}, {"features_static", r.features_static}, {"tracked_static", r.tracked_static}};
     return out;
   }
 
@@ -136,6 +153,7 @@ class OrbBackend : public beslam::sdk::Backend {
       m.color[1] = p.g;
       m.color[2] = p.b;
       m.observations = p.observations;
+      m.flags = p.on_static_object ? BESLAM_MAP_POINT_STATIC_OBJECT : 0;
       out.push_back(m);
     }
     return out;
@@ -143,6 +161,7 @@ class OrbBackend : public beslam::sdk::Backend {
 
  private:
   OrbSlam slam_;
+  std::set<int32_t> static_tracks_;  // track ids the motion checker has called static
 };
 
 }  // namespace
@@ -150,5 +169,5 @@ class OrbBackend : public beslam::sdk::Backend {
 BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<OrbBackend>(
     {"backend_orb", "ORB monocular SLAM",
      "ORB-SLAM2-class monocular tracking and local mapping (no loop closure); dynamic mask labels get no "
-     "features, static objects get more",
-     {0, 1, 0}, kFields}))
+     "features, static objects get more; optional metric scale from the camera height",
+     {0, 2, 0}, kFields}))

@@ -9,6 +9,8 @@
 #include <random>
 
 #include "ground/ground_plane.hpp"
+#include "map/map.hpp"
+#include "map/map_point.hpp"
 #include "map_builder.hpp"
 #include "optimize/bundle_adjustment.hpp"
 
@@ -118,6 +120,72 @@ TEST(GroundReference, IsTheMedianHeightAndMeanNormalOfTheFirstFits) {
   last.height = 50.0;
   ref.add(last);
   EXPECT_DOUBLE_EQ(ref.height(), 3.0) << "the reference does not move once set";
+}
+
+// Metric scale needs fits that agree: a window of the latest fits slides until their spread is small.
+TEST(GroundReference, WithASpreadLimitWaitsForAgreeingFitsAndRescales) {
+  GroundReference ref(3, 0.1);
+  auto add = [&](double h) {
+    GroundPlane p;
+    p.height = h;
+    ref.add(p);
+  };
+  add(1.0);
+  add(2.0);
+  add(3.0);
+  EXPECT_FALSE(ref.ready()) << "1, 2, 3 spread by half their median: no scale from them";
+  add(1.5);
+  EXPECT_FALSE(ref.ready()) << "the window 2, 3, 1.5 still spreads by a quarter";
+  add(1.52);
+  ASSERT_TRUE(ref.ready()) << "3, 1.5, 1.52: two of three agree (median absolute deviation)";
+  EXPECT_DOUBLE_EQ(ref.height(), 1.52);
+  EXPECT_NEAR(ref.spread(), 0.02 / 1.52, 1e-12);
+  ref.rescale(1.1);
+  EXPECT_DOUBLE_EQ(ref.height(), 1.52 * 1.1);
+}
+
+// Rescaling a map scales every translation and distance and keeps every reprojection.
+TEST(MapRescale, ScalesKeyframesPointsAndDistancesAlike) {
+  std::mt19937 rng(3);
+  const ScalePyramid pyr(8, 1.2);
+  Map map;
+  Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
+  T_cw.translation() = Eigen::Vector3d(0.2, -0.1, 0.5);
+  KeyFrame* kf = singleKeyFrame(map, pyr, T_cw, roadPoints(50, rng, 0.0));
+  MapPoint* mp = kf->validPoints().front();
+  mp->updateNormalAndDepth();
+  const Eigen::Vector3d p_cam = kf->T_cw * mp->position;
+  const Eigen::Vector2d uv(p_cam.x() / p_cam.z(), p_cam.y() / p_cam.z());
+  const float max_d = mp->max_distance;
+  map.rescale(20.0);
+  EXPECT_TRUE(kf->T_cw.translation().isApprox(20.0 * T_cw.translation()));
+  const Eigen::Vector3d q_cam = kf->T_cw * mp->position;
+  EXPECT_NEAR(q_cam.z(), 20.0 * p_cam.z(), 1e-9);
+  EXPECT_NEAR(q_cam.x() / q_cam.z(), uv.x(), 1e-12);
+  EXPECT_NEAR(q_cam.y() / q_cam.z(), uv.y(), 1e-12);
+  EXPECT_FLOAT_EQ(mp->max_distance, 20.0f * max_d);
+}
+
+// Points made on an object that starts moving leave the map; other points stay.
+TEST(MapObjects, DropObjectPointsRemovesOnlyThatObject) {
+  std::mt19937 rng(4);
+  const ScalePyramid pyr(8, 1.2);
+  Map map;
+  KeyFrame* kf = singleKeyFrame(map, pyr, Eigen::Isometry3d::Identity(), roadPoints(30, rng, 0.0));
+  auto points = kf->validPoints();
+  for (size_t i = 0; i < points.size(); ++i) points[i]->object_id = i < 10 ? 7 : (i < 15 ? 8 : -1);
+  EXPECT_EQ(map.dropObjectPoints(7), 10);
+  int live7 = 0, live8 = 0, background = 0;
+  for (MapPoint* mp : map.points()) {
+    if (mp->bad) continue;
+    live7 += mp->object_id == 7;
+    live8 += mp->object_id == 8;
+    background += mp->object_id < 0;
+  }
+  EXPECT_EQ(live7, 0);
+  EXPECT_EQ(live8, 5);
+  EXPECT_EQ(background, static_cast<int>(points.size()) - 15);
+  EXPECT_EQ(map.dropObjectPoints(7), 0);
 }
 
 // Five keyframes 1 m apart over a road; the start map is the truth scaled by 1.15 about the origin

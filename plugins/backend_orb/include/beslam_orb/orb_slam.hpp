@@ -69,6 +69,12 @@ struct Options {
   double ground_prior_sigma = 0.2;           // std-dev of one ground point's height, share of the height
   int ground_reference_keyframes = 5;        // keyframes whose median camera height is the reference
   int ground_min_inliers = 25;               // a keyframe's ground plane needs this many points
+  // Metric scale (beyond ORB-SLAM2; docs/metric-scale.md): once the ground planes of the first keyframes
+  // agree, the map is rescaled so the camera sits camera_height metres over them, and the ground prior
+  // (switched on with it) holds that height: poses and points are in metres from then on.
+  bool metric_scale = false;
+  double camera_height = 0;                  // the rig's camera height over the road, metres
+  double metric_max_spread = 0.1;            // the reference fits' heights must agree this well (rel. MAD)
   bool threaded_mapping = false;
   // Initialisation.
   int ransac_iterations = 200;
@@ -87,6 +93,9 @@ struct TrackResult {
   int64_t keyframe_id = -1;                                        // when is_keyframe
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // valid when state == Ok
   int tracked_points = 0;                                          // pose inliers
+  bool world_is_metric = false;                                    // T_world_cam (and the map) in metres
+  int features = 0, features_static = 0;                           // keypoints; on static-object labels
+  int tracked_static = 0;                                          // inliers on static-object map points
   std::vector<std::pair<std::string, double>> stage_ms;            // extract, track, local_map, mapping...
 };
 
@@ -117,6 +126,9 @@ struct Statistics {
   int frames = 0, frames_tracked = 0, keyframes = 0, keyframes_culled = 0, map_points = 0;
   int resets = 0, relocalisations = 0;
   int64_t initialised_at_frame = -1;
+  int64_t metric_from_frame = -1;      // first frame tracked in metres (-1: never)
+  double metric_scale_factor = 0;      // the factor the map was multiplied by then
+  int object_points_dropped = 0;       // map points of static objects that started to move
 };
 
 class OrbSlam {
@@ -148,6 +160,9 @@ class OrbSlam {
   // not enter the optimisation yet. Trust comes from the mask: features on label 1000 + id.
   void addObjectLandmarks(const std::vector<ObjectLandmark>& landmarks);
   std::vector<ObjectLandmark> objectLandmarks() const;
+
+  // Object `object_id` (mask label 1000 + id) started to move: its map points leave the map.
+  void dropObject(int32_t object_id);
 
   Statistics statistics() const;
   const Options& options() const;

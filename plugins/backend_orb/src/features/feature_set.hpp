@@ -38,6 +38,7 @@ struct FeatureSet {
   size_t size() const { return keypoints.size(); }
   const uint8_t* descriptor(size_t i) const { return descriptors.ptr<uint8_t>(static_cast<int>(i)); }
   bool onStaticObject(size_t i) const { return labels[i] >= 1000; }
+  int32_t objectId(size_t i) const { return labels[i] >= 1000 ? static_cast<int32_t>(labels[i]) - 1000 : -1; }
   void buildGrid() { grid = FeatureGrid(keypoints, width, height); }
   std::vector<int> query(float u, float v, float r, int min_level = -1, int max_level = -1) const {
     return grid.query(keypoints, u, v, r, min_level, max_level);

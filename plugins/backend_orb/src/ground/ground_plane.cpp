@@ -108,12 +108,26 @@ std::optional<GroundPlane> fitGroundPlane(const KeyFrame& kf, const GroundPlaneO
 void GroundReference::add(const GroundPlane& plane) {
   if (ready_ || !(plane.height > 0) || !std::isfinite(plane.height) || !plane.normal_cam.allFinite()) return;
   heights_.push_back(plane.height);
-  normal_sum_ += plane.normal_cam;
+  normals_.push_back(plane.normal_cam);
+  if (static_cast<int>(heights_.size()) > needed_) {  // slide: the oldest fit leaves the window
+    heights_.erase(heights_.begin());
+    normals_.erase(normals_.begin());
+  }
   if (static_cast<int>(heights_.size()) < needed_) return;
-  std::vector<double> s(heights_);
-  std::nth_element(s.begin(), s.begin() + s.size() / 2, s.end());
-  height_ = s[s.size() / 2];
-  normal_ = normal_sum_.normalized();
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  const double h = median(heights_);
+  std::vector<double> deviations;
+  for (double x : heights_) deviations.push_back(std::abs(x - h));
+  const double spread = median(deviations) / h;
+  if (spread > max_spread_) return;
+  height_ = h;
+  spread_ = spread;
+  Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero();
+  for (const auto& n : normals_) normal_sum += n;
+  normal_ = normal_sum.normalized();
   ready_ = true;
 }
 

@@ -33,6 +33,9 @@ struct GroundPlaneOptions {
   int min_inliers = 25;                 // fewer: no plane
   int ransac_iterations = 150;
   int reference_keyframes = 5;          // reference height: median over the first fits
+  // The reference needs its fits to agree: relative median absolute deviation of their heights at most
+  // this (infinite: the first fits, whatever they say). A window slides over later fits until they agree.
+  double reference_max_spread = 1e9;
   double sigma_ratio = 0.2;             // prior std-dev of one ground point's height, as a share of h
 };
 
@@ -49,16 +52,24 @@ std::optional<GroundPlane> fitGroundPlane(const KeyFrame& kf, const GroundPlaneO
 // normal of those fits. Later fits are compared with it.
 class GroundReference {
  public:
-  explicit GroundReference(int keyframes) : needed_(keyframes) {}
+  explicit GroundReference(int keyframes, double max_spread = 1e9) : needed_(keyframes), max_spread_(max_spread) {}
   void add(const GroundPlane& plane);
   bool ready() const { return ready_; }
   double height() const { return height_; }
+  double spread() const { return spread_; }  // relative MAD of the fits behind height()
   const Eigen::Vector3d& normal() const { return normal_; }
+  // The map's unit became s times smaller: heights follow.
+  void rescale(double s) {
+    height_ *= s;
+    for (double& h : heights_) h *= s;
+  }
 
  private:
   int needed_;
+  double max_spread_;
+  double spread_ = 0;
   std::vector<double> heights_;
-  Eigen::Vector3d normal_sum_ = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> normals_;
   bool ready_ = false;
   double height_ = 0;
   Eigen::Vector3d normal_ = Eigen::Vector3d::UnitY();

@@ -24,4 +24,24 @@ void Map::clear() {
   origin_ = nullptr;
 }
 
+void Map::rescale(double s) {
+  for (auto& kf : all_keyframes_) {
+    kf->T_cw.translation() *= s;
+    kf->T_cp.translation() *= s;
+  }
+  for (auto& mp : all_points_) {
+    mp->position *= s;
+    mp->min_distance *= static_cast<float>(s);
+    mp->max_distance *= static_cast<float>(s);
+  }
+}
+
+int Map::dropObjectPoints(int32_t object_id) {
+  std::vector<MapPoint*> doomed;
+  for (MapPoint* mp : points_)
+    if (!mp->bad && mp->object_id == object_id) doomed.push_back(mp);
+  for (MapPoint* mp : doomed) mp->setBad();
+  return static_cast<int>(doomed.size());
+}
+
 }  // namespace beslam::orb

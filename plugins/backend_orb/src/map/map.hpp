@@ -19,6 +19,11 @@ class Map {
   void eraseKeyFrame(KeyFrame* kf) { keyframes_.erase(kf); ++culled_; }
   void eraseMapPoint(MapPoint* mp) { points_.erase(mp); }
   void clear();
+  // Multiplies every length by s (keyframe and parent translations, point positions and their distance
+  // ranges), culled objects included, so that the map's unit becomes s times smaller (metric scale).
+  void rescale(double s);
+  // Marks bad every live map point made on static object `object_id` (it started to move).
+  int dropObjectPoints(int32_t object_id);
 
   const std::set<KeyFrame*, IdLess<KeyFrame>>& keyframes() const { return keyframes_; }
   const std::set<MapPoint*, IdLess<MapPoint>>& points() const { return points_; }

@@ -59,6 +59,7 @@ void MapPoint::replaceWith(MapPoint* other) {
   other->found += found;
   other->visible += visible;
   other->trusted = other->trusted || trusted;
+  if (other->object_id < 0) other->object_id = object_id;
   other->computeDistinctiveDescriptor();
   bad = true;
   replaced_by = other;

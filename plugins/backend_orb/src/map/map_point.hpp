@@ -34,6 +34,7 @@ class MapPoint {
   bool bad = false;
   MapPoint* replaced_by = nullptr;
   bool trusted = false;                // created on a static object
+  int32_t object_id = -1;              // that object's track id (mask label - 1000), -1 if none
   uint8_t grey = 0, r = 0, g = 0, b = 0;
 
   // Tracking scratch (per frame).

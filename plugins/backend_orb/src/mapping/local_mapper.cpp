@@ -32,7 +32,7 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 LocalMapper::LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyramid,
                          const LocalMapperOptions& options)
     : map_(map), camera_(camera), pyramid_(pyramid), options_(options),
-      ground_reference_(options.ground.reference_keyframes) {}
+      ground_reference_(makeGroundReference()) {}
 
 void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   timings_.clear();
@@ -53,9 +53,12 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   if (map_.numKeyFrames() > 2) {
     optimize::GroundPrior ground{options_.ground, &ground_reference_};
     last_ba_ = optimize::localBundleAdjustment(kf, map_, options_.ba, options_.ground.enabled ? &ground : nullptr);
-    if (options_.ground.enabled && !ground_reference_.ready())
+    if (options_.ground.enabled && !ground_reference_.ready()) {
       if (const auto plane = fitGroundPlane(*kf, options_.ground, Eigen::Vector3d::UnitY(), options_.ground.max_tilt_deg))
         ground_reference_.add(*plane);
+      if (ground_reference_.ready() && options_.metric_camera_height > 0 && !metric_)
+        pending_scale_ = options_.metric_camera_height / currentGroundHeight(kf);
+    }
   }
   timings_.emplace_back("map_local_ba", msSince(t0));
   t0 = Clock::now();
@@ -63,6 +66,9 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   if (options_.keyframe_culling) culled = cullKeyFrames(kf);
   timings_.emplace_back("map_kf_culling", msSince(t0));
   if (std::getenv("BESLAM_ORB_DEBUG")) {  // one line per keyframe for developers
+    if (const auto plane = fitGroundPlane(*kf, options_.ground, Eigen::Vector3d::UnitY(), options_.ground.max_tilt_deg))
+      std::fprintf(stderr, "  kf %ld frame %ld: ground fit h %.4f (%zu inliers)\n", kf->id,
+                   static_cast<long>(kf->frame_index), plane->height, plane->inliers.size());
     int obs_hist[6] = {0, 0, 0, 0, 0, 0};
     for (MapPoint* mp : kf->validPoints()) ++obs_hist[std::min(mp->numObservations(), 5)];
     std::fprintf(stderr,
@@ -73,6 +79,24 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
                  map_.numKeyFrames(), map_.points().size(), last_ba_.ground_keyframes, last_ba_.ground_residuals,
                  groundReferenceHeight());
   }
+}
+
+double LocalMapper::currentGroundHeight(KeyFrame* kf) const {
+  // The fits behind the reference were made when each keyframe was new; local BA has moved the map since.
+  // The scale that matters is the map's as it is now: refit the newest keyframes' planes.
+  std::vector<double> heights;
+  for (KeyFrame* k : kf->bestCovisibles(options_.ground.reference_keyframes * 2)) {
+    if (k->bad) continue;
+    if (const auto plane = fitGroundPlane(*k, options_.ground, ground_reference_.normal(),
+                                          options_.ground.max_tilt_from_reference_deg))
+      heights.push_back(plane->height);
+  }
+  if (const auto plane = fitGroundPlane(*kf, options_.ground, ground_reference_.normal(),
+                                        options_.ground.max_tilt_from_reference_deg))
+    heights.push_back(plane->height);
+  if (static_cast<int>(heights.size()) < options_.ground.reference_keyframes) return ground_reference_.height();
+  std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
+  return heights[heights.size() / 2];
 }
 
 void LocalMapper::registerKeyFrame(KeyFrame* kf) {
@@ -166,6 +190,7 @@ int LocalMapper::createNewPoints(KeyFrame* kf) {
       kf->addPoint(mp, i1);
       kf2->addPoint(mp, i2);
       mp->trusted = kf->features->onStaticObject(i1) || kf2->features->onStaticObject(i2);
+      mp->object_id = kf->features->onStaticObject(i1) ? kf->features->objectId(i1) : kf2->features->objectId(i2);
       const cv::Vec3b c = kf->features->colours[i1];
       mp->b = c[0]; mp->g = c[1]; mp->r = c[2];
       mp->grey = static_cast<uint8_t>((c[0] + c[1] + c[2]) / 3);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <list>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -27,6 +28,11 @@ struct LocalMapperOptions {
   bool keyframe_culling = true;
   optimize::BundleAdjustmentOptions ba;
   GroundPlaneOptions ground;  // ground-height prior in local BA (off by default)
+  // Metric scale (on when > 0, with the ground prior): the rig's camera height over the road in metres.
+  // Once the ground reference is confident, the mapper asks for the map to be rescaled so that the
+  // reference height becomes this; the ground prior then holds it (metres from then on).
+  double metric_camera_height = 0;
+  double metric_max_spread = 0.1;  // the reference's fits must agree this well (relative MAD)
 };
 
 class LocalMapper {
@@ -37,8 +43,22 @@ class LocalMapper {
   void processKeyFrame(KeyFrame* kf, bool run_ba = true);
   void reset() {
     recent_.clear();
-    ground_reference_ = GroundReference(options_.ground.reference_keyframes);
+    ground_reference_ = makeGroundReference();
+    metric_ = false;
+    pending_scale_.reset();
   }
+  // The factor the map should be multiplied by to be in metres, once, when the mapper has found it;
+  // the caller rescales map and tracker (with no mapping running) and calls rescale(s) here.
+  std::optional<double> takePendingScale() {
+    auto s = pending_scale_;
+    pending_scale_.reset();
+    return s;
+  }
+  void rescale(double s) {
+    ground_reference_.rescale(s);
+    metric_ = true;
+  }
+  bool metric() const { return metric_; }
   // Reference camera height of the ground prior (0 until the first fits have set it).
   double groundReferenceHeight() const { return ground_reference_.ready() ? ground_reference_.height() : 0; }
 
@@ -61,8 +81,15 @@ class LocalMapper {
   std::list<MapPoint*> recent_;
   std::vector<std::pair<std::string, double>> timings_;
   int last_new_points_ = 0;
+  double currentGroundHeight(KeyFrame* kf) const;
+  GroundReference makeGroundReference() const {
+    return GroundReference(options_.ground.reference_keyframes,
+                           options_.metric_camera_height > 0 ? options_.metric_max_spread : 1e9);
+  }
   GroundReference ground_reference_;
   optimize::BundleAdjustmentReport last_ba_;
+  bool metric_ = false;
+  std::optional<double> pending_scale_;
 };
 
 }  // namespace beslam::orb

@@ -192,6 +192,7 @@ bool Tracker::createInitialMap(const std::vector<int>& matches12, const TwoViewR
     mp->addObservation(kf_ini, i);
     mp->addObservation(kf_cur, j);
     mp->trusted = kf_ini->features->onStaticObject(i);
+    mp->object_id = kf_ini->features->objectId(i);
     const cv::Vec3b c = kf_ini->features->colours[i];
     mp->b = c[0]; mp->g = c[1]; mp->r = c[2];
     mp->grey = static_cast<uint8_t>((c[0] + c[1] + c[2]) / 3);
@@ -262,6 +263,26 @@ void Tracker::backfillInitialFrames(KeyFrame* kf_ini, KeyFrame* kf_cur) {
   for (MapPoint* mp : points) mp->track_in_view = false;
   init_between_.clear();
   current_ = saved;
+}
+
+int Tracker::trackedOnStaticObjects() const {
+  int n = 0;
+  for (size_t i = 0; i < last_.points.size(); ++i) {
+    const MapPoint* mp = last_.points[i];
+    if (mp && !mp->bad && !last_.outlier[i] && mp->trusted) ++n;
+  }
+  return n;
+}
+
+void Tracker::rescale(double s) {
+  for (Frame* f : {&current_, &last_, &init_frame_}) f->T_cw.translation() *= s;
+  for (Frame& f : init_between_) f.T_cw.translation() *= s;
+  if (velocity_) velocity_->translation() *= s;
+  if (last_good_pose_) last_good_pose_->translation() *= s;
+  for (FrameRecord& r : records_) {
+    r.T_c_ref.translation() *= s;
+    r.T_cw_online.translation() *= s;
+  }
 }
 
 void Tracker::reset() {

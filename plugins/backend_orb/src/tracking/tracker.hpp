@@ -48,6 +48,10 @@ class Tracker {
   int relocalisations() const { return relocalisations_; }
   int64_t initialisedAt() const { return initialised_at_; }
   KeyFrame* lastKeyFrame() const { return last_kf_; }
+  // Matched map points of the last tracked frame that lie on static objects (inliers only).
+  int trackedOnStaticObjects() const;
+  // The map's unit became s times smaller (Map::rescale): scale every stored translation with it.
+  void rescale(double s);
 
  private:
   void initialise(TrackResult& result);
