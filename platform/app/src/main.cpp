@@ -2,6 +2,7 @@
 //   beslam run PIPELINE.yaml [--set key=value]... [--out DIR] [--plugin-path DIR]... [--quiet]
 //   beslam plugins [--plugin-path DIR]... [--json]
 //   beslam eval --ref FILE --est FILE [...]
+//   beslam eval-motion --run DIR [...]
 //   beslam synth --config FILE --out DIR [--set key=value]...
 // Every failure prints one line "beslam: error: <file or plugin>: <cause>" and exits non-zero
 // (2 for a usage error, 1 for anything else).
@@ -13,6 +14,7 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/eval/eval.hpp"
+#include "beslam/motion_score/motion_score.hpp"
 #include "beslam/pipeline/runner.hpp"
 #include "beslam/pipeline/spec.hpp"
 #include "beslam/registry/registry.hpp"
@@ -29,6 +31,7 @@ constexpr const char* kUsage =
     "  run PIPELINE.yaml   run a pipeline (see configs/ and docs/pipelines.md)\n"
     "  plugins             list every plugin found, with its configuration schema\n"
     "  eval                APE/RPE of a trajectory against a reference (evo's definitions)\n"
+    "  eval-motion         a run's static/dynamic calls scored against synthetic truth\n"
     "  synth               render a synthetic sequence with full ground truth\n"
     "\n"
     "`beslam <command> --help` describes a command's options.\n";
@@ -112,7 +115,27 @@ int runCommand(const std::vector<std::string>& args) {
   if (s.has_ape)
     std::cout << "APE translation RMSE " << s.ape_trans_rmse << " m (" << spec.evaluation.alignment
               << ", scale " << s.ape_alignment_scale << "), RPE translation RMSE " << s.rpe_trans_rmse << " m\n";
+  if (s.has_ape)
+    std::cout << "APE (both alignments): Sim(3) " << s.ape_sim3_rmse << " m, SE(3) " << s.ape_se3_rmse << " m\n";
   if (!s.evaluation_error.empty()) std::cout << "no APE: " << s.evaluation_error << "\n";
+  if (s.metric_from_frame >= 0)
+    std::cout << "map in metres from frame " << s.metric_from_frame << " (camera height " << s.camera_height << " m)\n";
+  else
+    std::cout << "map scale: not metric (monocular unit)\n";
+  if (s.detections_static + s.detections_dynamic + s.detections_unknown > 0)
+    std::cout << "detections: " << s.detections_static << " static, " << s.detections_dynamic << " dynamic, "
+              << s.detections_unknown << " unknown; frames with masks " << s.frames_with_masks << "\n";
+  {
+    double features_static = 0, tracked_static = 0;
+    for (const auto& [name, value] : s.backend_counters) {
+      if (name == "features_static") features_static = value;
+      if (name == "tracked_static") tracked_static = value;
+    }
+    if (features_static > 0 || s.map_points_static > 0)
+      std::cout << "static objects: " << features_static << " features, " << tracked_static
+                << " tracked map-point matches, " << s.map_points_static << " of " << s.map_points
+                << " final map points\n";
+  }
   std::cout << "output: " << s.output_dir << "\n";
   return 0;
 }
@@ -189,6 +212,7 @@ int main(int argc, char** argv) {
     if (command == "run") return runCommand(args);
     if (command == "plugins") return pluginsCommand(args);
     if (command == "eval") return beslam::eval::runEvalCommand(args, std::cout, std::cerr);
+    if (command == "eval-motion") return beslam::motion_score::runCommand(args, std::cout, std::cerr);
 #ifdef BESLAM_WITH_SIM
     if (command == "synth") return beslam::sim::runSynthCommand(args, std::cout, std::cerr);
 #endif

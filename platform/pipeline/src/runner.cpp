@@ -159,6 +159,7 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
   }
   const std::string abs_out = fs::absolute(out_dir).string();
   base.output_dir = abs_out.c_str();
+  base.camera_height = spec.dataset.camera_height > 0 ? spec.dataset.camera_height : dataset->cameraHeight().value_or(0);
 
   auto infoFor = [&](const SlotSpec& slot) {
     beslam_create_info info = base;
@@ -185,6 +186,9 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
 
   RunSummary summary;
   summary.output_dir = out_dir;
+  summary.camera_height = base.camera_height;
+  bool world_metric = false;  // the backend's world unit, as its last track() said (data.h)
+  std::map<std::string, double> counter_sums;
   std::vector<TimingRow> timings;
   std::vector<std::string> object_rows;
   std::vector<double> frame_ms;
@@ -226,9 +230,15 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
     }
     if (motion) {
       t0 = Clock::now();
-      motion->classify(cf, T_world_cam_predicted, boxes);
+      // A pose in an unknown unit would make parked cars seem to move (and cars keeping pace with the
+      // ego seem parked): the checker gets none until the backend's world is metric.
+      motion->classify(cf, world_metric ? T_world_cam_predicted : std::nullopt, boxes);
       timing.stages.emplace_back("motion_checker", msSince(t0));
     }
+    for (const beslam_box3d& b : boxes)
+      ++(b.motion_state == BESLAM_MOTION_STATIC    ? summary.detections_static
+         : b.motion_state == BESLAM_MOTION_DYNAMIC ? summary.detections_dynamic
+                                                   : summary.detections_unknown);
     cv::Mat mask;
     if (masker) {
       t0 = Clock::now();
@@ -237,6 +247,7 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
                                 static_cast<int32_t>(mask.step[0]), 0};
       masker->generate(cf, boxes, buffer);
       timing.stages.emplace_back("mask_generator", msSince(t0));
+      if (cv::countNonZero(mask) > 0) ++summary.frames_with_masks;
     }
     const beslam_image_view mask_view = sdk::toView(mask, BESLAM_PIXEL_LABEL16);
 
@@ -246,8 +257,16 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
     for (const auto& [name, ms] : tracked.stage_ms) timing.stages.emplace_back("backend." + name, ms);
     if (tracked.result.state == BESLAM_TRACKING_OK) ++summary.tracked_online;
     frame_indices.push_back(frame.index);
+    for (const auto& [name, value] : tracked.counters) counter_sums[name] += value;
+    // The unit follows the backend's latest word (a reset map is unknown again); the summary keeps the frame
+    // from which the world stayed metric.
+    if (tracked.worldIsMetric() != world_metric) {
+      world_metric = tracked.worldIsMetric();
+      summary.metric_from_frame = world_metric ? frame.index : -1;
+    }
 
-    if (reconstructor && tracked.result.is_keyframe) {
+    // Objects are reconstructed in metres only: nothing before the world is metric.
+    if (reconstructor && tracked.result.is_keyframe && world_metric) {
       t0 = Clock::now();
       beslam_keyframe kf{};
       kf.struct_size = sizeof(kf);
@@ -255,6 +274,7 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
       kf.frame_index = frame.index;
       kf.timestamp = frame.timestamp;
       kf.T_world_cam = tracked.result.T_world_cam;
+      kf.world_scale = BESLAM_WORLD_SCALE_METRIC;
       const registry::Landmarks landmarks = reconstructor->reconstruct(kf, cf, boxes, mask_view);
       if (!landmarks.landmarks.empty()) backend->addLandmarks(landmarks);
       timing.stages.emplace_back("reconstructor", msSince(t0));
@@ -296,10 +316,13 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
   writeTrajectory(out_dir, "trajectory", final_poses, true);
   writeTrajectory(out_dir, "trajectory_online", online_poses, false);
   writeTrajectory(out_dir, "keyframes", keyframe_poses, false);
-  if (spec.output.map_points) {
+  {
     const auto points = backend->mapPoints();
-    if (!points.empty()) writePly((fs::path(out_dir) / "map_points.ply").string(), points);
+    summary.map_points = static_cast<int64_t>(points.size());
+    for (const auto& p : points) summary.map_points_static += (p.flags & BESLAM_MAP_POINT_STATIC_OBJECT) ? 1 : 0;
+    if (spec.output.map_points && !points.empty()) writePly((fs::path(out_dir) / "map_points.ply").string(), points);
   }
+  summary.backend_counters.assign(counter_sums.begin(), counter_sums.end());
   if (detector) {
     writeFileAtomic((fs::path(out_dir) / "objects.txt").string(), [&](std::ostream& out) {
       for (const auto& row : object_rows) out << row << '\n';
@@ -341,6 +364,10 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
   nlohmann::json json;
   json["pipeline"] = spec.path;
   json["dataset"] = dataset->describe();
+  if (dopt.type == "kitti_odometry") {  // where truth files of a synthetic sequence are (beslam eval-motion)
+    json["dataset_path"] = fs::absolute(fs::path(dopt.root) / "sequences" / dopt.sequence).string();
+    json["dataset_sequence"] = dopt.sequence;
+  }
   json["frames"] = summary.frames;
   json["tracked"] = summary.tracked;
   json["tracked_when_seen"] = summary.tracked_online;
@@ -349,6 +376,18 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
   json["median_frame_ms"] = summary.median_frame_ms;
   for (const auto& [name, s] : spec.slots)
     json["plugins"][name] = s.plugin ? nlohmann::json(s.plugin->id + " " + s.plugin->version) : nlohmann::json(nullptr);
+  json["world"] = {{"metric", summary.metric_from_frame >= 0},
+                   {"metric_from_frame", summary.metric_from_frame >= 0 ? nlohmann::json(summary.metric_from_frame)
+                                                                         : nlohmann::json(nullptr)},
+                   {"camera_height_m", summary.camera_height > 0 ? nlohmann::json(summary.camera_height)
+                                                                  : nlohmann::json(nullptr)}};
+  json["detections"] = {{"static", summary.detections_static},
+                        {"dynamic", summary.detections_dynamic},
+                        {"unknown", summary.detections_unknown}};
+  json["frames_with_masks"] = summary.frames_with_masks;
+  json["map_points"] = {{"total", summary.map_points}, {"on_static_objects", summary.map_points_static}};
+  json["backend_counters"] = nlohmann::json::object();
+  for (const auto& [name, value] : summary.backend_counters) json["backend_counters"][name] = value;
 
   if (spec.evaluation.enabled && !final_poses.empty()) {
     if (const auto gt = dataset->groundTruth()) {
@@ -366,6 +405,17 @@ RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, con
         summary.rpe_trans_rmse = result.rpe.trans.rmse;
         summary.ape_alignment_scale = result.alignment.scale;
         json["evaluation"] = nlohmann::json::parse(eval::toJson(result));
+        // Both alignments side by side: with a metric map, SE(3) APE close to Sim(3) APE says the scale is right.
+        eval::EvalOptions sim3 = eopt, se3 = eopt;
+        sim3.alignment = eval::AlignmentType::kSim3;
+        se3.alignment = eval::AlignmentType::kSe3;
+        const eval::EvalResult r_sim3 = eval::evaluatePaired(paired.ref, paired.est, sim3);
+        const eval::EvalResult r_se3 = eval::evaluatePaired(paired.ref, paired.est, se3);
+        summary.ape_sim3_rmse = r_sim3.ape.trans.rmse;
+        summary.ape_se3_rmse = r_se3.ape.trans.rmse;
+        json["ape"] = {{"sim3_rmse", r_sim3.ape.trans.rmse},
+                       {"sim3_scale", r_sim3.alignment.scale},
+                       {"se3_rmse", r_se3.ape.trans.rmse}};
       } catch (const Error& e) {
         // A degenerate or too short trajectory cannot be aligned: the run is still good, say why.
         summary.evaluation_error = e.what();

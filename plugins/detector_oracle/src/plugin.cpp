@@ -19,6 +19,7 @@ const beslam_config_field kFields[] = {
                 "sequences/NN/image_0/ -> sequences/NN/label_02/NN.txt)"),
     field::String("sequence", "\"\"", nullptr, "sequence name when labels is a folder (0007, 00)"),
     field::Path("motion", "\"\"", "objects_motion.txt (beslam synth): pass the true motion state of each box"),
+    field::Bool("true_motion", "false", "pass the true motion states from the objects_motion.txt beside the labels (beslam synth sequences; `motion` unset)"),
     field::String("classes", "all", nullptr, "classes to keep: all, or a comma list of Car,Van,Truck,Pedestrian,Cyclist,Unknown"),
     field::Double("position_noise", "0.0", 0, 100, "m: std dev of each centre coordinate"),
     field::Double("depth_noise_per_m", "0.0", 0, 10, "std dev along the viewing ray per metre of range (monocular-like)"),
@@ -39,6 +40,7 @@ class DetectorOracle : public beslam::sdk::Detector {
         options_(options(config)),
         sequence_(config.getString("sequence")),
         motion_(config.getString("motion")),
+        true_motion_(config.getBool("true_motion")),
         missing_empty_(config.getString("on_missing_frame") == "empty") {
     labels_ = config.getString("labels");
     if (!labels_.empty()) load();
@@ -62,6 +64,11 @@ class DetectorOracle : public beslam::sdk::Detector {
     if (fs::is_directory(labels_)) {
       if (sequence_.empty()) throw beslam::sdk::ConfigError("sequence: required when labels is a folder (" + labels_ + ")");
       labels_ = (fs::path(labels_) / (sequence_ + ".txt")).string();
+    }
+    if (true_motion_ && motion_.empty()) {  // beslam synth: sequences/NN/label_02/NN.txt beside sequences/NN/objects_motion.txt
+      motion_ = (fs::path(labels_).parent_path().parent_path() / "objects_motion.txt").string();
+      if (!fs::exists(motion_))
+        throw beslam::sdk::ConfigError("true_motion: " + motion_ + " does not exist (only beslam synth sequences have it)");
     }
     oracle_.emplace(readTruth(labels_, motion_), options_);
     context_.info("label oracle over " + labels_ + " (" + std::to_string(oracle_->lastFrame() + 1) + " frames)");
@@ -103,6 +110,7 @@ class DetectorOracle : public beslam::sdk::Detector {
   const beslam::sdk::Context& context_;
   OracleOptions options_;
   std::string labels_, sequence_, motion_;
+  bool true_motion_;
   bool missing_empty_;
   std::optional<LabelOracle> oracle_;
 };

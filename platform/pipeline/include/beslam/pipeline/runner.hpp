@@ -37,7 +37,17 @@ struct RunSummary {
   double rpe_trans_rmse = 0;
   double ape_alignment_scale = 1;
   std::string evaluation_error;       // why APE could not be computed, when it could not
+  double ape_sim3_rmse = 0, ape_se3_rmse = 0;  // both alignments, whatever spec.evaluation.alignment says
   double median_frame_ms = 0;
+  // The world unit: the first frame the backend said its world was in metres (-1: never).
+  int64_t metric_from_frame = -1;
+  double camera_height = 0;           // the rig value handed to the plugins (0: unknown)
+  // Detections after the motion checker, by motion state; frames whose mask marks any pixel.
+  int64_t detections_static = 0, detections_dynamic = 0, detections_unknown = 0;
+  int64_t frames_with_masks = 0;
+  // Sums of the backend's per-frame counters ("features_static", "tracked_static", ...).
+  std::vector<std::pair<std::string, double>> backend_counters;
+  int64_t map_points = 0, map_points_static = 0;  // final map; on static objects (trusted)
 };
 
 // Runs a loaded and resolved pipeline. Throws beslam::Error (naming the file or plugin) on failure.

@@ -1,0 +1,91 @@
+#!/usr/bin/env bash
+# The ablation behind issue 14 ("does trusting parked cars help?"), rerunnable by anyone:
+#   no semantics / every car masked (DynaSLAM-style) / BE-SLAM with our motion checker / BE-SLAM with the
+#   true motion states, on synthetic urban_loop and dynamic_street (5 backend seeds each), all with the
+#   metric ORB backend; then the real KITTI 00 and 06 excerpts (../shared/data) with the image detector.
+# Every run is an ordinary `beslam run` into OUT/<pipeline>/<sequence>/seed<N> (a finished run is skipped
+# when the script is run again); the table (medians over seeds, min-max) goes to OUT/table.md and stdout.
+#   scripts/ablation.sh [OUT (default out/ablation)] [SEEDS (default "42 1 2 3 4")] [SEQUENCES]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out="${1:-out/ablation}"
+seeds="${2:-42 1 2 3 4}"
+sequences="${3:-urban_loop dynamic_street}"
+bin="${BESLAM_BUILD_DIR:-build}/bin/beslam"
+[ -x "$bin" ] || { scripts/install-deps.sh && scripts/build.sh; }
+command -v python3 >/dev/null || { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3; }
+
+run() {  # run DIR CONFIG [--set k=v]...
+  local dir="$1" config="$2"; shift 2
+  if [ -f "$dir/summary.json" ]; then return; fi
+  echo "== $dir" >&2
+  "$bin" run "$config" --out "$dir" "$@" > "$dir.log" 2>&1 || { echo "failed: $dir (see $dir.log)" >&2; return 1; }
+}
+
+mkdir -p "$out"
+for s in $seeds; do  # seeds outermost: a partial sweep still compares every pipeline
+  for seq in $sequences; do
+    for p in synth_no_semantics synth_mask_all_cars synth_beslam synth_beslam_true_states; do
+      mkdir -p "$out/$p/$seq"
+      run "$out/$p/$seq/seed$s" "configs/ablation/$p.yaml" --set dataset.sequence="$seq" --set backend.seed="$s"
+      [ "$p" = synth_no_semantics ] || "$bin" eval-motion --run "$out/$p/$seq/seed$s" --json "$out/$p/$seq/seed$s/motion.json" > /dev/null
+    done
+  done
+done
+
+if [ -d ../shared/data/kitti/odometry ] && [ -f ../shared/models/yolo-fastest-1.1/yolo-fastest-1.1.weights ]; then
+  for seq in 00 06; do
+    for s in $seeds; do
+      for p in kitti_no_semantics kitti_mask_all_cars kitti_beslam; do mkdir -p "$out/$p/$seq"; done
+      run "$out/kitti_no_semantics/$seq/seed$s" configs/kitti_mono_orb_metric.yaml \
+        --set dataset.sequence="$seq" --set backend.seed="$s"
+      run "$out/kitti_mask_all_cars/$seq/seed$s" configs/kitti_detector_image_metric.yaml \
+        --set dataset.sequence="$seq" --set backend.seed="$s" --set motion_checker.plugin=none
+      run "$out/kitti_beslam/$seq/seed$s" configs/kitti_detector_image_metric.yaml \
+        --set dataset.sequence="$seq" --set backend.seed="$s"
+    done
+  done
+else
+  echo "ablation: ../shared/data (KITTI) or ../shared/models (Yolo-Fastest) absent: real-data rows skipped" >&2
+fi
+
+python3 - "$out" <<'PY'
+import json, os, statistics, sys
+out = sys.argv[1]
+rows = []
+for p in sorted(os.listdir(out)):
+    pdir = os.path.join(out, p)
+    if not os.path.isdir(pdir): continue
+    for seq in sorted(os.listdir(pdir)):
+        sdir = os.path.join(pdir, seq)
+        if not os.path.isdir(sdir): continue
+        runs = []
+        for r in sorted(os.listdir(sdir)):
+            f = os.path.join(sdir, r, "summary.json")
+            if not os.path.isfile(f): continue
+            j = json.load(open(f))
+            m = os.path.join(sdir, r, "motion.json")
+            runs.append((j, json.load(open(m)) if os.path.isfile(m) else None))
+        if runs: rows.append((p, seq, runs))
+def stat(v):
+    v = [x for x in v if x is not None]
+    if not v: return "-"
+    return "%.3f (%.3f-%.3f)" % (statistics.median(v), min(v), max(v))
+lines = ["| pipeline | sequence | seeds | APE Sim(3) m | APE SE(3) m | Sim(3) scale | metric from frame | detections static/dynamic/unknown (median) | F1 dyn | parked <=30 m called static |",
+         "|---|---|---|---|---|---|---|---|---|---|"]
+for p, seq, runs in rows:
+    ape = [j.get("ape", {}) for j, _ in runs]
+    det = [j.get("detections", {}) for j, _ in runs]
+    mot = [m for _, m in runs if m]
+    med = lambda k: int(statistics.median([d.get(k, 0) for d in det]))
+    f1 = stat([m["f1_dynamic"] for m in mot]) if mot else "-"
+    near = stat([m["standing_near_static"] / m["standing_near"] if m["standing_near"] else None for m in mot]) if mot else "-"
+    mf = [j.get("world", {}).get("metric_from_frame") for j, _ in runs]
+    lines.append("| %s | %s | %d | %s | %s | %s | %s | %d/%d/%d | %s | %s |" % (
+        p, seq, len(runs), stat([a.get("sim3_rmse") for a in ape]), stat([a.get("se3_rmse") for a in ape]),
+        stat([a.get("sim3_scale") for a in ape]), stat([x for x in mf if x is not None]),
+        med("static"), med("dynamic"), med("unknown"), f1, near))
+text = "\n".join(lines) + "\n"
+open(os.path.join(out, "table.md"), "w").write(text)
+print(text)
+PY
