@@ -48,13 +48,27 @@ enum class Truth { moving, parked, unscored };
 
 }  // namespace
 
-EvalCounts evaluateSequence(const EvalOptions& o, const std::string& seq) {
+struct SequenceData {
+  std::string seq;
+  trajectory::Trajectory poses;
+  detector_replay::DetectionTable table;
+  std::vector<std::vector<LabelBox>> frame_labels;
+  std::map<int64_t, std::map<int64_t, Eigen::Vector2d>> track_world;  // track -> frame -> BEV
+  std::map<int64_t, int64_t> first_frame;
+};
+
+void SequenceDataDeleter::operator()(SequenceData* d) const { delete d; }
+
+SequenceDataPtr loadSequence(const EvalOptions& o, const std::string& seq) {
   using namespace beslam::detector_replay;
   const fs::path root(o.root);
-  const trajectory::Trajectory poses = trajectory::readKitti((root / o.poses / (seq + ".txt")).string());
+  SequenceDataPtr data(new SequenceData);
+  data->seq = seq;
+  data->poses = trajectory::readKitti((root / o.poses / (seq + ".txt")).string());
+  const trajectory::Trajectory& poses = data->poses;
 
   // Detections: every class file present (the tracker sees pedestrians and cyclists too, as in a pipeline).
-  DetectionTable table;
+  DetectionTable& table = data->table;
   Report report;
   Filter filter;
   filter.min_score = o.min_score;
@@ -71,8 +85,9 @@ EvalCounts evaluateSequence(const EvalOptions& o, const std::string& seq) {
   const std::vector<datasets::TrackingLabel> labels =
       datasets::readTrackingLabels((root / o.labels / (seq + ".txt")).string());
   const int64_t n_frames = static_cast<int64_t>(poses.size());
-  std::vector<std::vector<LabelBox>> frame_labels(static_cast<size_t>(n_frames));
-  std::map<int64_t, std::map<int64_t, Eigen::Vector2d>> track_world;  // track -> frame -> BEV
+  auto& frame_labels = data->frame_labels;
+  frame_labels.resize(static_cast<size_t>(n_frames));
+  auto& track_world = data->track_world;
   for (const auto& l : labels) {
     if (l.object.type != "Car" && l.object.type != "Van") continue;
     if (l.frame < 0 || l.frame >= n_frames) continue;
@@ -81,6 +96,18 @@ EvalCounts evaluateSequence(const EvalOptions& o, const std::string& seq) {
     const Eigen::Vector3d w = poses.poses[static_cast<size_t>(l.frame)] * c;
     track_world[l.track_id][l.frame] = Eigen::Vector2d(w.x(), w.z());
   }
+  for (const auto& [track, frames] : track_world) data->first_frame[track] = frames.begin()->first;
+  return data;
+}
+
+EvalCounts evaluateLoaded(const EvalOptions& o, const SequenceData& data) {
+  const std::string& seq = data.seq;
+  const trajectory::Trajectory& poses = data.poses;
+  const detector_replay::DetectionTable& table = data.table;
+  const auto& frame_labels = data.frame_labels;
+  const auto& track_world = data.track_world;
+  const auto& first_frame = data.first_frame;
+  const int64_t n_frames = static_cast<int64_t>(poses.size());
   double truth_speed = 0;
   auto truthAt = [&](int64_t track, int64_t frame) {
     const auto& m = track_world.at(track);
@@ -95,8 +122,6 @@ EvalCounts evaluateSequence(const EvalOptions& o, const std::string& seq) {
     if (speed < o.parked_speed) return Truth::parked;
     return Truth::unscored;
   };
-  std::map<int64_t, int64_t> first_frame;
-  for (const auto& [track, frames] : track_world) first_frame[track] = frames.begin()->first;
 
   BevTracker tracker(o.params);
   EvalCounts c;
@@ -160,6 +185,10 @@ EvalCounts evaluateSequence(const EvalOptions& o, const std::string& seq) {
     }
   }
   return c;
+}
+
+EvalCounts evaluateSequence(const EvalOptions& o, const std::string& seq) {
+  return evaluateLoaded(o, *loadSequence(o, seq));
 }
 
 }  // namespace beslam::motion

@@ -13,6 +13,8 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
+#include <memory>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -55,7 +57,19 @@ struct EvalCounts {
   double meanMs() const;
 };
 
-// Evaluates one sequence ("0007"); throws std::runtime_error naming a missing or malformed file.
+// One sequence's inputs, read once (detections, poses, labels and their world tracks) so that many tracker
+// settings can be evaluated on it without reading the files again (motion_bench --loo).
+struct SequenceData;
+struct SequenceDataDeleter {
+  void operator()(SequenceData* d) const;
+};
+using SequenceDataPtr = std::unique_ptr<SequenceData, SequenceDataDeleter>;
+
+// Reads one sequence ("0007") as `options` name it; throws std::runtime_error naming a missing or malformed file.
+SequenceDataPtr loadSequence(const EvalOptions& options, const std::string& sequence);
+// Runs the tracker with options.params over loaded data and scores it (the reading options are not used again).
+EvalCounts evaluateLoaded(const EvalOptions& options, const SequenceData& data);
+// loadSequence + evaluateLoaded.
 EvalCounts evaluateSequence(const EvalOptions& options, const std::string& sequence);
 
 }  // namespace beslam::motion

@@ -90,6 +90,7 @@ std::string Params::validate() const {
   if (!(pos_sigma > 0)) return "pos_sigma must be > 0";
   if (!(pos_sigma_per_m >= 0)) return "pos_sigma_per_m must be >= 0";
   if (!(velocity_sigma > 0)) return "velocity_sigma must be > 0";
+  if (!(ego_speed_noise >= 0) || !(ego_turn_noise >= 0)) return "ego_speed_noise and ego_turn_noise must be >= 0";
   if (!(init_velocity_sigma > 0)) return "init_velocity_sigma must be > 0";
   if (!(max_miss_time >= 0)) return "max_miss_time must be >= 0";
   if (max_history < 2) return "max_history must be >= 2";
@@ -99,7 +100,6 @@ std::string Params::validate() const {
   if (!(displacement_margin >= 0)) return "displacement_margin must be >= 0";
   if (anchor_frames < 1) return "anchor_frames must be >= 1";
   if (!(dynamic_speed >= 0) || !(static_speed > 0)) return "dynamic_speed must be >= 0 and static_speed > 0";
-  if (!(dynamic_speed_per_m >= 0) || !(static_speed_per_m >= 0)) return "speed growth per metre must be >= 0";
   if (!(z_dynamic >= 0) || !(z_static >= 0)) return "z_dynamic and z_static must be >= 0";
   if (start_frames < 1 || stop_dwell < 1) return "start_frames and stop_dwell must be >= 1";
   if (!(max_range > 0)) return "max_range must be > 0";
@@ -118,6 +118,7 @@ void BevTracker::reset() {
   have_time_ = false;
   pose_mode_ = false;
   poses_.clear();
+  ego_speed_ = ego_yaw_rate_ = 0;
 }
 
 BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
@@ -133,10 +134,14 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
     while (first > 0 && h[first - 1].t >= t_end - window - 1e-6) --first;
     const size_t n = h.size() - first;
     if (static_cast<int>(n) >= params_.min_observations) {
-      double t_mean = 0, var_model = 0;
+      double t_mean = 0, var_model = 0, var_ego = 0;
       Eigen::Vector2d p_mean = Eigen::Vector2d::Zero();
-      for (size_t i = first; i < h.size(); ++i) t_mean += h[i].t, p_mean += h[i].p, var_model += h[i].sigma * h[i].sigma;
+      for (size_t i = first; i < h.size(); ++i) {
+        t_mean += h[i].t, p_mean += h[i].p, var_model += h[i].sigma * h[i].sigma;
+        var_ego += h[i].v_sigma * h[i].v_sigma;
+      }
       t_mean /= static_cast<double>(n), p_mean /= static_cast<double>(n), var_model /= static_cast<double>(n);
+      var_ego /= static_cast<double>(n);
       double stt = 0;
       Eigen::Vector2d stp = Eigen::Vector2d::Zero();
       for (size_t i = first; i < h.size(); ++i) {
@@ -157,7 +162,9 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
           consistent = var_residual <= params_.max_residual * params_.max_residual * var_model;
           var = std::max(var, var_residual);
         }
-        sigma_fit = std::sqrt(var / stt);
+        // Detection noise averages down with the window's length and number of positions (sum of (t - t_mean)^2);
+        // the ego-motion error is a velocity bias shared by all of them and does not.
+        sigma_fit = std::sqrt(var / stt + var_ego);
         fit = consistent;
       }
     }
@@ -180,7 +187,7 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
   return s;
 }
 
-void BevTracker::decide(Track& track, double range, const std::optional<Eigen::Vector2d>& det_velocity,
+void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_velocity,
                         Decision& out) {
   const Speed dyn = fitSpeed(track, params_.window_dynamic, det_velocity, params_.velocity_sigma);
   const Speed sta = fitSpeed(track, params_.window_static, det_velocity, params_.velocity_sigma);
@@ -189,20 +196,25 @@ void BevTracker::decide(Track& track, double range, const std::optional<Eigen::V
   if (track.state == BESLAM_MOTION_STATIC && track.anchor_n > 0 && !track.history.empty()) {
     const size_t k = std::min<size_t>(3, track.history.size());
     Eigen::Vector2d recent = Eigen::Vector2d::Zero();
-    double var = 0;
-    for (size_t i = track.history.size() - k; i < track.history.size(); ++i)
-      recent += track.history[i].p, var += track.history[i].sigma * track.history[i].sigma;
+    double var = 0, v_sigma = 0, t_recent = 0;
+    for (size_t i = track.history.size() - k; i < track.history.size(); ++i) {
+      const Observation& o = track.history[i];
+      recent += o.p, var += o.sigma * o.sigma, v_sigma += o.v_sigma, t_recent += o.t;
+    }
     recent /= static_cast<double>(k);
     var /= static_cast<double>(k * k);
+    // Pose drift since the parked position was measured: the ego-motion velocity error over that time.
+    const double drift = v_sigma / static_cast<double>(k) * std::max(0.0, t_recent / static_cast<double>(k) - track.anchor_t);
+    var += drift * drift;
     const double d = (recent - track.anchor).norm();
     displaced = d > params_.z_dynamic * std::sqrt(var + track.anchor_var) + params_.displacement_margin;
   }
   const bool dynamic_evidence =
       displaced ||
-      (dyn.valid && dyn.speed - params_.z_dynamic * dyn.sigma > params_.dynamic_speed + params_.dynamic_speed_per_m * range);
+      (dyn.valid && dyn.speed - params_.z_dynamic * dyn.sigma > params_.dynamic_speed);
   const bool static_evidence =
       !dynamic_evidence && sta.valid &&
-      sta.speed + params_.z_static * sta.sigma < params_.static_speed + params_.static_speed_per_m * range;
+      sta.speed + params_.z_static * sta.sigma < params_.static_speed;
   if (dynamic_evidence) {
     ++track.dynamic_run;
     track.static_run = 0;
@@ -227,6 +239,7 @@ void BevTracker::decide(Track& track, double range, const std::optional<Eigen::V
     const Observation& o = track.history.back();
     track.anchor_n = std::min(track.anchor_n + 1, params_.anchor_frames);
     track.anchor = track.anchor_n == 1 ? o.p : Eigen::Vector2d(track.anchor + (o.p - track.anchor) / track.anchor_n);
+    track.anchor_t = track.anchor_n == 1 ? o.t : track.anchor_t + (o.t - track.anchor_t) / track.anchor_n;
     track.anchor_var = o.sigma * o.sigma / track.anchor_n;
   } else if (track.state != BESLAM_MOTION_STATIC) {
     track.anchor_n = 0;
@@ -262,6 +275,13 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     }
     poses_.emplace_back(now, *T_world_cam);
     if (poses_.size() > 2) poses_.erase(poses_.begin());
+    if (poses_.size() == 2 && poses_[1].first > poses_[0].first) {
+      // The ego's own motion between the last two poses: BEV speed and yaw rate (the rotation's angle).
+      const double span = poses_[1].first - poses_[0].first;
+      const Eigen::Vector3d d = poses_[1].second.translation() - poses_[0].second.translation();
+      ego_speed_ = std::hypot(d.x(), d.z()) / span;
+      ego_yaw_rate_ = Eigen::AngleAxisd(poses_[0].second.linear().transpose() * poses_[1].second.linear()).angle() / span;
+    }
   } else if (!poses_.empty()) {
     const auto& [t1, T1] = poses_.back();
     Eigen::Isometry3d T = T1;
@@ -290,7 +310,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
   // Detections in the world BEV.
   const size_t n = boxes.size(), m = tracks_.size();
   std::vector<Eigen::Vector2d> p(n);
-  std::vector<double> range(n), sigma(n), yaw(n);
+  std::vector<double> range(n), sigma(n), v_sigma(n), yaw(n);
   std::vector<std::optional<Eigen::Vector2d>> vel(n);
   for (size_t i = 0; i < n; ++i) {
     const beslam_box3d& b = boxes[i];
@@ -299,6 +319,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     p[i] = Eigen::Vector2d(c_w.x(), c_w.z());
     range[i] = std::hypot(c_cam.x(), c_cam.z());
     sigma[i] = params_.pos_sigma + params_.pos_sigma_per_m * range[i];
+    v_sigma[i] = params_.ego_speed_noise * ego_speed_ + params_.ego_turn_noise * ego_yaw_rate_ * range[i];
     yaw[i] = bevYaw(R_wc, b.yaw);
     if (b.flags & BESLAM_BOX_HAS_VELOCITY) {
       const Eigen::Vector3d v_w = R_wc * Eigen::Vector3d(b.velocity_cam[0], b.velocity_cam[1], b.velocity_cam[2]);
@@ -372,13 +393,13 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     t->length = b.size[0] > 0 ? b.size[0] : t->length;
     t->width = b.size[1] > 0 ? b.size[1] : t->width;
     ++t->hits;
-    t->history.push_back({now, p[i], sigma[i]});
+    t->history.push_back({now, p[i], sigma[i], v_sigma[i]});
     while (static_cast<int>(t->history.size()) > params_.max_history) t->history.pop_front();
 
     Decision& d = out[i];
     d.track_id = t->id;
     d.range = range[i];
-    decide(*t, range[i], vel[i], d);
+    decide(*t, vel[i], d);
     d.motion_state = (T_world_cam && range[i] <= params_.max_range) ? t->state : BESLAM_MOTION_UNKNOWN;
   }
 

@@ -18,19 +18,19 @@ const beslam_config_field kFields[] = {
     field::Bool("match_across_classes", "false", "let any class match any other (car, van and truck always match)"),
     field::Double("accel_sigma", "4.0", 0.01, 100, "m/s^2: Kalman process noise (white acceleration)"),
     field::Double("pos_sigma", "0.1", 0.001, 100, "m: detection position noise at range 0"),
-    field::Double("pos_sigma_per_m", "0.005", 0, 10, "m of position noise per metre of range (depth uncertainty)"),
+    field::Double("pos_sigma_per_m", "0.005", 0, 10, "m of position noise per metre of range (depth and bearing uncertainty)"),
     field::Double("velocity_sigma", "1.0", 0.001, 100, "m/s: noise of a detector's own velocity"),
+    field::Double("ego_speed_noise", "0.01", 0, 1, "apparent speed of a parked car per m/s of ego speed (pose drift)"),
+    field::Double("ego_turn_noise", "0.05", 0, 1, "apparent lateral speed of a parked car per rad/s of ego yaw rate and metre of range (heading-rate error)"),
     field::Double("max_miss_time", "1.0", 0, 100, "s a track survives without detections (occlusion)"),
     field::Double("window_dynamic", "0.5", 0.01, 100, "s of track history behind dynamic evidence"),
     field::Double("window_static", "1.5", 0.01, 100, "s of track history behind static evidence"),
     field::Int("min_observations", "3", 2, 1000, "detections in the window before a track is decided"),
     field::Double("max_residual", "2.0", 0.01, 100, "a window whose line-fit residual exceeds this many noise sigmas gives no evidence"),
     field::Double("init_velocity_sigma", "5.0", 0.01, 100, "m/s: velocity uncertainty of a new track"),
-    field::Double("dynamic_speed", "0.5", 0, 100, "m/s: speed (less z_dynamic standard errors) above which a track moves"),
-    field::Double("dynamic_speed_per_m", "0.01", 0, 10, "m/s added to dynamic_speed per metre of range"),
-    field::Double("static_speed", "0.8", 0.001, 100, "m/s: speed (plus z_static standard errors) below which a track is parked"),
-    field::Double("static_speed_per_m", "0.0", 0, 10, "m/s added to static_speed per metre of range"),
-    field::Double("z_dynamic", "2.0", 0, 100, "standard errors a dynamic decision must clear"),
+    field::Double("dynamic_speed", "0.3", 0, 100, "m/s: a car this slow is parked; dynamic evidence needs speed less z_dynamic standard errors above it"),
+    field::Double("static_speed", "1.0", 0.001, 100, "m/s: a car this fast moves; static evidence needs speed plus z_static standard errors below it"),
+    field::Double("z_dynamic", "3.0", 0, 100, "standard errors a dynamic decision must clear"),
     field::Double("z_static", "2.0", 0, 100, "standard errors a static decision must clear"),
     field::Double("displacement_margin", "0.75", 0, 100, "m: a parked track that leaves its parked position by this (plus z_dynamic sigmas) moves"),
     field::Int("anchor_frames", "30", 1, 10000, "frames averaged into a parked track's position"),
@@ -50,6 +50,8 @@ Params paramsFrom(const beslam::sdk::Config& c) {
   p.pos_sigma = c.getDouble("pos_sigma");
   p.pos_sigma_per_m = c.getDouble("pos_sigma_per_m");
   p.velocity_sigma = c.getDouble("velocity_sigma");
+  p.ego_speed_noise = c.getDouble("ego_speed_noise");
+  p.ego_turn_noise = c.getDouble("ego_turn_noise");
   p.max_miss_time = c.getDouble("max_miss_time");
   p.window_dynamic = c.getDouble("window_dynamic");
   p.window_static = c.getDouble("window_static");
@@ -57,9 +59,7 @@ Params paramsFrom(const beslam::sdk::Config& c) {
   p.max_residual = c.getDouble("max_residual");
   p.init_velocity_sigma = c.getDouble("init_velocity_sigma");
   p.dynamic_speed = c.getDouble("dynamic_speed");
-  p.dynamic_speed_per_m = c.getDouble("dynamic_speed_per_m");
   p.static_speed = c.getDouble("static_speed");
-  p.static_speed_per_m = c.getDouble("static_speed_per_m");
   p.z_dynamic = c.getDouble("z_dynamic");
   p.z_static = c.getDouble("z_static");
   p.displacement_margin = c.getDouble("displacement_margin");
@@ -79,7 +79,8 @@ class MotionBevTracker : public beslam::sdk::MotionChecker {
     const Params& p = tracker_.params();
     std::ostringstream s;
     s << "association " << p.association << ", gate " << p.gate << " m + " << p.gate_per_m << "/m, noise "
-      << p.pos_sigma << " m + " << p.pos_sigma_per_m << "/m, dynamic > " << p.dynamic_speed << " m/s, static < "
+      << p.pos_sigma << " m + " << p.pos_sigma_per_m << "/m, ego " << p.ego_speed_noise << " x speed + "
+      << p.ego_turn_noise << " x yaw rate x range, dynamic > " << p.dynamic_speed << " m/s, static < "
       << p.static_speed << " m/s, dwell " << p.stop_dwell << " frames";
     context.info(s.str());
   }

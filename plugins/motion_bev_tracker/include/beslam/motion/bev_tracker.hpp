@@ -14,12 +14,15 @@
 //
 // Motion decision. Each track fits a straight line (least squares) to its world positions over the
 // last window_dynamic / window_static seconds and gets a speed and its standard error from the noise
-// model sigma(r) = pos_sigma + pos_sigma_per_m * r (monocular depth error grows with range; the
+// model sigma(r) = pos_sigma + pos_sigma_per_m * r (depth and bearing errors grow with range; the
 // residual spread is used when larger, and a window whose residual exceeds max_residual times the model
 // gives no evidence: the track jumped between objects). A detector velocity (absolute velocity over ground, in camera
 // axes) is fused by inverse variance. Evidence per frame:
-//   dynamic: speed - z_dynamic * sigma_v > dynamic_speed + dynamic_speed_per_m * r   (short window)
-//   static:  speed + z_static * sigma_v < static_speed + static_speed_per_m * r      (long window)
+//   dynamic: speed - z_dynamic * sigma_v > dynamic_speed   (short window; rejects "parked")
+//   static:  speed + z_static * sigma_v < static_speed     (long window; rejects "moving")
+// sigma_v also holds the ego-motion error, ego_speed_noise * v_ego + ego_turn_noise * yaw_rate_ego * r (the
+// pose source's drift: a heading-rate error moves a far object sideways), which more positions do not
+// average away; the detection noise does, so a track seen longer gets a smaller sigma_v.
 // A static track also has dynamic evidence when its latest positions (mean of 3) leave its parked
 // position (a running mean while static) by displacement_margin plus z_dynamic standard errors.
 // Hysteresis: UNKNOWN -> STATIC on the first static evidence, UNKNOWN or STATIC -> DYNAMIC after
@@ -55,6 +58,11 @@ struct Params {
   double pos_sigma = 0.1;         // m, position noise of a detection at range 0
   double pos_sigma_per_m = 0.005;  // m per metre of range
   double velocity_sigma = 1.0;    // m/s, noise of a detector's own velocity
+  // Ego-motion error (the pose source's drift): a parked car seems to move at up to
+  // ego_speed_noise * (ego speed) + ego_turn_noise * (ego yaw rate) * range. A velocity error that more
+  // observations do not average away; it widens every speed test and the pull-out test.
+  double ego_speed_noise = 0.01;  // fraction of the ego's speed (odometry translation drift)
+  double ego_turn_noise = 0.05;   // fraction of the ego's yaw rate (heading-rate error; lateral, grows with range)
   double init_velocity_sigma = 5.0;  // m/s, velocity uncertainty of a new track (no detector velocity)
   // Track life.
   double max_miss_time = 1.0;     // s a track survives without a detection
@@ -64,11 +72,12 @@ struct Params {
   double window_static = 1.5;     // s of history for static evidence
   int min_observations = 3;       // before any decision (without a detector velocity)
   double max_residual = 2.0;      // a window whose line-fit residual exceeds this many noise sigmas gives no evidence
-  double dynamic_speed = 0.5;     // m/s, floor for dynamic evidence at range 0
-  double dynamic_speed_per_m = 0.01;
-  double static_speed = 0.8;      // m/s, ceiling for static evidence at range 0
-  double static_speed_per_m = 0.0;
-  double z_dynamic = 2.0;         // standard errors the speed must clear (2D radial: 3 ~ 1 % false alarms a test)
+  // The two classes by definition: a car slower than dynamic_speed is parked, one faster than static_speed
+  // moves (KITTI's truth: 0.3 and 1 m/s). Dynamic evidence rejects "parked", static evidence rejects "moving";
+  // range enters through the noise model (pos_sigma_per_m, ego_turn_noise), not through these speeds.
+  double dynamic_speed = 0.3;     // m/s, dynamic evidence: speed - z_dynamic * sigma_v above this
+  double static_speed = 1.0;      // m/s, static evidence: speed + z_static * sigma_v below this
+  double z_dynamic = 3.0;         // standard errors the speed must clear (2D radial: 3 ~ 1 % false alarms a test)
   double z_static = 2.0;
   double displacement_margin = 0.75;  // m: a static track whose last 3 positions leave its parked position by
                                      // this plus z_dynamic standard errors has dynamic evidence
@@ -108,12 +117,16 @@ class BevTracker {
   void reset();
   size_t trackCount() const { return tracks_.size(); }
   const Params& params() const { return params_; }
+  // The ego's BEV speed (m/s) and yaw rate (rad/s) between the last two poses given (0 before two).
+  double egoSpeed() const { return ego_speed_; }
+  double egoYawRate() const { return ego_yaw_rate_; }
 
  private:
   struct Observation {
     double t;
     Eigen::Vector2d p;  // world BEV
     double sigma;       // position noise
+    double v_sigma;     // apparent velocity from ego-motion error (m/s)
   };
   struct Track {
     int32_t id = -1;
@@ -129,6 +142,7 @@ class BevTracker {
     int dynamic_run = 0, static_run = 0;
     Eigen::Vector2d anchor = Eigen::Vector2d::Zero();  // where a static track is parked
     double anchor_var = 0;
+    double anchor_t = 0;  // mean time of the parked position's observations
     int anchor_n = 0;
   };
   struct Speed {
@@ -138,7 +152,7 @@ class BevTracker {
 
   Speed fitSpeed(const Track& track, double window, const std::optional<Eigen::Vector2d>& det_velocity,
                  double det_sigma) const;
-  void decide(Track& track, double range, const std::optional<Eigen::Vector2d>& det_velocity, Decision& out);
+  void decide(Track& track, const std::optional<Eigen::Vector2d>& det_velocity, Decision& out);
 
   Params params_;
   std::vector<Track> tracks_;
@@ -147,6 +161,7 @@ class BevTracker {
   double last_time_ = 0;
   bool pose_mode_ = false;  // tracks live in a world frame (some pose seen)
   std::vector<std::pair<double, Eigen::Isometry3d>> poses_;  // last two known poses, for extrapolation
+  double ego_speed_ = 0, ego_yaw_rate_ = 0;  // between the last two known poses (m/s, rad/s)
 };
 
 // BEV footprint helpers (x-z plane of the frame the box is expressed in).
