@@ -274,6 +274,11 @@ TEST(DetectorImagePlugin, ConfigErrorsAndDetectionThroughTheAbi) {
   beslam::test::AbiHarness plugin(PLUGIN_FILE, "detector_image");
   beslam_create_info info{};
   info.camera = kittiCamera();
+  // The camera's height over the road is the dataset's (create info, ABI 1.1), not a detector setting.
+  EXPECT_EQ(plugin.create({{"model", "/no/such/yolo.cfg"}, {"weights", "/no/such/yolo.weights"}}, info),
+            BESLAM_ERROR_INVALID_CONFIG);
+  EXPECT_NE(plugin.lastError().find("camera_height"), std::string::npos) << plugin.lastError();
+  info.camera_height = 1.65;
   EXPECT_EQ(plugin.create({}, info), BESLAM_ERROR_INVALID_CONFIG);  // no model by default
   EXPECT_NE(plugin.lastError().find("model"), std::string::npos) << plugin.lastError();
   EXPECT_EQ(plugin.create({{"model", "/no/such/yolo.cfg"}, {"weights", "/no/such/yolo.weights"}}, info),
