@@ -6,6 +6,7 @@
 # Every run is an ordinary `beslam run` into OUT/<pipeline>/<sequence>/seed<N> (a finished run is skipped
 # when the script is run again); the table (medians over seeds, min-max) goes to OUT/table.md and stdout.
 #   scripts/ablation.sh [OUT (default out/ablation)] [SEEDS (default "42 1 2 3 4")] [SEQUENCES]
+# BESLAM_BUILD_DIR picks the build (default build); BESLAM_ABLATION_REAL=0 skips the KITTI rows.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out="${1:-out/ablation}"
@@ -33,7 +34,9 @@ for s in $seeds; do  # seeds outermost: a partial sweep still compares every pip
   done
 done
 
-if [ -d ../shared/data/kitti/odometry ] && [ -f ../shared/models/yolo-fastest-1.1/yolo-fastest-1.1.weights ]; then
+if [ "${BESLAM_ABLATION_REAL:-1}" = 0 ]; then
+  echo "ablation: BESLAM_ABLATION_REAL=0: real-data rows skipped" >&2
+elif [ -d ../shared/data/kitti/odometry ] && [ -f ../shared/models/yolo-fastest-1.1/yolo-fastest-1.1.weights ]; then
   for seq in 00 06; do
     for s in $seeds; do
       for p in kitti_no_semantics kitti_mask_all_cars kitti_beslam; do mkdir -p "$out/$p/$seq"; done

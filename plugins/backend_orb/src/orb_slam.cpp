@@ -2,6 +2,8 @@
 #include "beslam_orb/orb_slam.hpp"
 
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <condition_variable>
 #include <deque>
@@ -15,6 +17,8 @@
 #include "map/map_point.hpp"
 #include "mapping/local_mapper.hpp"
 #include "optimize/bundle_adjustment.hpp"
+#include "scale/object_range.hpp"
+#include "scale/parked_car_scale.hpp"
 #include "tracking/tracker.hpp"
 
 namespace beslam::orb {
@@ -49,8 +53,14 @@ LocalMapperOptions mapperOptions(const Options& o) {
   m.ba.max_local_keyframes = o.local_ba_max_keyframes;
   m.ba.trusted_weight = o.static_object_weight;
   m.ground.enabled = o.ground_prior || o.metric_scale;
+  // A metric map knows the camera height itself, which a car's load and suspension change by a few percent:
+  // a plane 10 % off it is not the road under the camera (a kerb, a wall's foot, a bare road's stray points).
+  if (o.metric_scale) m.ground.max_height_deviation = 0.1;
   m.metric_camera_height = o.metric_scale ? o.camera_height : 0;
   m.metric_max_spread = o.metric_max_spread;
+  m.metric_correction_min = o.metric_correction_min;
+  m.object_range_sigma = o.metric_scale && o.object_scale ? o.object_range_sigma : 0;
+  m.object_range_sigma_per_m = o.object_range_sigma_per_m;
   m.ground.sigma_ratio = o.ground_prior_sigma;
   m.ground.reference_keyframes = o.ground_reference_keyframes;
   m.ground.min_inliers = o.ground_min_inliers;
@@ -88,6 +98,8 @@ bool Options::validate(std::string* error) const {
   if (metric_scale && !(camera_height > 0 && camera_height < 100))
     return fail("metric_scale needs the camera's height over the road (dataset camera_height), in (0, 100) m");
   if (!(metric_max_spread > 0)) return fail("metric_max_spread must be > 0");
+  if (!(object_range_sigma > 0) || !(object_range_sigma_per_m >= 0))
+    return fail("object_range_sigma must be > 0 and object_range_sigma_per_m >= 0");
   if (local_ba_iterations_robust < 0 || local_ba_iterations_refine < 0) return fail("BA iterations must be >= 0");
   if (local_ba_max_keyframes < 0) return fail("local_ba_max_keyframes must be >= 0");
   if (init_min_parallax_deg <= 0) return fail("init_min_parallax_deg must be > 0");
@@ -104,6 +116,9 @@ struct OrbSlam::Impl {
   Tracker tracker;
   std::vector<ObjectLandmark> landmarks;
   Statistics stats;
+  ParkedCarScale parked_scale;
+  bool object_scale_done = false;
+  std::optional<double> pending_object_scale;
 
   // Mapping thread.
   std::thread worker;
@@ -165,11 +180,13 @@ struct OrbSlam::Impl {
     cv.wait(lock, [this] { return queue.empty() && !busy; });
   }
 
-  TrackResult track(const cv::Mat& image, const cv::Mat& labels, double timestamp, int64_t index) {
+  TrackResult track(const cv::Mat& image, const cv::Mat& labels, double timestamp, int64_t index,
+                    const std::vector<ObjectBox>& boxes) {
     const auto t_start = Clock::now();
     auto t0 = Clock::now();
     const int budget = tracker.initialising() ? options.features * options.init_features_factor : options.features;
     auto features = extractor.extract(image, labels, budget);
+    if (options.object_scale && options.metric_scale && !boxes.empty()) setObjectRanges(*features, boxes);
     const double extract_ms = msSince(t0);
     t0 = Clock::now();
     waitIdle();
@@ -179,9 +196,42 @@ struct OrbSlam::Impl {
     if (const auto s = mapper.takePendingScale()) {
       map.rescale(*s);
       tracker.rescale(*s);
-      mapper.rescale(*s);
+      mapper.rescale(*s, map.allKeyFrames().empty() ? 0 : map.allKeyFrames().back()->id);
+      parked_scale.rescale(*s);
       stats.metric_from_frame = index;
       stats.metric_scale_factor = *s;
+    }
+    if (pending_object_scale) {  // the parked cars' boxes: a direct metric measurement, preferred to the road
+      const double s = *pending_object_scale;
+      pending_object_scale.reset();
+      if (!mapper.metric()) {
+        map.rescale(s);
+        tracker.rescale(s);
+        mapper.rescale(s, map.allKeyFrames().empty() ? 0 : map.allKeyFrames().back()->id);
+        stats.metric_from_frame = index;
+        stats.metric_scale_factor = s;
+      } else {  // already metric (by the road): a correction about the current camera
+        const Eigen::Vector3d centre = tracker.lastCentre();
+        map.rescaleFrom(0, s, centre);
+        tracker.rescaleFrom(map.allKeyFrames().front().get(), centre, s);
+      }
+      mapper.objectScaled();
+      if (std::getenv("BESLAM_ORB_DEBUG"))
+        std::fprintf(stderr, "frame %ld: parked cars' boxes scale the map x%.4f (%d cars agree)\n",
+                     static_cast<long>(index), s, stats.object_scale_tracks);
+      stats.object_scale_frame = index;
+      stats.object_scale_factor = s;
+    }
+    if (const auto c = mapper.takePendingCorrection()) {
+      KeyFrame* first = map.allKeyFrames().at(static_cast<size_t>(c->first_kf_id)).get();
+      const Eigen::Vector3d centre = tracker.lastCentre();
+      map.rescaleFrom(c->first_kf_id, c->factor, centre);
+      tracker.rescaleFrom(first, centre, c->factor);
+      parked_scale.clear();  // its stored poses are in the old unit
+      ++stats.scale_corrections;
+      if (std::getenv("BESLAM_ORB_DEBUG"))
+        std::fprintf(stderr, "frame %ld: scale x%.4f from keyframe %ld (frame %ld) on\n", static_cast<long>(index),
+                     c->factor, c->first_kf_id, static_cast<long>(first->frame_index));
     }
     double background_mapping_ms = 0;
     if (options.threaded_mapping) {
@@ -198,6 +248,20 @@ struct OrbSlam::Impl {
     result.features = feature_count;
     result.features_static = features_static;
     result.tracked_static = tracker.trackedOnStaticObjects();
+    // The two-view map's unit settles over its first keyframes (KITTI 00: 0.76 of the later one at frames
+    // 0-5): poses from then would bias the parked-car fits, so they start once local BA has run a few times.
+    if (options.metric_scale && options.object_scale && !object_scale_done && result.state == TrackingState::Ok &&
+        static_cast<int>(map.numKeyFrames()) > options.ground_reference_keyframes) {
+      std::vector<std::pair<int32_t, Eigen::Vector3d>> centres;
+      for (const ObjectBox& b : boxes) centres.emplace_back(b.object_id, b.T_cam_box.translation());
+      parked_scale.addFrame(result.T_world_cam, centres);
+      if (std::getenv("BESLAM_ORB_DEBUG") && index % 10 == 0) parked_scale.debugPrint(index);
+      if (const auto e = parked_scale.estimate()) {
+        pending_object_scale = e->scale;
+        stats.object_scale_tracks = e->tracks;
+        object_scale_done = true;
+      }
+    }
     ++stats.frames;
     if (result.state == TrackingState::Ok) ++stats.frames_tracked;
     result.stage_ms.insert(result.stage_ms.begin(), {"extract", extract_ms});
@@ -231,6 +295,23 @@ struct OrbSlam::Impl {
     return result;
   }
 
+  // FeatureSet::object_range: where each static-object keypoint's ray enters its object's box (slab test).
+  void setObjectRanges(FeatureSet& f, const std::vector<ObjectBox>& boxes) const {
+    f.object_range.assign(f.size(), 0.0f);
+    for (size_t i = 0; i < f.size(); ++i) {
+      const int32_t id = f.objectId(i);
+      if (id < 0) continue;
+      for (const ObjectBox& b : boxes) {
+        if (b.object_id != id || !b.parked) continue;
+        const cv::Point2f& pt = f.keypoints[i].pt;
+        const Eigen::Vector3d ray_cam =
+            Eigen::Vector3d((pt.x - camera.cx) / camera.fx, (pt.y - camera.cy) / camera.fy, 1.0).normalized();
+        if (const auto t = rayBoxEntry(ray_cam, b); t && *t > 0.5) f.object_range[i] = static_cast<float>(*t);
+        break;
+      }
+    }
+  }
+
   Eigen::Isometry3d composedPose(const FrameRecord& r) const {
     Eigen::Isometry3d T_c_ref = r.T_c_ref;
     KeyFrame* ref = r.reference;
@@ -254,8 +335,9 @@ OrbSlam::~OrbSlam() = default;
 
 std::optional<Eigen::Isometry3d> OrbSlam::predictPose(double) const { return impl_->tracker.predictPose(); }
 
-TrackResult OrbSlam::track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index) {
-  return impl_->track(gray, label_mask, timestamp, frame_index);
+TrackResult OrbSlam::track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index,
+                           const std::vector<ObjectBox>& static_boxes) {
+  return impl_->track(gray, label_mask, timestamp, frame_index, static_boxes);
 }
 
 void OrbSlam::finish() {

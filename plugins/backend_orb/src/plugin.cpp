@@ -29,6 +29,10 @@ const beslam_config_field kFields[] = {
     field::Int("ground_min_inliers", "25", 3, 100000, "map points a keyframe's ground plane needs"),
     field::Bool("metric_scale", "false", "recover metres from the rig's camera height over the road (dataset camera_height) and hold them with the ground prior"),
     field::Double("metric_max_spread", "0.1", 0.001, 10.0, "metric scale: the reference ground fits' heights must agree this well (relative MAD)"),
+    field::Double("metric_correction_min", "0.02", 0.0, 1.0, "metric scale: recent ground fits off by more than this share (and their noise) scale the newer map back (0: off)"),
+    field::Bool("object_scale", "true", "metric scale: static objects' 3D boxes are a scale source and, once metric, range priors in local BA"),
+    field::Double("object_range_sigma", "0.15", 0.001, 100.0, "std-dev (m) of a static-object point's range from its box"),
+    field::Double("object_range_sigma_per_m", "0.02", 0.0, 10.0, "std-dev added per metre of range"),
     field::Bool("threaded_mapping", "false", "local mapping on its own thread (same results, overlaps the next frame)"),
     field::Int("seed", "42", 0, 2147483647.0, "seed of every random choice (RANSAC)"),
 };
@@ -37,6 +41,10 @@ beslam::orb::Options readOptions(const beslam::sdk::Config& c, const beslam::sdk
   beslam::orb::Options o;
   o.metric_scale = c.getBool("metric_scale");
   o.metric_max_spread = c.getDouble("metric_max_spread");
+  o.metric_correction_min = c.getDouble("metric_correction_min");
+  o.object_scale = c.getBool("object_scale");
+  o.object_range_sigma = c.getDouble("object_range_sigma");
+  o.object_range_sigma_per_m = c.getDouble("object_range_sigma_per_m");
   o.camera_height = context.cameraHeight().value_or(0);
   o.features = static_cast<int>(c.getInt("features"));
   o.scale_factor = c.getDouble("scale_factor");
@@ -98,7 +106,14 @@ class OrbBackend : public beslam::sdk::Backend {
     }
     // Colour (when given) only colours the map points; features come from the grey image.
     const cv::Mat& image = frame.color.empty() ? frame.gray : frame.color;
-    const beslam::orb::TrackResult r = slam_.track(image, mask, frame.timestamp, frame.index);
+    // Tracked cars' metric boxes: the scale source before the map is metric (parked cars agree on it), and
+    // for parked ones range priors in local BA after.
+    std::vector<beslam::orb::ObjectBox> car_boxes;
+    for (const beslam_box3d& b : boxes)
+      if (b.track_id >= 0 && (b.class_id == BESLAM_CLASS_CAR || b.class_id == BESLAM_CLASS_VAN || b.class_id == BESLAM_CLASS_TRUCK))
+        car_boxes.push_back({b.track_id, b.motion_state == BESLAM_MOTION_STATIC, beslam::sdk::boxPose(b),
+                             Eigen::Vector3d(b.size[0], b.size[2], b.size[1])});
+    const beslam::orb::TrackResult r = slam_.track(image, mask, frame.timestamp, frame.index, car_boxes);
     beslam::sdk::TrackResult out;
     out.state = toState(r.state);
     out.is_keyframe = r.is_keyframe;

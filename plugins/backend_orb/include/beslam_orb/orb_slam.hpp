@@ -75,6 +75,13 @@ struct Options {
   bool metric_scale = false;
   double camera_height = 0;                  // the rig's camera height over the road, metres
   double metric_max_spread = 0.1;            // the reference fits' heights must agree this well (rel. MAD)
+  // Once metric: the last ground_reference_keyframes fits that say the camera height is off by more than
+  // this share (and more than twice their standard error) scale the map back from the oldest of them on.
+  double metric_correction_min = 0.02;       // 0: no correction, the ground prior alone holds the scale
+  // Static objects' boxes as a metric source (ObjectBox): range prior std-dev, metres and per metre.
+  bool object_scale = true;
+  double object_range_sigma = 0.15;
+  double object_range_sigma_per_m = 0.02;
   bool threaded_mapping = false;
   // Initialisation.
   int ransac_iterations = 200;
@@ -86,6 +93,17 @@ struct Options {
 };
 
 enum class TrackingState { NotInitialized, Ok, Lost };
+
+// A metric 3D box of a tracked car in the frame being tracked (camera frame). Every car's centre over time
+// feeds the parked-car scale estimate (scale/parked_car_scale.hpp) before the map is metric; keypoints on
+// the mask label 1000 + object_id of a parked one get the metric range at which their ray enters its box:
+// a scale source too, and a range prior in local BA once metric (docs/metric-scale.md).
+struct ObjectBox {
+  int32_t object_id = -1;                                       // track id (mask label 1000 + id)
+  bool parked = false;                                          // called static: its keypoints get ranges
+  Eigen::Isometry3d T_cam_box = Eigen::Isometry3d::Identity();  // box centre; axes along length, height, width
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();               // extent along the box's x, y, z axes
+};
 
 struct TrackResult {
   TrackingState state = TrackingState::NotInitialized;
@@ -129,6 +147,10 @@ struct Statistics {
   int64_t metric_from_frame = -1;      // first frame tracked in metres (-1: never)
   double metric_scale_factor = 0;      // the factor the map was multiplied by then
   int object_points_dropped = 0;       // map points of static objects that started to move
+  int scale_corrections = 0;           // local scale corrections from the ground fits
+  int64_t object_scale_frame = -1;     // frame at which the parked cars' boxes set the scale (-1: never)
+  double object_scale_factor = 0;      // the factor they applied
+  int object_scale_tracks = 0;         // cars in the agreeing cluster
 };
 
 class OrbSlam {
@@ -143,7 +165,8 @@ class OrbSlam {
   std::optional<Eigen::Isometry3d> predictPose(double timestamp) const;
 
   // gray: CV_8UC1 (or CV_8UC3 BGR, converted; colour kept for map points); label_mask: CV_16UC1 or empty.
-  TrackResult track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index);
+  TrackResult track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index,
+                    const std::vector<ObjectBox>& static_boxes = {});
 
   // Waits for the mapping thread and runs a last local bundle adjustment.
   void finish();

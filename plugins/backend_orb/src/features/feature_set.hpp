@@ -33,11 +33,15 @@ struct FeatureSet {
   cv::Mat descriptors;                 // N x 32, CV_8U
   std::vector<uint16_t> labels;        // mask value under each keypoint (0 without a mask)
   std::vector<cv::Vec3b> colours;      // BGR (grey repeated for grey input)
+  // Metres from the camera to where the keypoint's ray enters the metric 3D box of the static object it
+  // lies on (OrbSlam::ObjectBox), 0 where there is none. Empty when the frame had no boxes.
+  std::vector<float> object_range;
   FeatureGrid grid;
 
   size_t size() const { return keypoints.size(); }
   const uint8_t* descriptor(size_t i) const { return descriptors.ptr<uint8_t>(static_cast<int>(i)); }
   bool onStaticObject(size_t i) const { return labels[i] >= 1000; }
+  float objectRange(size_t i) const { return i < object_range.size() ? object_range[i] : 0.0f; }
   int32_t objectId(size_t i) const { return labels[i] >= 1000 ? static_cast<int32_t>(labels[i]) - 1000 : -1; }
   void buildGrid() { grid = FeatureGrid(keypoints, width, height); }
   std::vector<int> query(float u, float v, float r, int min_level = -1, int max_level = -1) const {

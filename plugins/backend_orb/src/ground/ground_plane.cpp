@@ -105,10 +105,10 @@ std::optional<GroundPlane> fitGroundPlane(const KeyFrame& kf, const GroundPlaneO
   return plane;
 }
 
-void GroundReference::add(const GroundPlane& plane) {
-  if (ready_ || !(plane.height > 0) || !std::isfinite(plane.height) || !plane.normal_cam.allFinite()) return;
-  heights_.push_back(plane.height);
-  normals_.push_back(plane.normal_cam);
+void GroundReference::add(double value, const Eigen::Vector3d& normal) {
+  if (ready_ || !(value > 0) || !std::isfinite(value) || !normal.allFinite()) return;
+  heights_.push_back(value);
+  normals_.push_back(normal);
   if (static_cast<int>(heights_.size()) > needed_) {  // slide: the oldest fit leaves the window
     heights_.erase(heights_.begin());
     normals_.erase(normals_.begin());

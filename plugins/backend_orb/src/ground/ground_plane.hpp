@@ -53,11 +53,17 @@ std::optional<GroundPlane> fitGroundPlane(const KeyFrame& kf, const GroundPlaneO
 class GroundReference {
  public:
   explicit GroundReference(int keyframes, double max_spread = 1e9) : needed_(keyframes), max_spread_(max_spread) {}
-  void add(const GroundPlane& plane);
+  void add(const GroundPlane& plane) { add(plane.height, plane.normal_cam); }
+  // One sample of any positive quantity (a height, a scale ratio), with the normal it came with.
+  void add(double value, const Eigen::Vector3d& normal = Eigen::Vector3d::UnitY());
   bool ready() const { return ready_; }
   double height() const { return height_; }
   double spread() const { return spread_; }  // relative MAD of the fits behind height()
   const Eigen::Vector3d& normal() const { return normal_; }
+  // A known height (the rig's camera height once the map is metric); only a ready reference takes it.
+  void setHeight(double h) {
+    if (ready_) height_ = h;
+  }
   // The map's unit became s times smaller: heights follow.
   void rescale(double s) {
     height_ *= s;

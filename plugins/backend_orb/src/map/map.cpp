@@ -36,6 +36,21 @@ void Map::rescale(double s) {
   }
 }
 
+void Map::rescaleFrom(long first_kf_id, double s, const Eigen::Vector3d& c) {
+  for (size_t i = static_cast<size_t>(first_kf_id); i < all_keyframes_.size(); ++i) {
+    KeyFrame& kf = *all_keyframes_[i];
+    const Eigen::Vector3d centre = c + s * (kf.centre() - c);
+    kf.T_cw.translation() = -(kf.T_cw.linear() * centre);
+    kf.T_cp.translation() *= s;
+  }
+  for (auto& mp : all_points_) {
+    if (!mp->reference || mp->reference->id < first_kf_id) continue;
+    mp->position = c + s * (mp->position - c);
+    mp->min_distance *= static_cast<float>(s);
+    mp->max_distance *= static_cast<float>(s);
+  }
+}
+
 int Map::dropObjectPoints(int32_t object_id) {
   std::vector<MapPoint*> doomed;
   for (MapPoint* mp : points_)

@@ -22,6 +22,10 @@ class Map {
   // Multiplies every length by s (keyframe and parent translations, point positions and their distance
   // ranges), culled objects included, so that the map's unit becomes s times smaller (metric scale).
   void rescale(double s);
+  // Scale correction of the newer part of the map: keyframes from `first_kf_id` on and the points they made
+  // are mapped by X -> c + s (X - c) (rotations kept); older keyframes and points stay. With c the current
+  // camera's centre, whoever holds the current pose (the motion checker's world positions) sees no jump.
+  void rescaleFrom(long first_kf_id, double s, const Eigen::Vector3d& c);
   // Marks bad every live map point made on static object `object_id` (it started to move).
   int dropObjectPoints(int32_t object_id);
 

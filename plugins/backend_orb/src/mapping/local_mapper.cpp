@@ -32,7 +32,8 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 LocalMapper::LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyramid,
                          const LocalMapperOptions& options)
     : map_(map), camera_(camera), pyramid_(pyramid), options_(options),
-      ground_reference_(makeGroundReference()) {}
+      ground_reference_(makeGroundReference()),
+      object_reference_(options.ground.reference_keyframes, options.metric_max_spread) {}
 
 void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   timings_.clear();
@@ -52,13 +53,27 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   t0 = Clock::now();
   if (map_.numKeyFrames() > 2) {
     optimize::GroundPrior ground{options_.ground, &ground_reference_};
-    last_ba_ = optimize::localBundleAdjustment(kf, map_, options_.ba, options_.ground.enabled ? &ground : nullptr);
+    optimize::BundleAdjustmentOptions ba = options_.ba;
+    if (metric_) {  // the boxes are metric: so is the map now
+      ba.object_range_sigma = options_.object_range_sigma;
+      ba.object_range_sigma_per_m = options_.object_range_sigma_per_m;
+    }
+    // Once the parked cars' boxes gave the scale, their range priors hold it; the ground prior would pull it
+    // towards the road fits, whose biases (bare roads, kerbs) fight the direct measurement.
+    const bool ground_prior = options_.ground.enabled && !object_scaled_;
+    last_ba_ = optimize::localBundleAdjustment(kf, map_, ba, ground_prior ? &ground : nullptr);
+    if (options_.object_range_sigma > 0 && options_.metric_camera_height > 0 && !metric_ && !pending_scale_) {
+      if (const auto s = objectScale(*kf)) object_reference_.add(*s);
+      if (object_reference_.ready()) pending_scale_ = currentObjectScale(kf).value_or(object_reference_.height());
+    }
     if (options_.ground.enabled && !ground_reference_.ready()) {
       if (const auto plane = fitGroundPlane(*kf, options_.ground, Eigen::Vector3d::UnitY(), options_.ground.max_tilt_deg))
         ground_reference_.add(*plane);
-      if (ground_reference_.ready() && options_.metric_camera_height > 0 && !metric_)
+      if (metric_) ground_reference_.setHeight(options_.metric_camera_height);  // metric by the objects first
+      if (ground_reference_.ready() && options_.metric_camera_height > 0 && !metric_ && !pending_scale_)
         pending_scale_ = options_.metric_camera_height / currentGroundHeight(kf);
     }
+    if (metric_ && !object_scaled_ && options_.metric_correction_min > 0) keepScale(kf);
   }
   timings_.emplace_back("map_local_ba", msSince(t0));
   t0 = Clock::now();
@@ -79,6 +94,66 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
                  map_.numKeyFrames(), map_.points().size(), last_ba_.ground_keyframes, last_ba_.ground_residuals,
                  groundReferenceHeight());
   }
+}
+
+void LocalMapper::keepScale(KeyFrame* kf) {
+  const double H = options_.metric_camera_height;
+  const auto plane = fitGroundPlane(*kf, options_.ground, ground_reference_.normal(),
+                                    options_.ground.max_tilt_from_reference_deg);
+  if (!plane || std::abs(plane->height / H - 1.0) > options_.ground.max_height_deviation) return;
+  scale_fits_.emplace_back(kf->id, plane->height);
+  const size_t K = static_cast<size_t>(options_.ground.reference_keyframes);
+  if (scale_fits_.size() > K) scale_fits_.erase(scale_fits_.begin());
+  if (scale_fits_.size() < K) return;
+  std::vector<double> ratios;
+  for (const auto& f : scale_fits_) ratios.push_back(H / f.second);
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  const double r = median(ratios);
+  std::vector<double> dev;
+  for (double x : ratios) dev.push_back(std::abs(x - r));
+  // Standard error of the median of K fits, from their median absolute deviation (normal: 1.4826 MAD).
+  const double se = 1.4826 * median(dev) * 1.2533 / std::sqrt(static_cast<double>(K));
+  if (std::abs(r - 1.0) <= std::max(options_.metric_correction_min, 2.0 * se)) return;
+  // While the metric map is young its whole extent shares the first estimate's error: the whole map is
+  // corrected. Later, drift is local and slow: the map from the oldest of the fits on is corrected, and only
+  // by a few percent (a larger step over a few keyframes is the fits' own bias: a junction, a bare road).
+  const bool settling = kf->id - metric_since_kf_ < 3 * static_cast<long>(K);
+  if (!settling && std::abs(r - 1.0) > options_.metric_correction_max) {
+    scale_fits_.clear();
+    return;
+  }
+  pending_correction_ = ScaleCorrection{settling ? 0 : scale_fits_.front().first, r};
+  ++corrections_;
+  scale_fits_.clear();
+}
+
+std::optional<double> LocalMapper::objectScale(const KeyFrame& kf) const {
+  std::vector<double> ratios;
+  for (size_t i = 0; i < kf.points.size(); ++i) {
+    const MapPoint* mp = kf.points[i];
+    const float range = kf.features->objectRange(i);
+    if (!mp || mp->bad || !(range > 0)) continue;
+    const double d = (kf.T_cw * mp->position).norm();
+    if (d > 0) ratios.push_back(range / d);
+  }
+  if (ratios.size() < 8) return std::nullopt;  // a few points on a car say little
+  std::nth_element(ratios.begin(), ratios.begin() + ratios.size() / 2, ratios.end());
+  return ratios[ratios.size() / 2];
+}
+
+std::optional<double> LocalMapper::currentObjectScale(KeyFrame* kf) const {
+  // As for the ground: the map as it is now, over the keyframe and its best covisible keyframes.
+  std::vector<double> scales;
+  if (const auto s = objectScale(*kf)) scales.push_back(*s);
+  for (KeyFrame* k : kf->bestCovisibles(options_.ground.reference_keyframes * 2))
+    if (!k->bad)
+      if (const auto s = objectScale(*k)) scales.push_back(*s);
+  if (static_cast<int>(scales.size()) < options_.ground.reference_keyframes) return std::nullopt;
+  std::nth_element(scales.begin(), scales.begin() + scales.size() / 2, scales.end());
+  return scales[scales.size() / 2];
 }
 
 double LocalMapper::currentGroundHeight(KeyFrame* kf) const {

@@ -33,6 +33,21 @@ struct LocalMapperOptions {
   // reference height becomes this; the ground prior then holds it (metres from then on).
   double metric_camera_height = 0;
   double metric_max_spread = 0.1;  // the reference's fits must agree this well (relative MAD)
+  // Scale keeping once metric: when the last reference_keyframes ground fits say, beyond their own noise and
+  // by more than this share, that the camera height is not metric_camera_height, the map from the oldest of
+  // those keyframes on is scaled back (a local Sim(3) scale correction). 0: off.
+  double metric_correction_min = 0.02;
+  double metric_correction_max = 0.05;  // after settling: larger local corrections are not trusted
+  // Static objects' metric boxes (FeatureSet::object_range): a scale source like the ground fits, and once
+  // metric a range prior in local BA with this std-dev (m, plus per metre). 0: not used.
+  double object_range_sigma = 0;
+  double object_range_sigma_per_m = 0.02;
+};
+
+// A scale correction the mapper asks for: the map from keyframe first_kf_id on times factor.
+struct ScaleCorrection {
+  long first_kf_id = 0;
+  double factor = 1;
 };
 
 class LocalMapper {
@@ -46,6 +61,10 @@ class LocalMapper {
     ground_reference_ = makeGroundReference();
     metric_ = false;
     pending_scale_.reset();
+    scale_fits_.clear();
+    pending_correction_.reset();
+    object_reference_ = GroundReference(options_.ground.reference_keyframes, options_.metric_max_spread);
+    object_scaled_ = false;
   }
   // The factor the map should be multiplied by to be in metres, once, when the mapper has found it;
   // the caller rescales map and tracker (with no mapping running) and calls rescale(s) here.
@@ -54,9 +73,29 @@ class LocalMapper {
     pending_scale_.reset();
     return s;
   }
-  void rescale(double s) {
+  void rescale(double s, long current_kf_id) {
     ground_reference_.rescale(s);
+    // Metric now: the reference is the rig's camera height itself, not the (rescaled) median of the early
+    // fits, which the scale was taken from the map as it is now, not then.
+    ground_reference_.setHeight(options_.metric_camera_height);
     metric_ = true;
+    metric_since_kf_ = current_kf_id;
+    scale_fits_.clear();
+  }
+  // A local scale correction, once, when the metric map's recent ground fits ask for one (see options).
+  std::optional<ScaleCorrection> takePendingCorrection() {
+    auto c = pending_correction_;
+    pending_correction_.reset();
+    return c;
+  }
+  int corrections() const { return corrections_; }
+  // The scale came from parked cars' boxes: the ground fits no longer correct it and the ground prior is
+  // off (their biases on bare or sloping roads would undo a direct measurement); the boxes' range priors
+  // hold the scale.
+  void objectScaled() {
+    object_scaled_ = true;
+    scale_fits_.clear();
+    pending_correction_.reset();
   }
   bool metric() const { return metric_; }
   // Reference camera height of the ground prior (0 until the first fits have set it).
@@ -82,6 +121,9 @@ class LocalMapper {
   std::vector<std::pair<std::string, double>> timings_;
   int last_new_points_ = 0;
   double currentGroundHeight(KeyFrame* kf) const;
+  std::optional<double> objectScale(const KeyFrame& kf) const;
+  std::optional<double> currentObjectScale(KeyFrame* kf) const;
+  void keepScale(KeyFrame* kf);
   GroundReference makeGroundReference() const {
     return GroundReference(options_.ground.reference_keyframes,
                            options_.metric_camera_height > 0 ? options_.metric_max_spread : 1e9);
@@ -90,6 +132,12 @@ class LocalMapper {
   optimize::BundleAdjustmentReport last_ba_;
   bool metric_ = false;
   std::optional<double> pending_scale_;
+  std::vector<std::pair<long, double>> scale_fits_;
+  GroundReference object_reference_;  // per-keyframe object scale observations, same agreement rule  // (keyframe id, camera height over its plane) once metric
+  std::optional<ScaleCorrection> pending_correction_;
+  int corrections_ = 0;
+  long metric_since_kf_ = 0;
+  bool object_scaled_ = false;
 };
 
 }  // namespace beslam::orb

@@ -40,9 +40,10 @@ struct Problem {
   struct GroundEdge {
     double* pose;
     double* point;
-    std::unique_ptr<GroundHeightCost> cost;
+    std::unique_ptr<ceres::CostFunction> cost;
   };
   std::vector<GroundEdge> ground_edges;
+  std::vector<GroundEdge> range_edges;  // ObjectRangeCost, same shape
 
   void allocate() {
     std::vector<KeyFrame*> kfs(moving);
@@ -92,9 +93,10 @@ double solve(Problem& P, bool robust, int iterations, double chi2_threshold, boo
   }
   if (used == 0) return 0;
   ceres::HuberLoss ground_huber(2.0);  // residuals are in sigmas
-  for (auto& g : P.ground_edges)
-    if (problem.HasParameterBlock(g.pose) && problem.HasParameterBlock(g.point))
-      problem.AddResidualBlock(g.cost.get(), &ground_huber, g.pose, g.point);
+  for (auto* edges : {&P.ground_edges, &P.range_edges})
+    for (auto& g : *edges)
+      if (problem.HasParameterBlock(g.pose) && problem.HasParameterBlock(g.point))
+        problem.AddResidualBlock(g.cost.get(), &ground_huber, g.pose, g.point);
   // Points are eliminated first (Schur complement on the cameras).
   auto* ordering = new ceres::ParameterBlockOrdering;
   int n_poses = 0;
@@ -176,6 +178,20 @@ void addGroundEdges(Problem& P, const GroundPrior& ground, BundleAdjustmentRepor
   }
 }
 
+void addObjectRangeEdges(Problem& P, const BundleAdjustmentOptions& options, BundleAdjustmentReport* report) {
+  for (const Edge& e : P.edges) {
+    const float range = e.kf->features->objectRange(e.idx);
+    if (!(range > 0)) continue;
+    const double sigma = options.object_range_sigma + options.object_range_sigma_per_m * range;
+    // A box's 2D footprint holds background too (road, walls behind the car): a point whose range is far
+    // from the box's now is not on the object, and gets no prior.
+    const Eigen::Vector3d p_cam = e.kf->T_cw * e.mp->position;
+    if (std::abs(p_cam.norm() - range) > 3 * sigma) continue;
+    P.range_edges.push_back({e.pose, e.point, std::make_unique<ObjectRangeCost>(range, sigma)});
+    ++report->object_range_residuals;
+  }
+}
+
 }  // namespace
 
 BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const BundleAdjustmentOptions& options,
@@ -208,6 +224,7 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   P.allocate();
   addEdges(P, options.chi2_threshold, options.trusted_weight);
   if (ground && ground->reference && ground->reference->ready()) addGroundEdges(P, *ground, &report);
+  if (options.object_range_sigma > 0) addObjectRangeEdges(P, options, &report);
   report.keyframes = static_cast<int>(P.moving.size());
   report.fixed_keyframes = static_cast<int>(P.fixed.size());
   report.points = static_cast<int>(P.points.size());

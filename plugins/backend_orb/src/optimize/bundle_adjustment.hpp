@@ -21,11 +21,15 @@ struct BundleAdjustmentOptions {
   double chi2_threshold = 5.991;
   int max_local_keyframes = 0;   // 0 = every covisible keyframe
   double trusted_weight = 1.0;   // information multiplier for points on static objects
+  // Metric range priors from static objects' 3D boxes (FeatureSet::object_range), once the map is metric:
+  // sigma = object_range_sigma + object_range_sigma_per_m * range. Off while object_range_sigma is 0.
+  double object_range_sigma = 0;
+  double object_range_sigma_per_m = 0.02;
 };
 
 struct BundleAdjustmentReport {
   int keyframes = 0, fixed_keyframes = 0, points = 0, observations = 0, outliers_removed = 0;
-  int ground_keyframes = 0, ground_residuals = 0;
+  int ground_keyframes = 0, ground_residuals = 0, object_range_residuals = 0;
   double initial_cost = 0, final_cost = 0;
 };
 

@@ -124,4 +124,33 @@ class GroundHeightCost : public ceres::SizedCostFunction<1, 7, 3> {
   double h_, inv_sigma_;
 };
 
+// A metric range prior: the distance of a point from the camera, along the ray of its keypoint, is where
+// that ray enters the metric 3D box of the static object the keypoint lies on (ObjectBox). Residual in
+// sigmas: (|p_cam| - range) / sigma.
+class ObjectRangeCost : public ceres::SizedCostFunction<1, 7, 3> {
+ public:
+  ObjectRangeCost(double range, double sigma) : d_(range), inv_sigma_(1.0 / sigma) {}
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    Eigen::Matrix3d R;
+    const Eigen::Vector3d pc =
+        detail::toCamera(params[0], Eigen::Vector3d(params[1][0], params[1][1], params[1][2]), R);
+    const double r = pc.norm();
+    residuals[0] = (r - d_) * inv_sigma_;
+    const Eigen::Vector3d u = r > 1e-12 ? Eigen::Vector3d(pc / r) : Eigen::Vector3d::UnitZ();
+    if (jacobians && jacobians[0]) {  // d|pc| = u . (rho + phi x pc) = u . rho (u is parallel to pc)
+      Eigen::Map<Eigen::Matrix<double, 1, 7, Eigen::RowMajor>> J(jacobians[0]);
+      J.setZero();
+      J.leftCols<3>() = u.transpose() * inv_sigma_;
+    }
+    if (jacobians && jacobians[1]) {
+      Eigen::Map<Eigen::Matrix<double, 1, 3, Eigen::RowMajor>> Jp(jacobians[1]);
+      Jp = u.transpose() * R * inv_sigma_;
+    }
+    return true;
+  }
+
+ private:
+  double d_, inv_sigma_;
+};
+
 }  // namespace beslam::orb::optimize

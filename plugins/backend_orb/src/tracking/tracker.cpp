@@ -285,6 +285,21 @@ void Tracker::rescale(double s) {
   }
 }
 
+void Tracker::rescaleFrom(const KeyFrame* first_kf, const Eigen::Vector3d& c, double s) {
+  auto move = [&](Eigen::Isometry3d& T_cw) {
+    const Eigen::Vector3d centre = c + s * (T_cw.inverse().translation() - c);
+    T_cw.translation() = -(T_cw.linear() * centre);
+  };
+  for (Frame* f : {&current_, &last_}) move(f->T_cw);
+  if (velocity_) velocity_->translation() *= s;
+  if (last_good_pose_) move(*last_good_pose_);
+  for (FrameRecord& r : records_) {
+    if (r.index < first_kf->frame_index) continue;
+    if (r.reference && r.reference->id >= first_kf->id) r.T_c_ref.translation() *= s;
+    move(r.T_cw_online);
+  }
+}
+
 void Tracker::reset() {
   if (map_.numKeyFrames() > 0) ++resets_;
   map_.clear();

@@ -52,6 +52,10 @@ class Tracker {
   int trackedOnStaticObjects() const;
   // The map's unit became s times smaller (Map::rescale): scale every stored translation with it.
   void rescale(double s);
+  // The map's newer part was scaled about c (Map::rescaleFrom): frames after keyframe first_kf follow.
+  void rescaleFrom(const KeyFrame* first_kf, const Eigen::Vector3d& c, double s);
+  // The centre of the last tracked frame (world), the fixed point of scale corrections.
+  Eigen::Vector3d lastCentre() const { return last_.T_cw.inverse().translation(); }
 
  private:
   void initialise(TrackResult& result);

@@ -1,0 +1,142 @@
+// Metric scale from static objects: the ray-box entry that gives a keypoint its metric range, the range
+// prior's Jacobians against numeric ones, and that a rescaled map keeps every reprojection.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "optimize/cost_functions.hpp"
+#include "optimize/se3.hpp"
+#include "scale/object_range.hpp"
+#include "scale/parked_car_scale.hpp"
+
+#include <random>
+
+namespace beslam::orb {
+namespace {
+
+ObjectBox carAhead(double z, double yaw) {
+  ObjectBox b;
+  b.object_id = 3;
+  b.T_cam_box.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  b.T_cam_box.translation() = Eigen::Vector3d(0, 0.9, z);
+  b.size = Eigen::Vector3d(4.0, 1.5, 1.8);  // length (box x), height (box y), width (box z)
+  return b;
+}
+
+TEST(RayBoxEntry, StraightAheadHitsTheNearFace) {
+  // Yaw 0: the car's length runs along camera x, its width along z: the near face is z - 0.9.
+  const Eigen::Vector3d ray = Eigen::Vector3d(0, 0.9, 10).normalized();  // at the box centre
+  const auto t = rayBoxEntry(ray, carAhead(10, 0));
+  ASSERT_TRUE(t);
+  EXPECT_NEAR(*t, (10 - 0.9) / ray.z(), 1e-9);
+  // Turned by 90 degrees the length runs along z: the near face is 2 m closer than the centre.
+  const auto t90 = rayBoxEntry(ray, carAhead(10, M_PI / 2));
+  ASSERT_TRUE(t90);
+  EXPECT_NEAR(*t90, 8.0 / ray.z(), 1e-9);
+}
+
+TEST(RayBoxEntry, MissesAndInsideGiveNothing) {
+  EXPECT_FALSE(rayBoxEntry(Eigen::Vector3d(1, 0, 0.2).normalized(), carAhead(10, 0)));   // far to the right
+  EXPECT_FALSE(rayBoxEntry(Eigen::Vector3d(0, 0, -1), carAhead(10, 0)));                 // behind the camera
+  ObjectBox around = carAhead(0, 0);
+  around.T_cam_box.translation() = Eigen::Vector3d::Zero();
+  EXPECT_FALSE(rayBoxEntry(Eigen::Vector3d(0, 0, 1), around)) << "a camera inside the box has no range";
+}
+
+TEST(ObjectRangeCost, JacobiansMatchNumericOnes) {
+  Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
+  T_cw.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, 1, 0.1).normalized()).toRotationMatrix();
+  T_cw.translation() = Eigen::Vector3d(0.4, -0.2, 1.5);
+  double pose[7], point[3] = {1.0, 0.5, 9.0};
+  optimize::poseToParams(T_cw, pose);
+  const optimize::ObjectRangeCost cost(9.5, 0.3);
+  double r0, J_pose[7], J_point[3];
+  const double* params[] = {pose, point};
+  double* jac[] = {J_pose, J_point};
+  ASSERT_TRUE(cost.Evaluate(params, &r0, jac));
+  const double eps = 1e-6;
+  auto residualAt = [&](const Eigen::Isometry3d& T, const double* X) {
+    double p[7], r;
+    optimize::poseToParams(T, p);
+    const double* ps[] = {p, X};
+    cost.Evaluate(ps, &r, nullptr);
+    return r;
+  };
+  for (int k = 0; k < 6; ++k) {  // left update [rho, phi]
+    Eigen::Matrix<double, 6, 1> delta = Eigen::Matrix<double, 6, 1>::Zero();
+    delta[k] = eps;
+    Eigen::Isometry3d plus = Eigen::Isometry3d::Identity(), minus = Eigen::Isometry3d::Identity();
+    plus.linear() = optimize::expSO3(delta.tail<3>()).toRotationMatrix();
+    plus.translation() = delta.head<3>();
+    minus.linear() = optimize::expSO3(-delta.tail<3>()).toRotationMatrix();
+    minus.translation() = -delta.head<3>();
+    const double numeric = (residualAt(plus * T_cw, point) - residualAt(minus * T_cw, point)) / (2 * eps);
+    EXPECT_NEAR(J_pose[k], numeric, 1e-5) << "pose tangent " << k;
+  }
+  EXPECT_EQ(J_pose[6], 0.0);
+  for (int k = 0; k < 3; ++k) {
+    double xp[3] = {point[0], point[1], point[2]}, xm[3] = {point[0], point[1], point[2]};
+    xp[k] += eps, xm[k] -= eps;
+    EXPECT_NEAR(J_point[k], (residualAt(T_cw, xp) - residualAt(T_cw, xm)) / (2 * eps), 1e-5) << "point " << k;
+  }
+  // The residual is (|p_cam| - range) / sigma.
+  const Eigen::Vector3d p_cam = T_cw * Eigen::Vector3d(point[0], point[1], point[2]);
+  EXPECT_NEAR(r0, (p_cam.norm() - 9.5) / 0.3, 1e-12);
+}
+
+// A street: the camera drives 1 m a frame along z in a map whose unit is 20 m (true scale 20); parked
+// cars along both sides, one car driving ahead at half the ego speed, boxes with 10 cm noise.
+struct Street {
+  std::vector<std::pair<Eigen::Isometry3d, std::vector<std::pair<int32_t, Eigen::Vector3d>>>> frames;
+};
+
+Street street(int n_frames, double ego_step, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, 0.1);
+  const std::vector<Eigen::Vector3d> parked = {{-4, 0.8, 12}, {4, 0.8, 18}, {-4, 0.8, 25}, {4, 0.8, 30}, {-4, 0.8, 36}};
+  Street s;
+  for (int k = 0; k < n_frames; ++k) {
+    const Eigen::Vector3d centre_m(0, 0, ego_step * k);
+    Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
+    T_wc.linear() = Eigen::AngleAxisd(0.01 * k, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    T_wc.translation() = centre_m / 20.0;  // map units
+    std::vector<std::pair<int32_t, Eigen::Vector3d>> boxes;
+    auto see = [&](int32_t id, const Eigen::Vector3d& p_world_m) {
+      Eigen::Isometry3d T_wc_m = T_wc;
+      T_wc_m.translation() = centre_m;
+      const Eigen::Vector3d b = T_wc_m.inverse() * p_world_m + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+      if (b.z() > 2 && b.z() < 40) boxes.emplace_back(id, b);
+    };
+    for (size_t j = 0; j < parked.size(); ++j) see(static_cast<int32_t>(j), parked[j]);
+    see(100, Eigen::Vector3d(0, 0.8, 10 + 0.5 * ego_step * k));  // the car ahead, at half the ego speed
+    s.frames.emplace_back(T_wc, boxes);
+  }
+  return s;
+}
+
+TEST(ParkedCarScale, ParkedCarsAgreeOnTheMapScaleAndTheMovingCarIsOutvoted) {
+  ParkedCarScale estimator;
+  const Street s = street(20, 1.0, 5);
+  for (const auto& [T, boxes] : s.frames) estimator.addFrame(T, boxes);
+  const auto e = estimator.estimate();
+  ASSERT_TRUE(e);
+  EXPECT_NEAR(e->scale, 20.0, 0.2);
+  EXPECT_GE(e->tracks, 3);
+  estimator.rescale(20.0);  // the map became metric: the same cars now say 1
+  const auto e1 = estimator.estimate();
+  ASSERT_TRUE(e1);
+  EXPECT_NEAR(e1->scale, 1.0, 0.01);
+}
+
+TEST(ParkedCarScale, NoEstimateWithoutMotionOrWithoutEnoughCars) {
+  ParkedCarScale standing;
+  for (const auto& [T, boxes] : street(20, 0.0, 6).frames) standing.addFrame(T, boxes);
+  EXPECT_FALSE(standing.estimate()) << "a camera that does not move cannot tell the scale";
+  ParkedCarScale brief;
+  const Street s = street(5, 1.0, 7);
+  for (const auto& [T, boxes] : s.frames) brief.addFrame(T, boxes);
+  EXPECT_FALSE(brief.estimate()) << "5 frames are fewer than a track needs";
+}
+
+}  // namespace
+}  // namespace beslam::orb
