@@ -73,9 +73,9 @@ for p in sorted(os.listdir(out)):
 def stat(v):
     v = [x for x in v if x is not None]
     if not v: return "-"
-    return "%.3f (%.3f-%.3f)" % (statistics.median(v), min(v), max(v))
-lines = ["| pipeline | sequence | seeds | APE Sim(3) m | APE SE(3) m | Sim(3) scale | metric from frame | detections static/dynamic/unknown (median) | F1 dyn | parked <=30 m called static |",
-         "|---|---|---|---|---|---|---|---|---|---|"]
+    return "%.3f (%.3f-%.3f)" % (statistics.median(v), min(v), max(v)) if max(v) < 1000 else "%d (%d-%d)" % (statistics.median(v), min(v), max(v))
+lines = ["| pipeline | sequence | seeds | frames tracked | APE Sim(3) m | APE SE(3) m | Sim(3) scale | metric from frame | detections static/dynamic/unknown (median) | F1 dyn | parked <=30 m called static |",
+         "|---|---|---|---|---|---|---|---|---|---|---|"]
 for p, seq, runs in rows:
     ape = [j.get("ape", {}) for j, _ in runs]
     det = [j.get("detections", {}) for j, _ in runs]
@@ -84,8 +84,10 @@ for p, seq, runs in rows:
     f1 = stat([m["f1_dynamic"] for m in mot]) if mot else "-"
     near = stat([m["standing_near_static"] / m["standing_near"] if m["standing_near"] else None for m in mot]) if mot else "-"
     mf = [j.get("world", {}).get("metric_from_frame") for j, _ in runs]
-    lines.append("| %s | %s | %d | %s | %s | %s | %s | %d/%d/%d | %s | %s |" % (
-        p, seq, len(runs), stat([a.get("sim3_rmse") for a in ape]), stat([a.get("se3_rmse") for a in ape]),
+    tracked = [j.get("tracked", 0) for j, _ in runs]
+    lines.append("| %s | %s | %d | %d (%d-%d) of %d | %s | %s | %s | %s | %d/%d/%d | %s | %s |" % (
+        p, seq, len(runs), statistics.median(tracked), min(tracked), max(tracked), runs[0][0].get("frames", 0),
+        stat([a.get("sim3_rmse") for a in ape]), stat([a.get("se3_rmse") for a in ape]),
         stat([a.get("sim3_scale") for a in ape]), stat([x for x in mf if x is not None]),
         med("static"), med("dynamic"), med("unknown"), f1, near))
 text = "\n".join(lines) + "\n"

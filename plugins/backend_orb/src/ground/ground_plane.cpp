@@ -44,6 +44,18 @@ int countInliers(const std::vector<Eigen::Vector3d>& pts, const Eigen::Vector3d&
 
 }  // namespace
 
+double median(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+double medianAbsoluteDeviation(const std::vector<double>& values, double m) {
+  std::vector<double> deviations;
+  deviations.reserve(values.size());
+  for (double x : values) deviations.push_back(std::abs(x - m));
+  return median(std::move(deviations));
+}
+
 std::optional<GroundPlane> fitGroundPlane(const KeyFrame& kf, const GroundPlaneOptions& options,
                                           const Eigen::Vector3d& expected_normal_cam, double max_tilt_deg) {
   const Eigen::Vector3d down = expected_normal_cam.normalized();
@@ -114,14 +126,8 @@ void GroundReference::add(double value, const Eigen::Vector3d& normal) {
     normals_.erase(normals_.begin());
   }
   if (static_cast<int>(heights_.size()) < needed_) return;
-  auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
   const double h = median(heights_);
-  std::vector<double> deviations;
-  for (double x : heights_) deviations.push_back(std::abs(x - h));
-  const double spread = median(deviations) / h;
+  const double spread = medianAbsoluteDeviation(heights_, h) / h;
   if (spread > max_spread_) return;
   height_ = h;
   spread_ = spread;

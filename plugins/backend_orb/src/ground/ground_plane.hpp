@@ -45,6 +45,11 @@ struct GroundPlane {
   std::vector<MapPoint*> inliers;
 };
 
+// The median of a sample (the upper one of an even count), and the median absolute deviation from m: the
+// robust centre and spread every scale estimate here uses. Empty samples are the caller's to avoid.
+double median(std::vector<double> values);
+double medianAbsoluteDeviation(const std::vector<double>& values, double m);
+
 std::optional<GroundPlane> fitGroundPlane(const KeyFrame& kf, const GroundPlaneOptions& options,
                                           const Eigen::Vector3d& expected_normal_cam, double max_tilt_deg);
 

@@ -107,15 +107,9 @@ void LocalMapper::keepScale(KeyFrame* kf) {
   if (scale_fits_.size() < K) return;
   std::vector<double> ratios;
   for (const auto& f : scale_fits_) ratios.push_back(H / f.second);
-  auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
   const double r = median(ratios);
-  std::vector<double> dev;
-  for (double x : ratios) dev.push_back(std::abs(x - r));
   // Standard error of the median of K fits, from their median absolute deviation (normal: 1.4826 MAD).
-  const double se = 1.4826 * median(dev) * 1.2533 / std::sqrt(static_cast<double>(K));
+  const double se = 1.4826 * medianAbsoluteDeviation(ratios, r) * 1.2533 / std::sqrt(static_cast<double>(K));
   if (std::abs(r - 1.0) <= std::max(options_.metric_correction_min, 2.0 * se)) return;
   // While the metric map is young its whole extent shares the first estimate's error: the whole map is
   // corrected. Later, drift is local and slow: the map from the oldest of the fits on is corrected, and only
@@ -140,8 +134,7 @@ std::optional<double> LocalMapper::objectScale(const KeyFrame& kf) const {
     if (d > 0) ratios.push_back(range / d);
   }
   if (ratios.size() < 8) return std::nullopt;  // a few points on a car say little
-  std::nth_element(ratios.begin(), ratios.begin() + ratios.size() / 2, ratios.end());
-  return ratios[ratios.size() / 2];
+  return median(std::move(ratios));
 }
 
 std::optional<double> LocalMapper::currentObjectScale(KeyFrame* kf) const {
@@ -152,8 +145,7 @@ std::optional<double> LocalMapper::currentObjectScale(KeyFrame* kf) const {
     if (!k->bad)
       if (const auto s = objectScale(*k)) scales.push_back(*s);
   if (static_cast<int>(scales.size()) < options_.ground.reference_keyframes) return std::nullopt;
-  std::nth_element(scales.begin(), scales.begin() + scales.size() / 2, scales.end());
-  return scales[scales.size() / 2];
+  return median(std::move(scales));
 }
 
 double LocalMapper::currentGroundHeight(KeyFrame* kf) const {
@@ -170,8 +162,7 @@ double LocalMapper::currentGroundHeight(KeyFrame* kf) const {
                                         options_.ground.max_tilt_from_reference_deg))
     heights.push_back(plane->height);
   if (static_cast<int>(heights.size()) < options_.ground.reference_keyframes) return ground_reference_.height();
-  std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
-  return heights[heights.size() / 2];
+  return median(std::move(heights));
 }
 
 void LocalMapper::registerKeyFrame(KeyFrame* kf) {
