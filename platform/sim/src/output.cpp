@@ -309,6 +309,13 @@ std::string ensureSequence(const std::string& cache_dir, const SynthConfig& conf
   std::filesystem::remove_all(tmp, ec);
   generateSequence(config, tmp, progress);
   writeFileAtomic(tmp + "/COMPLETE", text);
+  // Several runs may render the same sequence at once (parallel ablations): the first to finish keeps its
+  // folder, which others may already be reading; a later one discards its own. Only a folder without the
+  // marker (an interrupted render) is replaced.
+  if (std::filesystem::exists(marker)) {
+    std::filesystem::remove_all(tmp, ec);
+    return dir;
+  }
   std::filesystem::remove_all(dir, ec);
   std::filesystem::rename(tmp, dir, ec);
   if (ec) {

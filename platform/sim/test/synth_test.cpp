@@ -8,6 +8,9 @@
 #include <fstream>
 #include <sstream>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -341,4 +344,36 @@ TEST(Synth, EgoDrivesAClosedLoopAtKittiSpeeds) {
   EXPECT_LT(vmax * 3.6, 50.0);
   // Camera height above the road stays at the mount height.
   EXPECT_NEAR(synth.T_world_cam(0).translation().norm(), 0.0, 1e-12);
+}
+
+// Two processes that need the same synthetic sequence at once (a parallel ablation) both get a complete
+// folder, and the one that finishes second does not pull it away from the first (whichever order they
+// finish in).
+TEST(SynthCache, ConcurrentRendersOfOneSequenceBothSucceed) {
+  const std::string cache = tempDir("cache_race");
+  SynthConfig c = tinyConfig();
+  c.frames = 3;
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    int code = 1;
+    try {
+      const std::string dir = beslam::sim::ensureSequence(cache, c, "tiny", nullptr);
+      code = fs::exists(fs::path(dir) / "COMPLETE") ? 0 : 2;
+    } catch (...) {
+    }
+    ::_exit(code);
+  }
+  const std::string dir = beslam::sim::ensureSequence(cache, c, "tiny", nullptr);
+  // Read the whole folder while the other process may still be finishing.
+  size_t files = 0;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) files += e.is_regular_file();
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_TRUE(fs::exists(fs::path(dir) / "COMPLETE"));
+  EXPECT_GT(files, 3u);
+  for (const auto& e : fs::directory_iterator(cache))
+    EXPECT_EQ(e.path().filename().string().find(".partial."), std::string::npos) << e.path();
 }
