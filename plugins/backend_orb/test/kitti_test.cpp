@@ -67,3 +67,55 @@ TEST(Kitti00, GroundPriorKeepsTheApeUnderTheTarget) {
 
 }  // namespace
 }  // namespace beslam::orb
+
+namespace beslam::orb {
+namespace {
+
+// KITTI 00 with the metric scale from the camera height (1.65 m): the map turns metric early, the
+// trajectory's length matches the ground truth's in metres, and the threaded mode, which applies the
+// rescale at the same frame, gives the same trajectory to the bit.
+TEST(Kitti00, MetricScaleFromTheCameraHeight) {
+  const std::string data = test::sharedData();
+  const std::string seq = data + "/kitti/odometry/sequences/00";
+  if (data.empty() || !test::exists(seq + "/image_0/000000.png"))
+    GTEST_SKIP() << "KITTI 00 excerpt not found (BESLAM_SHARED_DATA=" << data << ")";
+  const auto gt = kitti::readPoses(data + "/kitti/odometry/poses/00.txt");
+  const cv::Mat first = cv::imread(kitti::imagePath(seq, 0), cv::IMREAD_GRAYSCALE);
+  auto run = [&](bool threaded, Statistics* stats) {
+    Options options;
+    options.metric_scale = true;
+    options.camera_height = 1.65;
+    options.threaded_mapping = threaded;
+    OrbSlam slam(kitti::readCamera(seq + "/calib.txt", first.cols, first.rows), options);
+    bool metric_reported = false;
+    for (size_t n = 0;; ++n) {
+      const cv::Mat image = cv::imread(kitti::imagePath(seq, n), cv::IMREAD_GRAYSCALE);
+      if (image.empty()) break;
+      metric_reported = slam.track(image, cv::Mat(), 0.1 * static_cast<double>(n), static_cast<int64_t>(n)).world_is_metric;
+    }
+    slam.finish();
+    EXPECT_TRUE(metric_reported) << "the last frame is tracked in metres";
+    *stats = slam.statistics();
+    return slam.trajectory();
+  };
+  Statistics st, st_threaded;
+  const auto traj = run(false, &st);
+  const auto traj_threaded = run(true, &st_threaded);
+  EXPECT_GE(st.metric_from_frame, 5);
+  EXPECT_LE(st.metric_from_frame, 30);
+  ASSERT_EQ(traj.size(), traj_threaded.size());
+  for (size_t i = 0; i < traj.size(); ++i)
+    ASSERT_TRUE(traj[i].T_world_cam.matrix() == traj_threaded[i].T_world_cam.matrix()) << "frame " << traj[i].frame_index;
+  // Path length from frame 30 on (after the metric switch), estimate against truth: metres within 10 %.
+  double est = 0, ref = 0;
+  for (size_t i = 1; i < traj.size(); ++i) {
+    if (traj[i - 1].frame_index < 30) continue;
+    est += (traj[i].T_world_cam.translation() - traj[i - 1].T_world_cam.translation()).norm();
+    ref += (gt[traj[i].frame_index].translation() - gt[traj[i - 1].frame_index].translation()).norm();
+  }
+  ASSERT_GT(ref, 50.0);
+  EXPECT_NEAR(est / ref, 1.0, 0.1) << "path " << est << " m against " << ref << " m";
+}
+
+}  // namespace
+}  // namespace beslam::orb
