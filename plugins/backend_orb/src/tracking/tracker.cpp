@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <map>
 
@@ -108,6 +110,9 @@ TrackResult Tracker::track(std::shared_ptr<const FeatureSet> features, double ti
     result.T_world_cam = current_.T_cw.inverse();
     result.tracked_points = inliers_;
   } else {
+    if (std::getenv("BESLAM_ORB_DEBUG"))  // developers: why a frame was lost
+      std::fprintf(stderr, "frame %ld: lost (local-map inliers %d, keyframes %zu)\n", static_cast<long>(index), inliers_,
+                   map_.numKeyFrames());
     state_ = TrackingState::Lost;
     velocity_.reset();
     current_.has_pose = false;
