@@ -246,5 +246,15 @@ TEST(Demo, CallsParkedCarsStaticAndNoMovingCarStatic) {
   EXPECT_GT(number("standing_near_static"), 0) << m.out;
   ASSERT_GT(number("moving"), 0) << m.out;
   EXPECT_LE(number("moving_static") / number("moving"), 0.01) << m.out;
+  // Trusted statics reach the backend: features on parked cars' labels, matches to their map points, and
+  // map points on them in the final map.
+  const std::string summary = slurp(dir / "out/summary.json");
+  auto field = [&](const std::string& key) {
+    const size_t at = summary.find("\"" + key + "\":");
+    return at == std::string::npos ? -1.0 : std::stod(summary.substr(at + key.size() + 3));
+  };
+  EXPECT_GT(field("features_static"), 0) << summary;
+  EXPECT_GT(field("tracked_static"), 0) << summary;
+  EXPECT_GT(field("on_static_objects"), 0) << summary;
   fs::remove_all(dir);
 }
