@@ -282,6 +282,14 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       ego_speed_ = std::hypot(d.x(), d.z()) / span;
       ego_yaw_rate_ = Eigen::AngleAxisd(poses_[0].second.linear().transpose() * poses_[1].second.linear()).angle() / span;
     }
+  } else if (!poses_.empty() && now - poses_.back().first > params_.max_miss_time) {
+    // The backend has given no pose for longer than a track may coast: an extrapolated ego pose would place
+    // every parked car wrongly (a lost SLAM, a long gap). Every box is unknown, and the tracks wait,
+    // untouched, for the next real pose.
+    std::vector<Decision> unknown(boxes.size());
+    for (size_t i = 0; i < boxes.size(); ++i)
+      unknown[i].range = std::hypot(boxes[i].center_cam[0], boxes[i].center_cam[2]);
+    return unknown;
   } else if (!poses_.empty()) {
     const auto& [t1, T1] = poses_.back();
     Eigen::Isometry3d T = T1;

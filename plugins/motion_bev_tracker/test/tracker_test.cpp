@@ -411,6 +411,30 @@ TEST(BevTracker, ExtrapolatesThePoseWhenTheBackendHasNone) {
   }
 }
 
+// A backend lost for longer than a track may coast (max_miss_time): the tracker stops extrapolating the
+// ego pose (a parked car would seem to move), calls every box unknown, and takes up its tracks when poses
+// come back; the parked car is never called dynamic.
+TEST(BevTracker, LongPoseGapsGiveUnknownNotExtrapolation) {
+  Sim sim;
+  sim.objects = {parked(4.0, 30.0), driving(-3.0, 25.0, 0.0, 14.0)};
+  BevTracker tracker;  // max_miss_time 1.0 s
+  std::vector<int> ids;
+  int unknown_in_gap = 0, boxes_in_gap = 0;
+  for (int k = 0; k < 60; ++k) {
+    const auto boxes = sim.boxes(k, ids);
+    std::optional<Eigen::Isometry3d> pose;
+    if (k < 20 || k >= 45) pose = sim.ego(k * kDt);  // backend lost for 2.5 s
+    const auto d = tracker.update(k * kDt, pose, boxes);
+    for (size_t i = 0; i < d.size(); ++i) {
+      if (ids[i] == 0) EXPECT_NE(d[i].motion_state, BESLAM_MOTION_DYNAMIC) << "frame " << k;
+      if (k >= 31 && k < 45) unknown_in_gap += d[i].motion_state == BESLAM_MOTION_UNKNOWN, ++boxes_in_gap;
+      if (k >= 55) EXPECT_EQ(d[i].motion_state, ids[i] == 0 ? BESLAM_MOTION_STATIC : BESLAM_MOTION_DYNAMIC) << "frame " << k;
+    }
+  }
+  ASSERT_GT(boxes_in_gap, 0);
+  EXPECT_EQ(unknown_in_gap, boxes_in_gap) << "more than 1 s after the last pose every box is unknown";
+}
+
 TEST(BevTracker, DetectorVelocityDecidesWithinStartFrames) {
   BevTracker tracker;  // start_frames = 2
   beslam_box3d moving{}, still{};

@@ -104,8 +104,9 @@ class BevTracker {
  public:
   explicit BevTracker(const Params& params = {});
 
-  // One frame: T_world_cam from the backend, or nullopt (the tracker then extrapolates the last poses,
-  // or with none works in the camera frame and answers UNKNOWN). Returns one decision per box, in order.
+  // One frame: T_world_cam from the backend, or nullopt (the tracker then extrapolates the last poses for
+  // at most max_miss_time, after which every box is UNKNOWN and the tracks wait; with no pose ever it works
+  // in the camera frame and answers UNKNOWN). Returns one decision per box, in order.
   // Throws std::invalid_argument on a non-finite box.
   std::vector<Decision> update(double timestamp, const std::optional<Eigen::Isometry3d>& T_world_cam,
                                const std::vector<beslam_box3d>& boxes);
