@@ -193,23 +193,12 @@ struct OrbSlam::Impl {
     const double wait_ms = msSince(t0);
     // Mapping is idle here in both modes: a metric scale the mapper found is applied to everything at
     // once, before this frame is tracked (the same frame in the threaded and the inline mode).
-    if (const auto s = mapper.takePendingScale()) {
-      map.rescale(*s);
-      tracker.rescale(*s);
-      mapper.rescale(*s, map.allKeyFrames().empty() ? 0 : map.allKeyFrames().back()->id);
-      parked_scale.rescale(*s);
-      stats.metric_from_frame = index;
-      stats.metric_scale_factor = *s;
-    }
+    if (const auto s = mapper.takePendingScale()) becomeMetric(*s, index);
     if (pending_object_scale) {  // the parked cars' boxes: a direct metric measurement, preferred to the road
       const double s = *pending_object_scale;
       pending_object_scale.reset();
       if (!mapper.metric()) {
-        map.rescale(s);
-        tracker.rescale(s);
-        mapper.rescale(s, map.allKeyFrames().empty() ? 0 : map.allKeyFrames().back()->id);
-        stats.metric_from_frame = index;
-        stats.metric_scale_factor = s;
+        becomeMetric(s, index);
       } else {  // already metric (by the road): a correction about the current camera
         const Eigen::Vector3d centre = tracker.lastCentre();
         map.rescaleFrom(0, s, centre);
@@ -295,6 +284,16 @@ struct OrbSlam::Impl {
     return result;
   }
 
+  // The map, the tracker and the mapper's references times s: the world is in metres from this frame on.
+  void becomeMetric(double s, int64_t index) {
+    map.rescale(s);
+    tracker.rescale(s);
+    mapper.rescale(s, map.allKeyFrames().empty() ? 0 : map.allKeyFrames().back()->id);
+    parked_scale.rescale(s);
+    stats.metric_from_frame = index;
+    stats.metric_scale_factor = s;
+  }
+
   // FeatureSet::object_range: where each static-object keypoint's ray enters its object's box (slab test).
   void setObjectRanges(FeatureSet& f, const std::vector<ObjectBox>& boxes) const {
     f.object_range.assign(f.size(), 0.0f);
@@ -336,8 +335,8 @@ OrbSlam::~OrbSlam() = default;
 std::optional<Eigen::Isometry3d> OrbSlam::predictPose(double) const { return impl_->tracker.predictPose(); }
 
 TrackResult OrbSlam::track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index,
-                           const std::vector<ObjectBox>& static_boxes) {
-  return impl_->track(gray, label_mask, timestamp, frame_index, static_boxes);
+                           const std::vector<ObjectBox>& car_boxes) {
+  return impl_->track(gray, label_mask, timestamp, frame_index, car_boxes);
 }
 
 void OrbSlam::finish() {

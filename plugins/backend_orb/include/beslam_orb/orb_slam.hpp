@@ -164,9 +164,10 @@ class OrbSlam {
   // velocity is per frame (frames assumed evenly spaced); the timestamp is not used.
   std::optional<Eigen::Isometry3d> predictPose(double timestamp) const;
 
-  // gray: CV_8UC1 (or CV_8UC3 BGR, converted; colour kept for map points); label_mask: CV_16UC1 or empty.
+  // gray: CV_8UC1 (or CV_8UC3 BGR, converted; colour kept for map points); label_mask: CV_16UC1 or empty;
+  // car_boxes: the frame's tracked cars (ObjectBox), used with metric_scale.
   TrackResult track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index,
-                    const std::vector<ObjectBox>& static_boxes = {});
+                    const std::vector<ObjectBox>& car_boxes = {});
 
   // Waits for the mapping thread and runs a last local bundle adjustment.
   void finish();

@@ -33,9 +33,6 @@ struct GroundPlaneOptions {
   int min_inliers = 25;                 // fewer: no plane
   int ransac_iterations = 150;
   int reference_keyframes = 5;          // reference height: median over the first fits
-  // The reference needs its fits to agree: relative median absolute deviation of their heights at most
-  // this (infinite: the first fits, whatever they say). A window slides over later fits until they agree.
-  double reference_max_spread = 1e9;
   double sigma_ratio = 0.2;             // prior std-dev of one ground point's height, as a share of h
 };
 
@@ -54,7 +51,8 @@ std::optional<GroundPlane> fitGroundPlane(const KeyFrame& kf, const GroundPlaneO
                                           const Eigen::Vector3d& expected_normal_cam, double max_tilt_deg);
 
 // The reference ground under the camera: once `keyframes` fits are in, the median height and the mean
-// normal of those fits. Later fits are compared with it.
+// normal of those fits. Later fits are compared with it. With a finite max_spread the fits must agree
+// (relative median absolute deviation at most that); until they do, the window slides over later fits.
 class GroundReference {
  public:
   explicit GroundReference(int keyframes, double max_spread = 1e9) : needed_(keyframes), max_spread_(max_spread) {}

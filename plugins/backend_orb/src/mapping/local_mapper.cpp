@@ -120,7 +120,6 @@ void LocalMapper::keepScale(KeyFrame* kf) {
     return;
   }
   pending_correction_ = ScaleCorrection{settling ? 0 : scale_fits_.front().first, r};
-  ++corrections_;
   scale_fits_.clear();
 }
 

@@ -88,7 +88,6 @@ class LocalMapper {
     pending_correction_.reset();
     return c;
   }
-  int corrections() const { return corrections_; }
   // The scale came from parked cars' boxes: the ground fits no longer correct it and the ground prior is
   // off (their biases on bare or sloping roads would undo a direct measurement); the boxes' range priors
   // hold the scale.
@@ -132,10 +131,9 @@ class LocalMapper {
   optimize::BundleAdjustmentReport last_ba_;
   bool metric_ = false;
   std::optional<double> pending_scale_;
-  std::vector<std::pair<long, double>> scale_fits_;
-  GroundReference object_reference_;  // per-keyframe object scale observations, same agreement rule  // (keyframe id, camera height over its plane) once metric
+  std::vector<std::pair<long, double>> scale_fits_;  // (keyframe id, camera height over its plane) once metric
+  GroundReference object_reference_;  // per-keyframe object scale observations, same agreement rule
   std::optional<ScaleCorrection> pending_correction_;
-  int corrections_ = 0;
   long metric_since_kf_ = 0;
   bool object_scaled_ = false;
 };
