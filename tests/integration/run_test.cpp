@@ -102,7 +102,8 @@ TEST_F(RunTest, WritesEveryOutput) {
   // Ground truth is the replayed file itself: zero error.
   EXPECT_NE(r.out.find("APE translation RMSE 0 m"), std::string::npos) << r.out;
   for (const char* f : {"trajectory.tum", "trajectory.kitti", "trajectory_online.tum", "keyframes.tum",
-                        "pipeline.resolved.yaml", "timing.csv", "summary.json", "objects.txt", "masks/000005.png"})
+                        "pipeline.resolved.yaml", "timing.csv", "summary.json", "objects.txt", "masks/000005.png",
+                        "samples/000000.jpg", "samples/000005.jpg"})
     EXPECT_TRUE(fs::exists(dir_ / "out" / f)) << f;
   EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
   EXPECT_EQ(dataLines(slurp(dir_ / "out/keyframes.tum")), 3);

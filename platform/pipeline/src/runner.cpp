@@ -18,6 +18,7 @@
 #include "beslam/sdk/views.hpp"  // the host uses the SDK's zero-copy view helpers too
 #include "beslam/sim/synth.hpp"
 #include "run_outputs.hpp"
+#include "sample_frames.hpp"
 
 namespace fs = std::filesystem;
 
@@ -82,6 +83,7 @@ SynthSource synthSource(const DatasetSpec& dataset) {
 
 // Everything one frame carries from stage to stage.
 struct FrameState {
+  size_t position = 0;  // in the selected range
   datasets::Frame frame;
   beslam_frame view{};  // the ABI view of `frame` (points into it)
   std::optional<Eigen::Isometry3d> T_world_cam_predicted;
@@ -102,6 +104,8 @@ class Run {
     openDataset();
     makeDirectories(out_dir_);
     if (spec.output.masks) makeDirectories((fs::path(out_dir_) / "masks").string());
+    sample_positions_ = detail::samplePositions(dataset_->size(), spec.output.samples);
+    if (!sample_positions_.empty()) makeDirectories((fs::path(out_dir_) / "samples").string());
     createPlugins();
   }
 
@@ -215,6 +219,7 @@ class Run {
   // load: the frame from the dataset, and its ABI view.
   void load(size_t i, FrameState& f) {
     StageTimer timer(f.timing, "load");
+    f.position = i;
     f.frame = dataset_->load(i);
     f.timing.index = f.frame.index;
     beslam_frame& cf = f.view;
@@ -306,7 +311,8 @@ class Run {
     if (!landmarks.landmarks.empty()) backend_->addLandmarks(landmarks);
   }
 
-  // write: the per-frame outputs (objects.txt rows, masks/NNNNNN.png); everything else at the end.
+  // write: the per-frame outputs (objects.txt rows, masks/NNNNNN.png, samples/NNNNNN.jpg); everything
+  // else at the end.
   void write(FrameState& f) {
     StageTimer timer(f.timing, "write");
     if (detector_)
@@ -318,6 +324,12 @@ class Run {
       const cv::Mat labels = f.mask.empty() ? cv::Mat::zeros(camera_.height, camera_.width, CV_16UC1) : f.mask;
       if (!cv::imencode(".png", labels, png)) throwAt(path, "cannot encode mask");
       writeFileAtomic(path, std::string(png.begin(), png.end()));
+    }
+    if (sample_positions_.count(f.position)) {
+      const cv::Mat& image = f.frame.color.empty() ? f.frame.gray : f.frame.color;
+      detail::writeSampleFrame(
+          (fs::path(out_dir_) / "samples" / (std::to_string(1000000 + f.frame.index).substr(1) + ".jpg")).string(),
+          detail::drawSampleFrame(image, f.mask, f.tracked.keypoints, f.boxes, camera_));
     }
   }
 
@@ -334,6 +346,7 @@ class Run {
   std::unique_ptr<registry::ReconstructorInstance> reconstructor_;
   std::unique_ptr<registry::BackendInstance> backend_;
   bool world_metric_ = false;  // the backend's world unit, as its last track() said (data.h)
+  std::set<size_t> sample_positions_;
   detail::RunRecord record_;
   RunSummary summary_;
 };
