@@ -25,7 +25,11 @@ function(beslam_add_plugin target)
     CXX_VISIBILITY_PRESET hidden
     VISIBILITY_INLINES_HIDDEN ON
     LIBRARY_OUTPUT_DIRECTORY ${out})
-  target_link_options(${target} PRIVATE -Wl,--no-undefined)
+  # clang links the sanitizer runtimes into the executable only: a sanitised plugin's references to them
+  # resolve at load time, so --no-undefined cannot hold there.
+  if(NOT (BESLAM_SANITIZE AND CMAKE_CXX_COMPILER_ID MATCHES "Clang"))
+    target_link_options(${target} PRIVATE -Wl,--no-undefined)
+  endif()
   set_property(GLOBAL APPEND PROPERTY BESLAM_ALL_PLUGINS ${target})
   include(GNUInstallDirs)
   install(TARGETS ${target} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/beslam/plugins)

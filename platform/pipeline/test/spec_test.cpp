@@ -78,6 +78,14 @@ TEST_F(PipelineSpecTest, SyntaxErrorNamesFileAndLine) {
               {"pipeline.yaml:", "YAML syntax error"});
 }
 
+// Found by the pipeline_yaml fuzzer (tests/fuzz): a map or a sequence used as a key reached yaml-cpp's
+// string conversion and escaped as a YAML exception.
+TEST_F(PipelineSpecTest, NonScalarKeysAreOneError) {
+  expectError("? {a: 1}\n: 2\n", {"pipeline.yaml:1:", "keys must be plain names"});
+  expectError(std::string(kGood) + "output:\n  ? [x, y]\n  : 3\n", {"pipeline.yaml:", "keys must be plain names"});
+  expectError("# t: rpeAde+#lt\n:\n t: rpeAde+#lt\n:\n?  : rpeAde+#lt\n:\n", {"pipeline.yaml"});
+}
+
 TEST_F(PipelineSpecTest, UnknownKeyNamesLineAndKnownKeys) {
   expectError(std::string(kGood) + "datset: {}\n", {"pipeline.yaml:9: datset: unknown key", "known: name"});
   expectError("dataset:\n  type: tum\n  root: x\n  frist: 3\nbackend: {plugin: a}\n",

@@ -155,7 +155,9 @@ BevRefineResult refineBoxBev(const beslam_box3d& box, const CameraPoints& points
   // BEV clusters: occupied cells of cluster_gap / 2, 8-connected (two points of one cluster are linked by
   // a chain of cells; clusters farther apart than about 1.4 cluster_gap never merge). Linear time.
   const double cell_size = params.cluster_gap / 2;
-  auto key = [](int cx, int cz) { return (static_cast<int64_t>(cx) << 32) ^ static_cast<uint32_t>(cz); };
+  auto key = [](int cx, int cz) {  // shifted as unsigned: a left shift of a negative value is undefined
+    return static_cast<int64_t>((uint64_t{static_cast<uint32_t>(cx)} << 32) | static_cast<uint32_t>(cz));
+  };
   std::unordered_map<int64_t, int> cells;
   cells.reserve(cand.size());
   std::vector<int> point_cell(cand.size());

@@ -59,7 +59,10 @@ struct Sim {
       const double r = std::hypot(c.x(), c.z());
       const Eigen::Vector3d ray = Eigen::Vector3d(c.x(), 0, c.z()).normalized();
       const Eigen::Vector3d side(ray.z(), 0, -ray.x());
-      c += ray * normal() * (depth_sigma + depth_sigma_per_m * r) + side * normal() * lateral_sigma;
+      // Two draws in a fixed order (the order of operands of + is unspecified: compilers differ).
+      const double n_side = normal();
+      const double n_depth = normal();
+      c += ray * n_depth * (depth_sigma + depth_sigma_per_m * r) + side * n_side * lateral_sigma;
       beslam_box3d b{};
       b.class_id = objects[i].class_id;
       b.track_id = -1;
