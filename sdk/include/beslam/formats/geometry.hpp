@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
+#include <utility>
 
 #include "beslam/data.h"
 
@@ -101,32 +102,20 @@ inline bool kittiClass(const std::string& name, int32_t& class_id) {
   return true;
 }
 
+// The ABI class's KITTI-style name ("Misc" for unknown ids) and a motion state's name.
 inline const char* className(int32_t class_id) {
-  switch (class_id) {
-    case BESLAM_CLASS_CAR:
-      return "Car";
-    case BESLAM_CLASS_PEDESTRIAN:
-      return "Pedestrian";
-    case BESLAM_CLASS_CYCLIST:
-      return "Cyclist";
-    case BESLAM_CLASS_TRUCK:
-      return "Truck";
-    case BESLAM_CLASS_VAN:
-      return "Van";
-    default:
-      return "Misc";
-  }
+  static const std::pair<int32_t, const char*> kNames[] = {{BESLAM_CLASS_CAR, "Car"},
+                                                           {BESLAM_CLASS_PEDESTRIAN, "Pedestrian"},
+                                                           {BESLAM_CLASS_CYCLIST, "Cyclist"},
+                                                           {BESLAM_CLASS_TRUCK, "Truck"},
+                                                           {BESLAM_CLASS_VAN, "Van"}};
+  for (const auto& [id, name] : kNames)
+    if (id == class_id) return name;
+  return "Misc";
 }
 
 inline const char* motionName(int32_t state) {
-  switch (state) {
-    case BESLAM_MOTION_STATIC:
-      return "static";
-    case BESLAM_MOTION_DYNAMIC:
-      return "dynamic";
-    default:
-      return "unknown";
-  }
+  return state == BESLAM_MOTION_STATIC ? "static" : state == BESLAM_MOTION_DYNAMIC ? "dynamic" : "unknown";
 }
 
 }  // namespace beslam::formats

@@ -23,6 +23,8 @@ struct TrackResult {
   bool world_is_metric = false;
   // Named per-frame counts the host sums into summary.json ("features", "features_static", "tracked_static").
   std::vector<std::pair<std::string, double>> counters;
+  // The frame's features (ABI 1.2), for drawing: pixel, mask label, BESLAM_KEYPOINT_* flags, octave.
+  std::vector<beslam_keypoint> keypoints;
 };
 
 struct TrajectoryEntry {
@@ -44,11 +46,14 @@ class Backend : public detail::Kind<Backend, BESLAM_KIND_BACKEND> {
   virtual std::vector<beslam_map_point> mapPoints() { return {}; }
 
  private:
-  friend struct detail::Glue<Backend>;  // the C glue (detail/backend.hpp) fills the buffers below
-  detail::NamedValues<beslam_stage_time> abi_stages_;
-  detail::NamedValues<beslam_named_value> abi_counters_;
-  std::vector<beslam_trajectory_entry> abi_trajectory_;
-  std::vector<beslam_map_point> abi_points_;
+  friend struct detail::Access;  // the C glue (detail/backend.hpp) keeps here what the host reads
+  struct {
+    detail::NamedValues<beslam_stage_time> stages;
+    detail::NamedValues<beslam_named_value> counters;
+    std::vector<beslam_keypoint> keypoints;
+    std::vector<beslam_trajectory_entry> trajectory;
+    std::vector<beslam_map_point> points;
+  } abi_;
 };
 
 }  // namespace beslam::sdk

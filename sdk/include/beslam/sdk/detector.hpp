@@ -14,8 +14,10 @@ class Detector : public detail::Kind<Detector, BESLAM_KIND_DETECTOR> {
   virtual std::vector<beslam_box3d> detect(const Frame& frame) = 0;
 
  private:
-  friend struct detail::Glue<Detector>;  // the C glue (detail/detector.hpp) fills the buffers below
-  std::vector<beslam_box3d> abi_boxes_;  // what the last detect() handed to the host
+  friend struct detail::Access;  // the C glue (detail/detector.hpp) keeps here what the host reads
+  struct {
+    std::vector<beslam_box3d> boxes;  // what the last detect() handed to the host
+  } abi_;
 };
 
 }  // namespace beslam::sdk

@@ -15,9 +15,11 @@ class Reconstructor : public detail::Kind<Reconstructor, BESLAM_KIND_RECONSTRUCT
                                             const std::vector<beslam_box3d>& boxes, const cv::Mat& mask) = 0;
 
  private:
-  friend struct detail::Glue<Reconstructor>;  // the C glue (detail/reconstructor.hpp) fills the buffers below
-  std::vector<Landmark> abi_landmarks_;
-  std::vector<beslam_object_landmark> abi_c_landmarks_;
+  friend struct detail::Access;  // the C glue (detail/reconstructor.hpp) keeps here what the host reads
+  struct {
+    std::vector<Landmark> landmarks;
+    std::vector<beslam_object_landmark> c_landmarks;  // C views of landmarks
+  } abi_;
 };
 
 }  // namespace beslam::sdk

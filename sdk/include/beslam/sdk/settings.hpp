@@ -57,22 +57,9 @@ inline std::string settingRange(const beslam_config_field& f) {
 }
 
 inline const char* typeName(int32_t type) {
-  switch (type) {
-    case BESLAM_CONFIG_BOOL:
-      return "a boolean";
-    case BESLAM_CONFIG_INT:
-      return "an integer";
-    case BESLAM_CONFIG_DOUBLE:
-      return "a number";
-    case BESLAM_CONFIG_STRING:
-      return "a string";
-    case BESLAM_CONFIG_PATH:
-      return "a path";
-    case BESLAM_CONFIG_DOUBLE_LIST:
-      return "a list of numbers";
-    default:
-      return "an unknown type";
-  }
+  static const char* const kNames[] = {"an unknown type", "a boolean", "an integer",       "a number",
+                                       "a string",        "a path",    "a list of numbers"};
+  return type >= BESLAM_CONFIG_BOOL && type <= BESLAM_CONFIG_DOUBLE_LIST ? kNames[type] : kNames[0];
 }
 
 inline bool inRange(const beslam_config_field& f, double v) {

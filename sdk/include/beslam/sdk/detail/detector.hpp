@@ -7,24 +7,20 @@ namespace beslam::sdk {
 
 namespace detail {
 
-template <>
-struct Glue<Detector> {
-  template <class Impl>
-  static const void* table() {
-    static const beslam_detector_v1 table = {
-        sizeof(beslam_detector_v1), 0,
-        [](void* instance, const beslam_frame* frame, beslam_box_list* out) -> beslam_status {
-          return detail::call<Impl, Detector>(instance, "detect", [&](Detector& d) {
-            detail::require("detect", out);
-            d.abi_boxes_ = d.detect(toFrame(frame));
-            out->boxes = d.abi_boxes_.data();
-            out->count = static_cast<uint32_t>(d.abi_boxes_.size());
-            out->element_size = sizeof(beslam_box3d);
-          });
-        }};
-    return &table;
-  }
-};
+template <class Impl>
+const void* table(Tag<Impl>, const Detector*) {
+  return makeTable<beslam_detector_v1>(
+      [](void* instance, const beslam_frame* frame, beslam_box_list* out) -> beslam_status {
+        return call<Impl, Detector>(instance, "detect", [&](Detector& d) {
+          require("detect", out);
+          auto& abi = Access::buffers(d);
+          abi.boxes = d.detect(toFrame(frame));
+          out->boxes = abi.boxes.data();
+          out->count = static_cast<uint32_t>(abi.boxes.size());
+          out->element_size = sizeof(beslam_box3d);
+        });
+      });
+}
 
 }  // namespace detail
 }  // namespace beslam::sdk

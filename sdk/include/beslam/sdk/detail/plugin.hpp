@@ -21,15 +21,30 @@ inline Frame toFrame(const beslam_frame* frame) {
 
 namespace detail {
 
-// What every kind base class derives from: its ABI kind and itself, so describe<Impl>() finds the kind's
-// C function table (Glue<KindBase>::table<Impl>(), one specialisation per kind in detail/<kind>.hpp).
+// What every kind base class derives from: its ABI kind. describe() finds the kind's C function table as
+// the overload table(Tag<Impl>, const KindBase*) in detail/<kind>.hpp (by argument-dependent lookup, so
+// the kind headers may come after this one).
+template <class Impl>
+struct Tag {};
 template <class Base, int32_t K>
 struct Kind {
   static constexpr int32_t kKind = K;
-  using KindBase = Base;
 };
-template <class KindBase>
-struct Glue;
+
+// The glue's way into a kind's private abi_ buffers (what the host reads until the next call).
+struct Access {
+  template <class KindBase>
+  static auto& buffers(KindBase& kind) {
+    return kind.abi_;
+  }
+};
+
+// A kind's C function table for one plugin class: built once, valid while the library is loaded.
+template <class Table, class... Functions>
+const void* makeTable(Functions... functions) {
+  static const Table table = {sizeof(Table), 0, functions...};
+  return &table;
+}
 
 // Runs f, mapping every exception to a status and logging its message: nothing crosses the C ABI.
 template <class F>
@@ -131,7 +146,7 @@ const beslam_plugin_descriptor* describe(const PluginInfo& info) {
       } catch (...) {
       }
     };
-    desc.functions = detail::Glue<typename Impl::KindBase>::template table<Impl>();
+    desc.functions = table(detail::Tag<Impl>{}, static_cast<const Impl*>(nullptr));
     return desc;
   }();
   return &d;
