@@ -13,25 +13,15 @@
 #include "beslam/formats/geometry.hpp"
 #include "beslam/formats/labels.hpp"
 #include "beslam/formats/trajectory.hpp"
+#include "temp_files.hpp"
 
 namespace beslam::formats {
 namespace {
 
 namespace fs = std::filesystem;
 
-class Files : public ::testing::Test {
+class Files : public TempFiles {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("beslam_formats_test_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string file(const std::string& name, const std::string& text) const {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path, std::ios::binary) << text;
-    return path;
-  }
   // The one error message reading `path` gives (empty when it reads).
   template <class F>
   static std::string errorOf(F&& read) {
@@ -42,12 +32,11 @@ class Files : public ::testing::Test {
     }
     return "";
   }
-  fs::path dir_;
 };
 
 TEST_F(Files, KittiAndTumRowsReadAndRoundTripExactly) {
   const std::string kitti =
-      file("k.txt", "# comment\n1 0 0 0.5 0 1 0 -0.25 0 0 1 3\r\n\n0 -1 0 1e-3 1 0 0 2 0 0 1 0\n");
+      write("k.txt", "# comment\n1 0 0 0.5 0 1 0 -0.25 0 0 1 3\r\n\n0 -1 0 1e-3 1 0 0 2 0 0 1 0\n");
   const Trajectory k = readKitti(kitti);
   ASSERT_EQ(k.size(), 2u);
   EXPECT_EQ(k.stamps[1], 1.0);
@@ -55,37 +44,37 @@ TEST_F(Files, KittiAndTumRowsReadAndRoundTripExactly) {
   EXPECT_EQ(k.poses[1].linear()(0, 1), -1.0);
   EXPECT_EQ(detectFormat(kitti), "kitti");
 
-  const std::string tum = file("t.txt", "0.1 1 2 3 0 0 0 2\n0.2,1,2,3.5,0,0,0.7071067811865476,0.7071067811865476\n");
+  const std::string tum = write("t.txt", "0.1 1 2 3 0 0 0 2\n0.2,1,2,3.5,0,0,0.7071067811865476,0.7071067811865476\n");
   const Trajectory t = readTum(tum);
   ASSERT_EQ(t.size(), 2u);
   EXPECT_TRUE(t.poses[0].linear().isIdentity(0));  // quaternion normalised on read
   EXPECT_NEAR(t.poses[1].linear()(1, 0), 1.0, 1e-15);
   EXPECT_EQ(detectFormat(tum), "tum");
 
-  writeTum(file("out.tum", ""), t);
+  writeTum(write("out.tum", ""), t);
   const Trajectory back = readTum((dir_ / "out.tum").string());
   EXPECT_EQ(back.stamps, t.stamps);
   EXPECT_EQ(back.poses[1].translation(), t.poses[1].translation());
-  writeKitti(file("out.kitti", ""), k);
+  writeKitti(write("out.kitti", ""), k);
   EXPECT_EQ(readKitti((dir_ / "out.kitti").string()).poses[1].matrix(), k.poses[1].matrix());
 }
 
 TEST_F(Files, BadTrajectoryRowsNameTheFileAndLine) {
-  const std::string short_row = file("short.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n");
+  const std::string short_row = write("short.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1\n");
   EXPECT_EQ(errorOf([&] { readKitti(short_row); }),
             short_row + ":2: expected 12 numbers per row (KITTI format), found 11");
-  const std::string word = file("word.txt", "0.1 1 2 x 0 0 0 1\n");
+  const std::string word = write("word.txt", "0.1 1 2 x 0 0 0 1\n");
   EXPECT_EQ(errorOf([&] { readTum(word); }), word + ":1: column 4: 'x' is not a number");
-  const std::string nan = file("nan.txt", "# t x y z qx qy qz qw\n0.1 1 2 nan 0 0 0 1\n");
+  const std::string nan = write("nan.txt", "# t x y z qx qy qz qw\n0.1 1 2 nan 0 0 0 1\n");
   EXPECT_EQ(errorOf([&] { readTum(nan); }), nan + ":2: column 4: non-finite value 'nan'");
-  const std::string zero_q = file("zq.txt", "0.1 1 2 3 0 0 0 0\n");
+  const std::string zero_q = write("zq.txt", "0.1 1 2 3 0 0 0 0\n");
   EXPECT_EQ(errorOf([&] { readTum(zero_q); }), zero_q + ":1: quaternion has zero length");
-  const std::string skew = file("skew.txt", "2 0 0 0 0 1 0 0 0 0 1 0\n");
+  const std::string skew = write("skew.txt", "2 0 0 0 0 1 0 0 0 0 1 0\n");
   EXPECT_NE(errorOf([&] { readKitti(skew); }).find(skew + ":1: the 3x3 part is not a rotation matrix"),
             std::string::npos);
-  const std::string empty = file("empty.txt", "# nothing\n\n");
+  const std::string empty = write("empty.txt", "# nothing\n\n");
   EXPECT_EQ(errorOf([&] { readKitti(empty); }), empty + ": no poses in file (empty or only comments)");
-  EXPECT_EQ(errorOf([&] { detectFormat(file("nine.txt", "1 2 3 4 5 6 7 8 9\n")); }),
+  EXPECT_EQ(errorOf([&] { detectFormat(write("nine.txt", "1 2 3 4 5 6 7 8 9\n")); }),
             (dir_ / "nine.txt").string() + ":1: cannot tell the format: 9 numbers per row (KITTI has 12, TUM has 8)");
   EXPECT_NE(errorOf([&] { readKitti((dir_ / "absent.txt").string()); }).find("absent.txt: cannot open file"),
             std::string::npos);
@@ -108,11 +97,11 @@ TEST_F(Files, LabelRowsParseAndBadRowsNameTheFileAndLine) {
             "4 7 Van 0 0 0.000000 1.000000 2.000000 3.000000 4.000000 2.000000 1.800000 4.500000 "
             "-1.000000 1.600000 20.000000 0.300000");
 
-  const std::string labels = file("labels.txt",
-                                  "Car 0 0 0 1 2 3 4 1.5 1.6 3.9 2 1.7 12 0.1\n\n"
-                                  "Car 0 0 0 1 2 3 4 1.5 1.6 wide 2 1.7 12 0.1\n");
+  const std::string labels = write("labels.txt",
+                                   "Car 0 0 0 1 2 3 4 1.5 1.6 3.9 2 1.7 12 0.1\n\n"
+                                   "Car 0 0 0 1 2 3 4 1.5 1.6 wide 2 1.7 12 0.1\n");
   EXPECT_EQ(errorOf([&] { readObjectLabels(labels); }), labels + ":3: l 'wide' is not a number");
-  const std::string tracking = file("0001.txt", "0 1 Car 0 0 0 1 2 3 4 1.5 1.6 3.9 2 1.7 12\n");
+  const std::string tracking = write("0001.txt", "0 1 Car 0 0 0 1 2 3 4 1.5 1.6 3.9 2 1.7 12\n");
   EXPECT_EQ(errorOf([&] { readTrackingLabels(tracking); }),
             tracking + ":1: tracking label row has 16 fields, expected 17 or 18");
   EXPECT_EQ(errorOf([&] { parseTrackingRow("-2 1 Car 0 0 0 1 2 3 4 1.5 1.6 3.9 2 1.7 12 0.1", "x.txt", 9); }),
@@ -120,7 +109,7 @@ TEST_F(Files, LabelRowsParseAndBadRowsNameTheFileAndLine) {
   EXPECT_EQ(errorOf([&] { parseObjectRow("3 0 0 0 1 2 3 4 1.5 1.6 3.9 2 1.7 12 0.1", "y.txt", 2); }),
             "y.txt:2: type '3' is a number, expected a class name");
 
-  const std::string motion = file("motion.txt", "# frame track moving speed\n0 3 1 4.5\n0 4 0 0\n1 3 2 0\n");
+  const std::string motion = write("motion.txt", "# frame track moving speed\n0 3 1 4.5\n0 4 0 0\n1 3 2 0\n");
   EXPECT_EQ(errorOf([&] { readObjectMotion(motion); }),
             motion + ":4: expected 'frame track_id moving(0/1) speed', got '1 3 2 0'");
 }
