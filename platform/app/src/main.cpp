@@ -3,6 +3,7 @@
 //   beslam plugins [--plugin-path DIR]... [--json]
 //   beslam eval --ref FILE --est FILE [...]
 //   beslam eval-motion --run DIR [...]
+//   beslam eval-static-map --run DIR [...]
 //   beslam synth --config FILE --out DIR [--set key=value]...
 // Every failure prints one line "beslam: error: <file or plugin>: <cause>" and exits non-zero
 // (2 for a usage error, 1 for anything else).
@@ -22,6 +23,7 @@
 #include "beslam/pipeline/runner.hpp"
 #include "beslam/pipeline/spec.hpp"
 #include "beslam/registry/registry.hpp"
+#include "beslam/static_map/score.hpp"
 #ifdef BESLAM_WITH_SIM
 #include "beslam/sim/synth.hpp"
 #endif
@@ -36,6 +38,7 @@ constexpr const char* kUsage =
     "  plugins             list every plugin found, with its configuration schema\n"
     "  eval                APE/RPE of a trajectory against a reference (evo's definitions)\n"
     "  eval-motion         a run's static/dynamic calls scored against synthetic truth\n"
+    "  eval-static-map     a run's static_map.bt (OctoMap) scored against synthetic truth\n"
     "  synth               render a synthetic sequence with full ground truth\n"
     "\n"
     "`beslam <command> --help` describes a command's options.\n";
@@ -248,6 +251,7 @@ int main(int argc, char** argv) {
     if (command == "plugins") return pluginsCommand(args);
     if (command == "eval") return beslam::eval::runEvalCommand(args, std::cout, std::cerr);
     if (command == "eval-motion") return beslam::motion_score::runCommand(args, std::cout, std::cerr);
+    if (command == "eval-static-map") return beslam::static_map::runEvalCommand(args, std::cout, std::cerr);
 #ifdef BESLAM_WITH_SIM
     if (command == "synth") return beslam::sim::runSynthCommand(args, std::cout, std::cerr);
 #endif
