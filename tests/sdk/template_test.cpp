@@ -1,6 +1,7 @@
 // The SDK as a third party gets it: install the project into a temporary prefix, build
-// sdk/template OUT OF TREE against the installed beslam_sdk package, then have the host list the
-// plugin and run it.
+// sdk/template OUT OF TREE against the installed beslam_sdk package (the mask generator on the SDK
+// headers, the replay detector on the SDK's formats library too), then have the host list the plugins
+// and run them.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -52,7 +53,7 @@ class TemplateBuild : public ::testing::Test {
                     root_ / "build.log"), 0)
         << slurp(root_ / "build.log");
     plugin_dir_ = root_ / "build" / "plugins";
-    built_ = fs::exists(plugin_dir_ / "mask_rect.so");
+    built_ = fs::exists(plugin_dir_ / "mask_rect.so") && fs::exists(plugin_dir_ / "label_replay.so");
   }
   static void TearDownTestSuite() { fs::remove_all(root_); }
 
@@ -118,4 +119,57 @@ TEST_F(TemplateBuild, BeslamPluginsListsIt) {
   const std::string text = slurp(out);
   EXPECT_NE(text.find("mask_rect  (mask_generator, version 1.0.0, ABI 1.2)"), std::string::npos) << text;
   EXPECT_NE(text.find("backend_pose_replay"), std::string::npos) << text;
+}
+
+TEST_F(TemplateBuild, TheOutOfTreeReplayPluginReadsLabelsThroughTheSdkFormats) {
+  ASSERT_TRUE(built_);
+  beslam::registry::Registry registry;
+  registry.addSearchPath(plugin_dir_.string());
+  registry.scan();
+  ASSERT_TRUE(registry.problems().empty()) << registry.problems().front();
+  const auto& plugin = registry.find("label_replay", BESLAM_KIND_DETECTOR);
+  ASSERT_EQ(plugin.fields.size(), 3u);
+  EXPECT_EQ(plugin.fields[2].choices, "empty|error");
+
+  const fs::path labels = root_ / "labels";
+  fs::create_directories(labels);
+  std::ofstream(labels / "000000.txt") << "Car 0.00 0 -1.57 100 120 200 180 1.50 1.60 3.90 2.00 1.70 12.00 0.10 0.9\n"
+                                        << "DontCare -1 -1 -10 0 0 10 10 -1 -1 -1 -1000 -1000 -1000 -10\n"
+                                        << "Pedestrian 0.00 0 0.2 10 10 20 40 1.80 0.60 0.80 -3.00 1.60 8.00 0.00 0.2\n";
+  std::ofstream(labels / "000002.txt") << "Car 0.00 0 -1.57 100 120 200 180 1.50 1.60 3.90 2.00 1.70\n";
+
+  beslam::registry::HostLog log;
+  const std::string folder = labels.string();
+  std::vector<beslam_config_value> config(3);
+  config[0] = {"folder", BESLAM_CONFIG_PATH, 0, 0, folder.c_str(), nullptr, 0};
+  config[1] = {"min_score", BESLAM_CONFIG_DOUBLE, 0, 0.5, nullptr, nullptr, 0};
+  config[2] = {"missing", BESLAM_CONFIG_STRING, 0, 0, "empty", nullptr, 0};
+  beslam_create_info info{};
+  info.struct_size = sizeof(info);
+  info.host = log.host();
+  info.config = config.data();
+  info.config_count = 3;
+  beslam::registry::DetectorInstance detector(plugin, info, log);
+
+  beslam_frame frame{};
+  frame.struct_size = sizeof(frame);
+  frame.index = 0;
+  const std::vector<beslam_box3d> boxes = detector.detect(frame);
+  ASSERT_EQ(boxes.size(), 1u);  // DontCare skipped, the pedestrian below min_score
+  EXPECT_EQ(boxes[0].class_id, BESLAM_CLASS_CAR);
+  EXPECT_DOUBLE_EQ(boxes[0].center_cam[1], 1.70 - 1.50 / 2);  // KITTI's bottom centre -> geometric centre
+  EXPECT_DOUBLE_EQ(boxes[0].size[0], 3.90);
+  EXPECT_FLOAT_EQ(boxes[0].score, 0.9f);
+  EXPECT_EQ(boxes[0].track_id, -1);
+
+  frame.index = 1;
+  EXPECT_TRUE(detector.detect(frame).empty());  // no label file: no objects
+  frame.index = 2;                               // a 13-field row: the error names the file and the line
+  try {
+    detector.detect(frame);
+    FAIL() << "a malformed label row was accepted";
+  } catch (const beslam::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("000002.txt:1: object label row has 13 fields, expected 15 or 16"),
+              std::string::npos) << e.what();
+  }
 }

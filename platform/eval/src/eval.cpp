@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "beslam/common/error.hpp"
+#include "beslam/formats/align.hpp"
 
 namespace beslam::eval {
 namespace {
@@ -187,37 +188,15 @@ Alignment computeAlignment(const Trajectory& ref, const Trajectory& est, Alignme
 
   const std::size_t n = (first_n == 0 || first_n > ref.size()) ? ref.size() : first_n;
   alignment.poses_used = n;
-  Eigen::Vector3d mean_est = Eigen::Vector3d::Zero(), mean_ref = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> p_ref, p_est;
   for (std::size_t i = 0; i < n; ++i) {
-    mean_est += est.poses[i].translation();
-    mean_ref += ref.poses[i].translation();
+    p_ref.push_back(ref.poses[i].translation());
+    p_est.push_back(est.poses[i].translation());
   }
-  mean_est /= static_cast<double>(n);
-  mean_ref /= static_cast<double>(n);
-
-  // Umeyama (1991), eqs. 36-42: variance of the estimate, covariance ref x est.
-  double variance_est = 0.0;
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d d_est = est.poses[i].translation() - mean_est;
-    const Eigen::Vector3d d_ref = ref.poses[i].translation() - mean_ref;
-    variance_est += d_est.squaredNorm();
-    covariance += d_ref * d_est.transpose();
-  }
-  variance_est /= static_cast<double>(n);
-  covariance /= static_cast<double>(n);
-
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Vector3d d = svd.singularValues();
-  const int rank = static_cast<int>((d.array() > std::numeric_limits<double>::epsilon()).count());
-  if (rank < 2) {
-    throw Error("cannot align: the " + std::to_string(n) + " positions used are degenerate (all equal or on one line)");
-  }
-  Eigen::Vector3d s = Eigen::Vector3d::Ones();
-  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0.0) s(2) = -1.0;
-  alignment.R_ref_est = svd.matrixU() * s.asDiagonal() * svd.matrixV().transpose();
-  alignment.scale = type == AlignmentType::kSim3 ? d.dot(s) / variance_est : 1.0;
-  alignment.t_ref_est = mean_ref - alignment.scale * alignment.R_ref_est * mean_est;
+  const formats::Similarity fit = formats::umeyama(p_ref, p_est, n, type == AlignmentType::kSim3);
+  alignment.scale = fit.scale;
+  alignment.R_ref_est = fit.R_ref_est;
+  alignment.t_ref_est = fit.t_ref_est;
   return alignment;
 }
 

@@ -7,63 +7,49 @@
 
 namespace {
 
-namespace field = beslam::sdk::field;
+using beslam::orb::Options;
 using beslam::orb::OrbSlam;
+using beslam::sdk::setting;
 
-const beslam_config_field kFields[] = {
-    field::Int("features", "2000", 100, 20000, "ORB keypoints per frame (twice that while initialising)"),
-    field::Double("scale_factor", "1.2", 1.01, 2.0, "image pyramid scale step"),
-    field::Int("levels", "8", 1, 16, "image pyramid levels"),
-    field::Int("fast_initial", "20", 1, 255, "FAST threshold per cell"),
-    field::Int("fast_fallback", "7", 1, 255, "FAST threshold of a cell that found nothing"),
-    field::Int("static_object_fast", "7", 1, 255, "FAST threshold on static objects (mask label >= 1000)"),
-    field::Double("static_object_budget_share", "0.3", 0.0, 1.0, "share of each level's features reserved for static objects"),
-    field::Double("static_object_weight", "1.0", 0.01, 100.0, "optimisation weight of map points on static objects"),
-    field::Double("fps", "10", 0.1, 1000.0, "frame rate: at most this many frames between keyframes"),
-    field::Int("keyframe_min_gap", "2", 1, 100, "at least this many frames between keyframes"),
-    field::Bool("keyframe_culling", "true", "remove redundant keyframes"),
-    field::Int("local_ba_max_keyframes", "0", 0, 1000, "keyframes moved by local BA (0: all covisible)"),
-    field::Bool("ground_prior", "false", "hold the camera height over the fitted ground plane in local BA (vehicle cameras)"),
-    field::Double("ground_prior_sigma", "0.2", 0.001, 10.0, "std-dev of one ground point's height, as a share of the camera height"),
-    field::Int("ground_reference_keyframes", "5", 1, 1000, "first keyframes whose median camera height is the reference"),
-    field::Int("ground_min_inliers", "25", 3, 100000, "map points a keyframe's ground plane needs"),
-    field::Bool("metric_scale", "false", "recover metres from the rig's camera height over the road (dataset camera_height) and hold them with the ground prior"),
-    field::Double("metric_max_spread", "0.1", 0.001, 10.0, "metric scale: the reference ground fits' heights must agree this well (relative MAD)"),
-    field::Double("metric_correction_min", "0.02", 0.0, 1.0, "metric scale: recent ground fits off by more than this share (and their noise) scale the newer map back (0: off)"),
-    field::Bool("object_scale", "true", "metric scale: static objects' 3D boxes are a scale source and, once metric, range priors in local BA"),
-    field::Double("object_range_sigma", "0.15", 0.001, 100.0, "std-dev (m) of a static-object point's range from its box"),
-    field::Double("object_range_sigma_per_m", "0.02", 0.0, 10.0, "std-dev added per metre of range"),
-    field::Bool("threaded_mapping", "false", "local mapping on its own thread (same results, overlaps the next frame)"),
-    field::Int("seed", "42", 0, 2147483647.0, "seed of every random choice (RANSAC)"),
+// Each setting once: its schema entry and the beslam::orb::Options member it sets.
+// clang-format off: one setting a line
+const beslam::sdk::Settings<Options> kSettings{
+    setting(&Options::features, "features", "2000", 100, 20000, "ORB keypoints per frame (twice that while initialising)"),
+    setting(&Options::scale_factor, "scale_factor", "1.2", 1.01, 2.0, "image pyramid scale step"),
+    setting(&Options::levels, "levels", "8", 1, 16, "image pyramid levels"),
+    setting(&Options::fast_initial, "fast_initial", "20", 1, 255, "FAST threshold per cell"),
+    setting(&Options::fast_fallback, "fast_fallback", "7", 1, 255, "FAST threshold of a cell that found nothing"),
+    setting(&Options::static_object_fast, "static_object_fast", "7", 1, 255, "FAST threshold on static objects (mask label >= 1000)"),
+    setting(&Options::static_object_budget_share, "static_object_budget_share", "0.3", 0.0, 1.0, "share of each level's features reserved for static objects"),
+    setting(&Options::static_object_weight, "static_object_weight", "1.0", 0.01, 100.0, "optimisation weight of map points on static objects"),
+    setting(&Options::fps, "fps", "10", 0.1, 1000.0, "frame rate: at most this many frames between keyframes"),
+    setting(&Options::keyframe_min_gap, "keyframe_min_gap", "2", 1, 100, "at least this many frames between keyframes"),
+    setting(&Options::keyframe_culling, "keyframe_culling", "true", "remove redundant keyframes"),
+    setting(&Options::local_ba_max_keyframes, "local_ba_max_keyframes", "0", 0, 1000, "keyframes moved by local BA (0: all covisible)"),
+    setting(&Options::ground_prior, "ground_prior", "false", "hold the camera height over the fitted ground plane in local BA (vehicle cameras)"),
+    setting(&Options::ground_prior_sigma, "ground_prior_sigma", "0.2", 0.001, 10.0, "std-dev of one ground point's height, as a share of the camera height"),
+    setting(&Options::ground_reference_keyframes, "ground_reference_keyframes", "5", 1, 1000, "first keyframes whose median camera height is the reference"),
+    setting(&Options::ground_min_inliers, "ground_min_inliers", "25", 3, 100000, "map points a keyframe's ground plane needs"),
+    setting(&Options::metric_scale, "metric_scale", "false", "recover metres from the rig's camera height over the road (dataset camera_height) and hold them with the ground prior"),
+    setting(&Options::metric_max_spread, "metric_max_spread", "0.1", 0.001, 10.0, "metric scale: the reference ground fits' heights must agree this well (relative MAD)"),
+    setting(&Options::metric_correction_min, "metric_correction_min", "0.02", 0.0, 1.0, "metric scale: recent ground fits off by more than this share (and their noise) scale the newer map back (0: off)"),
+    setting(&Options::object_scale, "object_scale", "true", "metric scale: static objects' 3D boxes are a scale source and, once metric, range priors in local BA"),
+    setting(&Options::object_range_sigma, "object_range_sigma", "0.15", 0.001, 100.0, "std-dev (m) of a static-object point's range from its box"),
+    setting(&Options::object_range_sigma_per_m, "object_range_sigma_per_m", "0.02", 0.0, 10.0, "std-dev added per metre of range"),
+    setting(&Options::threaded_mapping, "threaded_mapping", "false", "local mapping on its own thread (same results, overlaps the next frame)"),
+    setting(&Options::seed, "seed", "42", 0, 2147483647.0, "seed of every random choice (RANSAC)"),
 };
+// clang-format on
 
-beslam::orb::Options readOptions(const beslam::sdk::Config& c, const beslam::sdk::Context& context) {
-  beslam::orb::Options o;
-  o.metric_scale = c.getBool("metric_scale");
-  o.metric_max_spread = c.getDouble("metric_max_spread");
-  o.metric_correction_min = c.getDouble("metric_correction_min");
-  o.object_scale = c.getBool("object_scale");
-  o.object_range_sigma = c.getDouble("object_range_sigma");
-  o.object_range_sigma_per_m = c.getDouble("object_range_sigma_per_m");
-  o.camera_height = context.cameraHeight().value_or(0);
-  o.features = static_cast<int>(c.getInt("features"));
-  o.scale_factor = c.getDouble("scale_factor");
-  o.levels = static_cast<int>(c.getInt("levels"));
-  o.fast_initial = static_cast<int>(c.getInt("fast_initial"));
-  o.fast_fallback = static_cast<int>(c.getInt("fast_fallback"));
-  o.static_object_fast = static_cast<int>(c.getInt("static_object_fast"));
-  o.static_object_budget_share = c.getDouble("static_object_budget_share");
-  o.static_object_weight = c.getDouble("static_object_weight");
-  o.fps = c.getDouble("fps");
-  o.keyframe_min_gap = static_cast<int>(c.getInt("keyframe_min_gap"));
-  o.keyframe_culling = c.getBool("keyframe_culling");
-  o.local_ba_max_keyframes = static_cast<int>(c.getInt("local_ba_max_keyframes"));
-  o.ground_prior = c.getBool("ground_prior");
-  o.ground_prior_sigma = c.getDouble("ground_prior_sigma");
-  o.ground_reference_keyframes = static_cast<int>(c.getInt("ground_reference_keyframes"));
-  o.ground_min_inliers = static_cast<int>(c.getInt("ground_min_inliers"));
-  o.threaded_mapping = c.getBool("threaded_mapping");
-  o.seed = static_cast<uint64_t>(c.getInt("seed"));
+const beslam::sdk::PluginInfo kInfo(
+    "backend_orb", "ORB monocular SLAM",
+    "ORB-SLAM2-class monocular tracking and local mapping (no loop closure); dynamic mask labels get no "
+    "features, static objects get more; optional metric scale from the camera height",
+    {0, 2, 0}, kSettings);
+
+beslam::orb::Options readOptions(const beslam::sdk::Config& config, const beslam::sdk::Context& context) {
+  beslam::orb::Options o = kSettings.read(config);
+  o.camera_height = context.cameraHeight().value_or(0);  // the rig's, from the dataset: not a setting
   std::string error;
   if (!o.validate(&error)) throw beslam::sdk::ConfigError(error);
   return o;
@@ -78,9 +64,12 @@ beslam::orb::Camera readCamera(const beslam::sdk::Context& context) {
 
 int32_t toState(beslam::orb::TrackingState s) {
   switch (s) {
-    case beslam::orb::TrackingState::Ok: return BESLAM_TRACKING_OK;
-    case beslam::orb::TrackingState::Lost: return BESLAM_TRACKING_LOST;
-    default: return BESLAM_TRACKING_NOT_INITIALIZED;
+    case beslam::orb::TrackingState::Ok:
+      return BESLAM_TRACKING_OK;
+    case beslam::orb::TrackingState::Lost:
+      return BESLAM_TRACKING_LOST;
+    default:
+      return BESLAM_TRACKING_NOT_INITIALIZED;
   }
 }
 
@@ -110,7 +99,8 @@ class OrbBackend : public beslam::sdk::Backend {
     // for parked ones range priors in local BA after.
     std::vector<beslam::orb::ObjectBox> car_boxes;
     for (const beslam_box3d& b : boxes)
-      if (b.track_id >= 0 && (b.class_id == BESLAM_CLASS_CAR || b.class_id == BESLAM_CLASS_VAN || b.class_id == BESLAM_CLASS_TRUCK))
+      if (b.track_id >= 0 &&
+          (b.class_id == BESLAM_CLASS_CAR || b.class_id == BESLAM_CLASS_VAN || b.class_id == BESLAM_CLASS_TRUCK))
         car_boxes.push_back({b.track_id, b.motion_state == BESLAM_MOTION_STATIC, beslam::sdk::boxPose(b),
                              Eigen::Vector3d(b.size[0], b.size[2], b.size[1])});
     const beslam::orb::TrackResult r = slam_.track(image, mask, frame.timestamp, frame.index, car_boxes);
@@ -184,8 +174,4 @@ class OrbBackend : public beslam::sdk::Backend {
 
 }  // namespace
 
-BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<OrbBackend>(
-    {"backend_orb", "ORB monocular SLAM",
-     "ORB-SLAM2-class monocular tracking and local mapping (no loop closure); dynamic mask labels get no "
-     "features, static objects get more; optional metric scale from the camera height",
-     {0, 2, 0}, kFields}))
+BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<OrbBackend>(kInfo))

@@ -8,7 +8,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "ape.hpp"
+#include "beslam/formats/align.hpp"
 #include "beslam_orb/orb_slam.hpp"
 #include "kitti.hpp"
 #include "test_util.hpp"
@@ -50,7 +50,7 @@ void checkExcerpt(const std::string& sequence, size_t frames, const Options& opt
     est.push_back(p.T_world_cam.translation());
     ref.push_back(gt[p.frame_index].translation());
   }
-  const auto ape = eval::apeTranslation(est, ref);
+  const auto ape = formats::positionError(est, ref);
   ::testing::Test::RecordProperty("ape_rmse_" + sequence + "_m", std::to_string(ape.rmse));
   EXPECT_LT(ape.rmse, ape_bound) << "APE " << ape.rmse << " m over " << est.size() << " frames";
 }

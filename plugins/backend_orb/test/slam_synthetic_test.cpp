@@ -3,7 +3,7 @@
 // threaded mapping gives the same result as inline mapping).
 #include <gtest/gtest.h>
 
-#include "ape.hpp"
+#include "beslam/formats/align.hpp"
 #include "beslam_orb/orb_slam.hpp"
 #include "synthetic_world.hpp"
 
@@ -46,7 +46,7 @@ TEST(SlamSynthetic, TracksTheCorridorAccurately) {
     est.push_back(p.T_world_cam.translation());
     truth.push_back(world.pose(static_cast<int>(p.frame_index)).translation());
   }
-  const auto ape = eval::apeTranslation(est, truth);
+  const auto ape = formats::positionError(est, truth);
   // 15.6 m driven: a few centimetres of error.
   EXPECT_LT(ape.rmse, 0.10) << "APE " << ape.rmse;
 }
@@ -88,7 +88,7 @@ TEST(SlamSynthetic, DynamicMaskedRegionsGetNoMapPoints) {
     est.push_back(p.T_world_cam.translation());
     truth.push_back(world.pose(static_cast<int>(p.frame_index)).translation());
   }
-  const auto ape = eval::apeTranslation(est, truth);
+  const auto ape = formats::positionError(est, truth);
   int on_floor = 0, total = 0;
   for (const CloudPoint& p : slam.mapPoints()) {
     ++total;

@@ -1,5 +1,5 @@
 // Minimal KITTI odometry reading for this module's tool and tests: P0 intrinsics from calib.txt (rows
-// with or without the "P0:" name), image_0/NNNNNN.png, times.txt, KITTI pose rows (3 x 4, camera to world).
+// with or without the "P0:" name), image_0/NNNNNN.png, times.txt; KITTI pose rows (3 x 4, camera to world) come from the SDK's formats.
 #pragma once
 
 #include <cstdio>
@@ -11,6 +11,7 @@
 
 #include <Eigen/Geometry>
 
+#include "beslam/formats/trajectory.hpp"
 #include "beslam_orb/orb_slam.hpp"
 
 namespace beslam::orb::kitti {
@@ -44,24 +45,10 @@ inline Camera readCamera(const std::string& calib_path, int width, int height) {
   throw std::runtime_error(calib_path + ": no P0 row");
 }
 
+// KITTI pose rows through the SDK's formats (beslam::Error "file:line: cause" on a bad row).
 inline std::vector<Eigen::Isometry3d> readPoses(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open");
-  std::vector<Eigen::Isometry3d> poses;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream ss(line);
-    double v[12];
-    int n = 0;
-    while (n < 12 && ss >> v[n]) ++n;
-    if (n == 0) continue;
-    if (n != 12) throw std::runtime_error(path + ": a pose row needs 12 numbers");
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
-    T.translation() << v[3], v[7], v[11];
-    poses.push_back(T);
-  }
-  return poses;
+  const formats::Trajectory trajectory = formats::readKitti(path);
+  return {trajectory.poses.begin(), trajectory.poses.end()};
 }
 
 inline std::vector<double> readTimes(const std::string& path) {

@@ -15,7 +15,7 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "ape.hpp"
+#include "beslam/formats/align.hpp"
 #include "beslam_orb/orb_slam.hpp"
 #include "kitti.hpp"
 
@@ -43,7 +43,7 @@ double ape(const std::vector<FramePose>& traj, const std::vector<Eigen::Isometry
     est.push_back(p.T_world_cam.translation());
     ref.push_back(gt[p.frame_index].translation());
   }
-  return eval::apeTranslation(est, ref).rmse;
+  return beslam::formats::positionError(est, ref).rmse;
 }
 
 }  // namespace
@@ -150,7 +150,7 @@ int main(int argc, char** argv) {
           est.push_back(p.T_world_cam.translation());
           ref.push_back(gt[p.frame_index].translation());
         }
-        const auto a = eval::apeTranslation(est, ref);
+        const auto a = beslam::formats::positionError(est, ref);
         for (size_t i = 0; i + 20 < est.size(); i += (i < 40 ? 5 : 20)) {
           const size_t j = i < 40 ? i + 5 : i + 20;
           const double de = a.alignment.scale * (est[j] - est[i]).norm(), dg = (ref[j] - ref[i]).norm();

@@ -7,31 +7,45 @@
 #include <algorithm>
 #include <cmath>
 
+#include "beslam/formats/trajectory.hpp"
 #include "beslam/sdk/sdk.hpp"
-#include "beslam/trajectory/trajectory.hpp"
 
 namespace {
 
-namespace field = beslam::sdk::field;
+using beslam::sdk::setting;
 using beslam::sdk::TrajectoryEntry;
 
-const beslam_config_field kFields[] = {
-    field::Path("poses", nullptr, "pose file: KITTI (12 numbers a row) or TUM (t x y z qx qy qz qw)"),
-    field::String("format", "auto", "auto|kitti|tum", "file format; auto decides by the column count"),
-    field::Double("max_time_diff", "0.02", 0, 10, "TUM: largest |t_frame - t_pose| accepted (s)"),
-    field::Int("keyframe_interval", "5", 1, 1000, "every n-th tracked frame becomes a keyframe"),
-    field::Bool("metric", "true", "the poses are in metres (ground truth, stereo, LiDAR); false for a monocular estimate"),
+struct Options {
+  std::string poses, format;
+  double max_time_diff = 0;
+  int64_t keyframe_interval = 1;
+  bool metric = true;
 };
+
+const beslam::sdk::Settings<Options> kSettings{
+    beslam::sdk::path(&Options::poses, "poses", nullptr,
+                      "pose file: KITTI (12 numbers a row) or TUM (t x y z qx qy qz qw)"),
+    setting(&Options::format, "format", "auto", "auto|kitti|tum", "file format; auto decides by the column count"),
+    setting(&Options::max_time_diff, "max_time_diff", "0.02", 0, 10, "TUM: largest |t_frame - t_pose| accepted (s)"),
+    setting(&Options::keyframe_interval, "keyframe_interval", "5", 1, 1000,
+            "every n-th tracked frame becomes a keyframe"),
+    setting(&Options::metric, "metric", "true",
+            "the poses are in metres (ground truth, stereo, LiDAR); false for a monocular estimate"),
+};
+
+const beslam::sdk::PluginInfo kInfo("backend_pose_replay", "Pose replay",
+                                    "Replays camera poses from a KITTI or TUM file (ground truth or external odometry)",
+                                    {1, 0, 0}, kSettings);
 
 struct PoseFile {
   bool timestamped = false;  // TUM: match by time; KITTI: row = frame index
-  beslam::trajectory::Trajectory poses;
+  beslam::formats::Trajectory poses;
 };
 
 PoseFile readPoses(const std::string& path, const std::string& format) {
   PoseFile file;
-  const std::string used = format == "auto" ? beslam::trajectory::detectFormat(path) : format;
-  file.poses = beslam::trajectory::read(path, used);
+  const std::string used = format == "auto" ? beslam::formats::detectFormat(path) : format;
+  file.poses = beslam::formats::read(path, used);
   file.timestamped = used == "tum";
   if (file.timestamped)
     for (size_t i = 1; i < file.poses.size(); ++i)
@@ -43,10 +57,8 @@ PoseFile readPoses(const std::string& path, const std::string& format) {
 class PoseReplay : public beslam::sdk::Backend {
  public:
   PoseReplay(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
-      : file_(readPoses(config.getString("poses"), config.getString("format"))),
-        max_time_diff_(config.getDouble("max_time_diff")),
-        keyframe_interval_(config.getInt("keyframe_interval")), metric_(config.getBool("metric")) {
-    context.info("replaying " + std::to_string(file_.poses.size()) + " poses from " + config.getString("poses"));
+      : options_(kSettings.read(config)), file_(readPoses(options_.poses, options_.format)) {
+    context.info("replaying " + std::to_string(file_.poses.size()) + " poses from " + options_.poses);
   }
 
   std::optional<Eigen::Isometry3d> predictPose(const beslam::sdk::Frame& frame) override {
@@ -58,7 +70,7 @@ class PoseReplay : public beslam::sdk::Backend {
   beslam::sdk::TrackResult track(const beslam::sdk::Frame& frame, const cv::Mat&,
                                  const std::vector<beslam_box3d>&) override {
     beslam::sdk::TrackResult result;
-    result.world_is_metric = metric_;
+    result.world_is_metric = options_.metric;
     const long i = lookup(frame);
     if (i < 0) {
       result.state = tracked_.empty() ? BESLAM_TRACKING_NOT_INITIALIZED : BESLAM_TRACKING_LOST;
@@ -67,7 +79,7 @@ class PoseReplay : public beslam::sdk::Backend {
     result.state = BESLAM_TRACKING_OK;
     result.T_world_cam = file_.poses.poses[i];
     const TrajectoryEntry entry{frame.index, frame.timestamp, file_.poses.poses[i]};
-    if (static_cast<int64_t>(tracked_.size()) % keyframe_interval_ == 0) {
+    if (static_cast<int64_t>(tracked_.size()) % options_.keyframe_interval == 0) {
       result.is_keyframe = true;
       result.keyframe_id = static_cast<int64_t>(keyframes_.size());
       keyframes_.push_back(entry);
@@ -83,11 +95,12 @@ class PoseReplay : public beslam::sdk::Backend {
  private:
   long lookup(const beslam::sdk::Frame& frame) const {
     if (!file_.timestamped)
-      return frame.index >= 0 && frame.index < static_cast<int64_t>(file_.poses.size()) ? static_cast<long>(frame.index) : -1;
+      return frame.index >= 0 && frame.index < static_cast<int64_t>(file_.poses.size()) ? static_cast<long>(frame.index)
+                                                                                        : -1;
     const std::vector<double>& stamps = file_.poses.stamps;
     const auto it = std::lower_bound(stamps.begin(), stamps.end(), frame.timestamp);
     long best = -1;
-    double best_diff = max_time_diff_;
+    double best_diff = options_.max_time_diff;
     for (auto c : {it, it == stamps.begin() ? it : it - 1}) {
       if (c == stamps.end()) continue;
       const double diff = std::abs(*c - frame.timestamp);
@@ -96,15 +109,11 @@ class PoseReplay : public beslam::sdk::Backend {
     return best;
   }
 
+  Options options_;
   PoseFile file_;
-  double max_time_diff_;
-  int64_t keyframe_interval_;
-  bool metric_;
   std::vector<TrajectoryEntry> tracked_, keyframes_;
 };
 
 }  // namespace
 
-BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<PoseReplay>(
-    {"backend_pose_replay", "Pose replay", "Replays camera poses from a KITTI or TUM file (ground truth or external odometry)",
-     {1, 0, 0}, kFields}))
+BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<PoseReplay>(kInfo))

@@ -6,89 +6,55 @@
 
 namespace {
 
-namespace field = beslam::sdk::field;
 using beslam::detector_lidar::Options;
+using beslam::sdk::setting;
 
-const beslam_config_field kFields[] = {
-    field::Double("min_range", "1.5", 0, 200, "points closer to the LiDAR than this (m) are ignored"),
-    field::Double("max_range", "60", 1, 300, "points farther than this (m) are ignored"),
-    field::Bool("camera_fov_only", "true", "report only cars with points that project into the image"),
-    field::Double("fov_margin_px", "40", 0, 10000, "image grown by this many pixels for camera_fov_only"),
-    field::String("ground_method", "ransac", "ransac|grid",
-                  "ground removal: one RANSAC plane, or a BEV grid of local lowest points"),
-    field::Double("ground_threshold", "0.25", 0.01, 2, "points up to this height above the ground (m) are ground"),
-    field::Double("max_ground_tilt_deg", "10", 0.1, 44, "ransac: largest angle between ground normal and camera y"),
-    field::Int("ransac_iterations", "200", 1, 100000, "ransac: iterations"),
-    field::Double("grid_cell", "0.5", 0.05, 10, "grid: cell size (m)"),
-    field::Int("grid_radius", "6", 0, 50, "grid: local ground is the lowest point within this many cells"),
-    field::Double("max_height", "3.0", 0.1, 20, "points higher than this above the ground (m) are ignored"),
-    field::Double("voxel_size", "0.12", 0, 1, "voxel grid (m) the cloud is thinned to before clustering; 0: none"),
-    field::Double("cluster_tolerance", "0.5", 0.05, 5, "Euclidean clustering distance (m)"),
-    field::Int("min_cluster_points", "8", 3, 1000000, "smallest cluster kept"),
-    field::Int("max_cluster_points", "25000", 3, 10000000, "largest cluster kept"),
-    field::String("box_fit", "lshape", "lshape|min_area", "BEV rectangle: L-shape search or minimum-area rectangle"),
-    field::Double("angle_step_deg", "1", 0.05, 45, "lshape: heading search step (degrees)"),
-    field::Int("lshape_min_points", "40", 0, 1000000,
-               "lshape: clusters with fewer points (after thinning) get the minimum-area rectangle"),
-    field::Double("car_min_extent", "1.0", 0.01, 20, "car gate: the longer footprint side reaches at least this (m)"),
-    field::Double("car_max_length", "6.5", 0.1, 50, "car gate: longest footprint side (m)"),
-    field::Double("car_max_width", "2.8", 0.1, 50, "car gate: shorter footprint side at most (m)"),
-    field::Double("car_min_top", "0.9", 0, 20, "car gate: the cluster's top is at least this high (m)"),
-    field::Double("car_max_top", "2.0", 0.1, 20, "car gate: the cluster's top is at most this high (m)"),
-    field::Double("car_max_bottom", "1.6", 0, 20, "car gate: the cluster's lowest point is at most this high (m)"),
-    field::DoubleList("car_size", "[3.9, 1.6, 1.5]", 0.1, 20,
-                      "car prior length, width, height (m): unseen sides are grown to it"),
-    field::Double("car_min_length", "2.2", 0.1, 20,
-                  "without free_space: a seen side shorter than this (m) is grown to the prior length"),
-    field::Double("car_min_width", "1.2", 0.1, 20,
-                  "without free_space: a seen end narrower than this (m) is grown to the prior width"),
-    field::Double("fov_context", "5.0", 0, 50, "points up to this far (m) outside the image's view still shape boxes"),
-    field::Bool("free_space", "true", "grow boxes only where no LiDAR ray passed through at body height"),
-    field::Double("free_space_min_height", "0.4", 0, 5, "free space: lowest body height above the ground (m)"),
-    field::Double("free_space_max_height", "0.9", 0.01, 5, "free space: highest body height above the ground (m)"),
-    field::Int("free_space_min_rays", "3", 1, 1000, "free space: rays needed to call a place free"),
-    field::Double("uncertain_range", "40", 0.1, 1000, "boxes farther than this (m) are flagged uncertain"),
-    field::Int("uncertain_points", "25", 0, 1000000, "boxes with fewer points are flagged uncertain"),
+// Each setting once: its schema entry and the Options member it sets.
+// clang-format off: one setting a line
+const beslam::sdk::Settings<Options> kSettings{
+    setting(&Options::min_range, "min_range", "1.5", 0, 200, "points closer to the LiDAR than this (m) are ignored"),
+    setting(&Options::max_range, "max_range", "60", 1, 300, "points farther than this (m) are ignored"),
+    setting(&Options::camera_fov_only, "camera_fov_only", "true", "report only cars with points that project into the image"),
+    setting(&Options::fov_margin_px, "fov_margin_px", "40", 0, 10000, "image grown by this many pixels for camera_fov_only"),
+    setting(&Options::ground_method, "ground_method", "ransac", "ransac|grid", "ground removal: one RANSAC plane, or a BEV grid of local lowest points"),
+    setting(&Options::ground_threshold, "ground_threshold", "0.25", 0.01, 2, "points up to this height above the ground (m) are ground"),
+    setting(&Options::max_ground_tilt_deg, "max_ground_tilt_deg", "10", 0.1, 44, "ransac: largest angle between ground normal and camera y"),
+    setting(&Options::ransac_iterations, "ransac_iterations", "200", 1, 100000, "ransac: iterations"),
+    setting(&Options::grid_cell, "grid_cell", "0.5", 0.05, 10, "grid: cell size (m)"),
+    setting(&Options::grid_radius, "grid_radius", "6", 0, 50, "grid: local ground is the lowest point within this many cells"),
+    setting(&Options::max_height, "max_height", "3.0", 0.1, 20, "points higher than this above the ground (m) are ignored"),
+    setting(&Options::voxel_size, "voxel_size", "0.12", 0, 1, "voxel grid (m) the cloud is thinned to before clustering; 0: none"),
+    setting(&Options::cluster_tolerance, "cluster_tolerance", "0.5", 0.05, 5, "Euclidean clustering distance (m)"),
+    setting(&Options::min_cluster_points, "min_cluster_points", "8", 3, 1000000, "smallest cluster kept"),
+    setting(&Options::max_cluster_points, "max_cluster_points", "25000", 3, 10000000, "largest cluster kept"),
+    setting(&Options::box_fit, "box_fit", "lshape", "lshape|min_area", "BEV rectangle: L-shape search or minimum-area rectangle"),
+    setting(&Options::angle_step_deg, "angle_step_deg", "1", 0.05, 45, "lshape: heading search step (degrees)"),
+    setting(&Options::lshape_min_points, "lshape_min_points", "40", 0, 1000000, "lshape: clusters with fewer points (after thinning) get the minimum-area rectangle"),
+    setting(&Options::car_min_extent, "car_min_extent", "1.0", 0.01, 20, "car gate: the longer footprint side reaches at least this (m)"),
+    setting(&Options::car_max_length, "car_max_length", "6.5", 0.1, 50, "car gate: longest footprint side (m)"),
+    setting(&Options::car_max_width, "car_max_width", "2.8", 0.1, 50, "car gate: shorter footprint side at most (m)"),
+    setting(&Options::car_min_top, "car_min_top", "0.9", 0, 20, "car gate: the cluster's top is at least this high (m)"),
+    setting(&Options::car_max_top, "car_max_top", "2.0", 0.1, 20, "car gate: the cluster's top is at most this high (m)"),
+    setting(&Options::car_max_bottom, "car_max_bottom", "1.6", 0, 20, "car gate: the cluster's lowest point is at most this high (m)"),
+    setting(&Options::car_size, "car_size", "[3.9, 1.6, 1.5]", 0.1, 20, "car prior length, width, height (m): unseen sides are grown to it"),
+    setting(&Options::car_min_length, "car_min_length", "2.2", 0.1, 20, "without free_space: a seen side shorter than this (m) is grown to the prior length"),
+    setting(&Options::car_min_width, "car_min_width", "1.2", 0.1, 20, "without free_space: a seen end narrower than this (m) is grown to the prior width"),
+    setting(&Options::fov_context, "fov_context", "5.0", 0, 50, "points up to this far (m) outside the image's view still shape boxes"),
+    setting(&Options::free_space, "free_space", "true", "grow boxes only where no LiDAR ray passed through at body height"),
+    setting(&Options::free_space_min_height, "free_space_min_height", "0.4", 0, 5, "free space: lowest body height above the ground (m)"),
+    setting(&Options::free_space_max_height, "free_space_max_height", "0.9", 0.01, 5, "free space: highest body height above the ground (m)"),
+    setting(&Options::free_space_min_rays, "free_space_min_rays", "3", 1, 1000, "free space: rays needed to call a place free"),
+    setting(&Options::uncertain_range, "uncertain_range", "40", 0.1, 1000, "boxes farther than this (m) are flagged uncertain"),
+    setting(&Options::uncertain_points, "uncertain_points", "25", 0, 1000000, "boxes with fewer points are flagged uncertain"),
 };
+// clang-format on
 
-Options readOptions(const beslam::sdk::Config& c) {
-  Options o;
-  o.min_range = c.getDouble("min_range");
-  o.max_range = c.getDouble("max_range");
-  o.camera_fov_only = c.getBool("camera_fov_only");
-  o.fov_margin_px = c.getDouble("fov_margin_px");
-  o.ground_method = c.getString("ground_method");
-  o.ground_threshold = c.getDouble("ground_threshold");
-  o.max_ground_tilt_deg = c.getDouble("max_ground_tilt_deg");
-  o.ransac_iterations = static_cast<int>(c.getInt("ransac_iterations"));
-  o.grid_cell = c.getDouble("grid_cell");
-  o.grid_radius = static_cast<int>(c.getInt("grid_radius"));
-  o.max_height = c.getDouble("max_height");
-  o.voxel_size = c.getDouble("voxel_size");
-  o.cluster_tolerance = c.getDouble("cluster_tolerance");
-  o.min_cluster_points = static_cast<int>(c.getInt("min_cluster_points"));
-  o.max_cluster_points = static_cast<int>(c.getInt("max_cluster_points"));
-  o.box_fit = c.getString("box_fit");
-  o.angle_step_deg = c.getDouble("angle_step_deg");
-  o.lshape_min_points = static_cast<int>(c.getInt("lshape_min_points"));
-  o.car_min_extent = c.getDouble("car_min_extent");
-  o.car_max_length = c.getDouble("car_max_length");
-  o.car_max_width = c.getDouble("car_max_width");
-  o.car_min_top = c.getDouble("car_min_top");
-  o.car_max_top = c.getDouble("car_max_top");
-  o.car_max_bottom = c.getDouble("car_max_bottom");
-  const std::vector<double> size = c.getList("car_size");
-  if (size.size() != 3) throw beslam::sdk::ConfigError("car_size: expected [length, width, height]");
-  o.car_size = {size[0], size[1], size[2]};
-  o.car_min_length = c.getDouble("car_min_length");
-  o.car_min_width = c.getDouble("car_min_width");
-  o.fov_context = c.getDouble("fov_context");
-  o.free_space = c.getBool("free_space");
-  o.free_space_min_height = c.getDouble("free_space_min_height");
-  o.free_space_max_height = c.getDouble("free_space_max_height");
-  o.free_space_min_rays = static_cast<int>(c.getInt("free_space_min_rays"));
-  o.uncertain_range = c.getDouble("uncertain_range");
-  o.uncertain_points = static_cast<int>(c.getInt("uncertain_points"));
+const beslam::sdk::PluginInfo kInfo(
+    "detector_lidar", "LiDAR BEV car detector",
+    "Cars from one LiDAR scan: ground removal, Euclidean clustering, L-shape BEV boxes (PCL)", {1, 0, 0}, kSettings);
+
+Options readOptions(const beslam::sdk::Config& config) {
+  const Options o = kSettings.read(config);
   try {
     o.validate();
   } catch (const std::invalid_argument& e) {
@@ -142,7 +108,4 @@ class DetectorLidar : public beslam::sdk::Detector {
 
 }  // namespace
 
-BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<DetectorLidar>(
-    {"detector_lidar", "LiDAR BEV car detector",
-     "Cars from one LiDAR scan: ground removal, Euclidean clustering, L-shape BEV boxes (PCL)", {1, 0, 0},
-     kFields}))
+BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<DetectorLidar>(kInfo))

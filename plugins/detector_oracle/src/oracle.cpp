@@ -7,7 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "beslam/datasets/labels.hpp"
+#include "beslam/formats/labels.hpp"
 #include "beslam/detector_replay/replay.hpp"
 
 namespace beslam::detector_oracle {
@@ -106,7 +106,7 @@ std::vector<beslam_box3d> LabelOracle::detect(int64_t frame) const {
 
 std::vector<std::vector<TruthBox>> readTruth(const std::string& labels, const std::string& motion) {
   std::map<std::pair<int64_t, int64_t>, bool> moving;
-  if (!motion.empty()) moving = datasets::readObjectMotion(motion);
+  if (!motion.empty()) moving = formats::readObjectMotion(motion);
   std::vector<std::vector<TruthBox>> frames;
   std::ifstream in(labels);
   if (!in) throw std::runtime_error(labels + ": cannot open label file");
@@ -117,7 +117,7 @@ std::vector<std::vector<TruthBox>> readTruth(const std::string& labels, const st
     if (!line.empty() && line.back() == '\r') line.pop_back();
     const auto first = line.find_first_not_of(" \t");
     if (first == std::string::npos || line[first] == '#') continue;
-    const datasets::TrackingLabel l = datasets::parseTrackingRow(line, labels, line_no);
+    const formats::TrackingLabel l = formats::parseTrackingRow(line, labels, line_no);
     if (l.frame < 0 || l.frame > 10'000'000)
       throw std::runtime_error(labels + ":" + std::to_string(line_no) + ": frame " + std::to_string(l.frame) + " is out of range");
     if (static_cast<size_t>(l.frame) >= frames.size()) frames.resize(static_cast<size_t>(l.frame) + 1);

@@ -6,66 +6,79 @@
 
 #include "beslam/detector_replay/nuscenes.hpp"
 #include "beslam/detector_replay/replay.hpp"
+#include "beslam/formats/trajectory.hpp"
 #include "beslam/sdk/sdk.hpp"
-#include "beslam/trajectory/trajectory.hpp"
 
 namespace {
 
-namespace field = beslam::sdk::field;
 namespace fs = std::filesystem;
 using namespace beslam::detector_replay;
+using beslam::sdk::nested;
+using beslam::sdk::path;
+using beslam::sdk::setting;
 
-const beslam_config_field kFields[] = {
-    field::String("format", nullptr, "ab3dmot|kitti_tracking|kitti_object|nuscenes", "result file format"),
-    field::Path("path", nullptr,
-                "ab3dmot: a file, or a folder of <Class>/<sequence>.txt; kitti_tracking: a label file, or a folder "
-                "of <sequence>.txt; kitti_object: a folder of <frame:06d>.txt; nuscenes: the results JSON"),
-    field::String("sequence", "\"\"", nullptr, "sequence name (0007) when path is a folder of per-sequence files"),
-    field::String("classes", "all", nullptr, "classes to keep: all, or a comma list of Car,Van,Truck,Pedestrian,Cyclist,Unknown"),
-    field::Double("min_score", "0.0", -1e9, 1e9, "boxes below this score (after score_transform) are dropped"),
-    field::String("score_transform", "auto", "auto|none|sigmoid",
-                  "auto: sigmoid for ab3dmot (PointRCNN writes logits), none otherwise"),
-    field::Double("min_depth", "0.0", -1e9, 1e9, "boxes whose centre has camera z below this (m) are dropped"),
-    field::Double("max_distance", "1e9", 0, 1e12, "boxes farther than this from the camera (m) are dropped"),
-    field::String("on_error", "stop", "stop|skip", "a malformed row stops the run, or is skipped and counted"),
-    field::String("on_missing_frame", "error", "error|empty",
-                  "a frame the results do not cover (past the last frame, no token, no result, no label file)"),
-    field::Path("sample_tokens", "\"\"", "nuscenes: token per frame (text, one per line; or JSON, optionally with ego poses)"),
-    field::Path("ego_poses", "\"\"", "nuscenes: T_global_ego per frame, KITTI pose format (row i = frame i)"),
-    field::DoubleList("camera_extrinsic", "[0, 0, 0, 0.5, -0.5, 0.5, -0.5]", -1e6, 1e6,
-                      "nuscenes: T_ego_cam as tx ty tz qw qx qy qz (calibrated_sensor of the camera)"),
+// What the plugin reads; each setting below is declared once against it.
+struct Options {
+  std::string format, path, sequence;
+  Filter filter;
+  std::string score_transform;
+  Policy policy = Policy::stop;
+  bool missing_empty = false;
+  std::string sample_tokens, ego_poses;
+  std::vector<double> camera_extrinsic;
 };
+
+// clang-format off: one setting a line
+const beslam::sdk::Settings<Options> kSettings{
+    setting(&Options::format, "format", nullptr, "ab3dmot|kitti_tracking|kitti_object|nuscenes", "result file format"),
+    path(&Options::path, "path", nullptr, "ab3dmot: a file, or a folder of <Class>/<sequence>.txt; kitti_tracking: a label file, or a folder of <sequence>.txt; kitti_object: a folder of <frame:06d>.txt; nuscenes: the results JSON"),
+    setting(&Options::sequence, "sequence", "\"\"", nullptr, "sequence name (0007) when path is a folder of per-sequence files"),
+    nested(&Options::filter, beslam::sdk::parsed(&Filter::classes, "classes", "all", nullptr, "classes to keep: all, or a comma list of Car,Van,Truck,Pedestrian,Cyclist,Unknown", parseClassList)),
+    nested(&Options::filter, setting(&Filter::min_score, "min_score", "0.0", -1e9, 1e9, "boxes below this score (after score_transform) are dropped")),
+    setting(&Options::score_transform, "score_transform", "auto", "auto|none|sigmoid", "auto: sigmoid for ab3dmot (PointRCNN writes logits), none otherwise"),
+    nested(&Options::filter, setting(&Filter::min_depth, "min_depth", "0.0", -1e9, 1e9, "boxes whose centre has camera z below this (m) are dropped")),
+    nested(&Options::filter, setting(&Filter::max_distance, "max_distance", "1e9", 0, 1e12, "boxes farther than this from the camera (m) are dropped")),
+    beslam::sdk::choice(&Options::policy, "on_error", "stop", {{"stop", Policy::stop}, {"skip", Policy::skip}}, "a malformed row stops the run, or is skipped and counted"),
+    beslam::sdk::choice(&Options::missing_empty, "on_missing_frame", "error", {{"error", false}, {"empty", true}}, "a frame the results do not cover (past the last frame, no token, no result, no label file)"),
+    path(&Options::sample_tokens, "sample_tokens", "\"\"", "nuscenes: token per frame (text, one per line; or JSON, optionally with ego poses)"),
+    path(&Options::ego_poses, "ego_poses", "\"\"", "nuscenes: T_global_ego per frame, KITTI pose format (row i = frame i)"),
+    setting(&Options::camera_extrinsic, "camera_extrinsic", "[0, 0, 0, 0.5, -0.5, 0.5, -0.5]", -1e6, 1e6, "nuscenes: T_ego_cam as tx ty tz qw qx qy qz (calibrated_sensor of the camera)"),
+};
+// clang-format on
+
+const beslam::sdk::PluginInfo kInfo(
+    "detector_replay", "Detection replay",
+    "Replays published 3D detections: nuScenes results JSON (BEVFormer, Fast-BEV), KITTI labels, AB3DMOT rows",
+    {1, 0, 0}, kSettings);
 
 class DetectorReplay : public beslam::sdk::Detector {
  public:
   DetectorReplay(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
+      : DetectorReplay(context, kSettings.read(config)) {}
+
+  DetectorReplay(const beslam::sdk::Context& context, const Options& options)
       : context_(context),
-        format_(config.getString("format")),
-        path_(config.getString("path")),
-        missing_empty_(config.getString("on_missing_frame") == "empty") {
-    Filter filter;
-    try {
-      filter.classes = parseClassList(config.getString("classes"));
-    } catch (const std::invalid_argument& e) {
-      throw beslam::sdk::ConfigError(std::string("classes: ") + e.what());
-    }
-    filter.min_score = config.getDouble("min_score");
-    filter.min_depth = config.getDouble("min_depth");
-    filter.max_distance = config.getDouble("max_distance");
-    filter_ = filter;
-    policy_ = config.getString("on_error") == "skip" ? Policy::skip : Policy::stop;
-    const std::string st = config.getString("score_transform");
-    transform_ = st == "sigmoid" || (st == "auto" && format_ == "ab3dmot") ? ScoreTransform::sigmoid : ScoreTransform::none;
-    const std::string sequence = config.getString("sequence");
+        format_(options.format),
+        path_(options.path),
+        missing_empty_(options.missing_empty),
+        filter_(options.filter),
+        policy_(options.policy) {
+    const Filter& filter = filter_;
+    const std::string& st = options.score_transform;
+    transform_ =
+        st == "sigmoid" || (st == "auto" && format_ == "ab3dmot") ? ScoreTransform::sigmoid : ScoreTransform::none;
+    const std::string& sequence = options.sequence;
 
     if (format_ == "ab3dmot") {
       if (fs::is_directory(path_)) {
-        if (sequence.empty()) throw beslam::sdk::ConfigError("sequence: required when path is a folder (" + path_ + ")");
+        if (sequence.empty())
+          throw beslam::sdk::ConfigError("sequence: required when path is a folder (" + path_ + ")");
         int found = 0;
         for (const char* cls : {"Car", "Pedestrian", "Cyclist"}) {
           int32_t id = 0;
           kittiClass(cls, id);
-          if (!filter.classes.empty() && std::find(filter.classes.begin(), filter.classes.end(), id) == filter.classes.end())
+          if (!filter.classes.empty() &&
+              std::find(filter.classes.begin(), filter.classes.end(), id) == filter.classes.end())
             continue;
           const fs::path file = fs::path(path_) / cls / (sequence + ".txt");
           if (!fs::exists(file)) continue;
@@ -81,7 +94,8 @@ class DetectorReplay : public beslam::sdk::Detector {
     } else if (format_ == "kitti_tracking") {
       std::string file = path_;
       if (fs::is_directory(path_)) {
-        if (sequence.empty()) throw beslam::sdk::ConfigError("sequence: required when path is a folder (" + path_ + ")");
+        if (sequence.empty())
+          throw beslam::sdk::ConfigError("sequence: required when path is a folder (" + path_ + ")");
         file = (fs::path(path_) / (sequence + ".txt")).string();
       }
       readKittiTrackingFile(file, filter, policy_, transform_, table_, report_);
@@ -92,16 +106,16 @@ class DetectorReplay : public beslam::sdk::Detector {
     } else {  // nuscenes
       NuScenesOptions o;
       o.results = path_;
-      const std::string tokens = config.getString("sample_tokens");
+      const std::string& tokens = options.sample_tokens;
       if (tokens.empty()) throw beslam::sdk::ConfigError("sample_tokens: required for format nuscenes");
       o.frames = readNuScenesFrames(tokens);
-      const std::string poses = config.getString("ego_poses");
+      const std::string& poses = options.ego_poses;
       if (!poses.empty()) {
-        const beslam::trajectory::Trajectory t = beslam::trajectory::readKitti(poses);
+        const beslam::formats::Trajectory t = beslam::formats::readKitti(poses);
         o.ego_poses.assign(t.poses.begin(), t.poses.end());
       }
       try {
-        o.T_ego_cam = poseFromTranslationQuaternion(config.getList("camera_extrinsic"), "camera_extrinsic");
+        o.T_ego_cam = poseFromTranslationQuaternion(options.camera_extrinsic, "camera_extrinsic");
       } catch (const std::invalid_argument& e) {
         throw beslam::sdk::ConfigError(e.what());
       }
@@ -144,7 +158,8 @@ class DetectorReplay : public beslam::sdk::Detector {
 
   ~DetectorReplay() override {
     if (missing_frames_ > 0)
-      context_.warn(std::to_string(missing_frames_) + " frames had no detections in " + sources_ + " (replayed as empty)");
+      context_.warn(std::to_string(missing_frames_) + " frames had no detections in " + sources_ +
+                    " (replayed as empty)");
   }
 
  private:
@@ -164,7 +179,8 @@ class DetectorReplay : public beslam::sdk::Detector {
     DetectionTable table;
     Report report;
     readKittiObjectFile(file.string(), index, filter_, policy_, transform_, table, report);
-    if (report.skipped > 0) context_.warn("skipped " + std::to_string(report.skipped) + " malformed rows; first: " + report.problems.front());
+    if (report.skipped > 0)
+      context_.warn("skipped " + std::to_string(report.skipped) + " malformed rows; first: " + report.problems.front());
     return table.at(index);
   }
 
@@ -183,7 +199,4 @@ class DetectorReplay : public beslam::sdk::Detector {
 
 }  // namespace
 
-BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<DetectorReplay>(
-    {"detector_replay", "Detection replay",
-     "Replays published 3D detections: nuScenes results JSON (BEVFormer, Fast-BEV), KITTI labels, AB3DMOT rows",
-     {1, 0, 0}, kFields}))
+BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<DetectorReplay>(kInfo))

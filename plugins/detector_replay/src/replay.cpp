@@ -8,8 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "beslam/common/error.hpp"
-#include "beslam/datasets/labels.hpp"
+#include "beslam/formats/labels.hpp"
 
 namespace beslam::detector_replay {
 
@@ -108,7 +107,7 @@ void keep(const beslam_box3d& box, int64_t frame, const Filter& filter, Detectio
   ++report.boxes;
 }
 
-beslam_box3d boxFromLabel(const datasets::ObjectLabel& o, int32_t class_id, ScoreTransform transform,
+beslam_box3d boxFromLabel(const formats::ObjectLabel& o, int32_t class_id, ScoreTransform transform,
                           const std::string& path, int line_no) {
   beslam_box3d b = boxFromKitti(class_id, o.h, o.w, o.l, o.p_cam_bottom.x(), o.p_cam_bottom.y(), o.p_cam_bottom.z(), o.ry);
   checkGeometry(b, path, line_no);
@@ -157,17 +156,6 @@ int64_t DetectionTable::boxCount() const {
   return n;
 }
 
-bool kittiClass(const std::string& name, int32_t& class_id) {
-  if (name == "Car") class_id = BESLAM_CLASS_CAR;
-  else if (name == "Van") class_id = BESLAM_CLASS_VAN;
-  else if (name == "Truck") class_id = BESLAM_CLASS_TRUCK;
-  else if (name == "Pedestrian" || name == "Person_sitting" || name == "Person") class_id = BESLAM_CLASS_PEDESTRIAN;
-  else if (name == "Cyclist") class_id = BESLAM_CLASS_CYCLIST;
-  else if (name == "Tram" || name == "Misc") class_id = BESLAM_CLASS_UNKNOWN;
-  else return false;
-  return true;
-}
-
 bool ab3dmotClass(int64_t id, int32_t& class_id) {
   switch (id) {
     case 1: class_id = BESLAM_CLASS_PEDESTRIAN; return true;
@@ -207,22 +195,6 @@ std::vector<int32_t> parseClassList(const std::string& list) {
                                   "' (known: Car, Van, Truck, Pedestrian, Cyclist, Unknown, or all)");
   }
   return out;
-}
-
-beslam_box3d boxFromKitti(int32_t class_id, double h, double w, double l, double x, double y, double z, double ry) {
-  beslam_box3d b{};
-  b.class_id = class_id;
-  b.track_id = -1;
-  b.motion_state = BESLAM_MOTION_UNKNOWN;
-  b.center_cam[0] = x;
-  b.center_cam[1] = y - h / 2;  // KITTI gives the bottom centre (y points down)
-  b.center_cam[2] = z;
-  b.size[0] = l;
-  b.size[1] = w;
-  b.size[2] = h;
-  b.yaw = ry;
-  b.score = 1.0f;
-  return b;
 }
 
 beslam_box3d parseAb3dmotRow(const std::string& line, const std::string& path, int line_no, ScoreTransform transform,
@@ -266,7 +238,7 @@ void readAb3dmotFile(const std::string& path, const Filter& filter, Policy polic
 void readKittiTrackingFile(const std::string& path, const Filter& filter, Policy policy, ScoreTransform transform,
                            DetectionTable& table, Report& report) {
   forEachRow(path, policy, report, [&](const std::string& line, int line_no) {
-    const datasets::TrackingLabel t = datasets::parseTrackingRow(line, path, line_no);
+    const formats::TrackingLabel t = formats::parseTrackingRow(line, path, line_no);
     if (t.frame < 0 || t.frame > kMaxFrame) failAt(path, line_no, "frame " + std::to_string(t.frame) + " is out of range");
     if (t.object.isDontCare()) {
       table.cover(t.frame);
@@ -284,7 +256,7 @@ void readKittiObjectFile(const std::string& path, int64_t frame, const Filter& f
                          ScoreTransform transform, DetectionTable& table, Report& report) {
   table.cover(frame);
   forEachRow(path, policy, report, [&](const std::string& line, int line_no) {
-    const datasets::ObjectLabel o = datasets::parseObjectRow(line, path, line_no);
+    const formats::ObjectLabel o = formats::parseObjectRow(line, path, line_no);
     if (o.isDontCare()) {
       ++report.filtered;
       return;

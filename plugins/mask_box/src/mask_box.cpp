@@ -8,7 +8,12 @@
 
 namespace {
 
-const beslam_config_field kFields[] = {BESLAM_MASK_COMMON_FIELDS};
+const beslam::sdk::Settings<beslam::mask::MaskOptions> kSettings(beslam::mask::commonSettings());
+
+const beslam::sdk::PluginInfo kInfo(
+    "mask_box", "Box projection mask",
+    "Projects each near-plane-clipped 3D box, fills its convex hull (+margin), optional edge contour refinement",
+    {1, 0, 0}, kSettings);
 
 class MaskBox : public beslam::sdk::MaskGenerator {
  public:
@@ -21,8 +26,8 @@ class MaskBox : public beslam::sdk::MaskGenerator {
 
  private:
   static beslam::mask::MaskOptions options(const beslam::sdk::Config& config) {
-    beslam::mask::MaskOptions o;
-    beslam::mask::readCommonOptions(config, o);
+    beslam::mask::MaskOptions o = kSettings.read(config);
+    beslam::mask::checkCommonOptions(o);
     o.use_lidar = false;
     return o;
   }
@@ -31,7 +36,4 @@ class MaskBox : public beslam::sdk::MaskGenerator {
 
 }  // namespace
 
-BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<MaskBox>(
-    {"mask_box", "Box projection mask",
-     "Projects each near-plane-clipped 3D box, fills its convex hull (+margin), optional edge contour refinement",
-     {1, 0, 0}, kFields}))
+BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<MaskBox>(kInfo))

@@ -11,7 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "beslam/datasets/labels.hpp"
+#include "beslam/formats/labels.hpp"
 
 namespace fs = std::filesystem;
 
@@ -101,7 +101,7 @@ void summarise(ScoreSummary& s) {
 
 std::map<std::pair<int64_t, int64_t>, bool> readObjectMotionIfPresent(const std::string& path) {
   if (!fs::exists(path)) return {};
-  return datasets::readObjectMotion(path);
+  return formats::readObjectMotion(path);
 }
 
 ScoreSummary scoreSequence(const std::string& masks_dir, const std::string& sequence_dir, const ScoreOptions& options) {
@@ -114,8 +114,8 @@ ScoreSummary scoreSequence(const std::string& masks_dir, const std::string& sequ
     for (const auto& e : fs::directory_iterator(seq / "label_02"))
       if (e.path().extension() == ".txt") label_file = e.path().string();
   if (label_file.empty()) throw std::runtime_error((seq / "label_02").string() + ": no tracking label file");
-  std::map<int64_t, std::vector<datasets::TrackingLabel>> labels;
-  for (auto& l : datasets::readTrackingLabels(label_file)) labels[l.frame].push_back(std::move(l));
+  std::map<int64_t, std::vector<formats::TrackingLabel>> labels;
+  for (auto& l : formats::readTrackingLabels(label_file)) labels[l.frame].push_back(std::move(l));
 
   const std::map<std::pair<int64_t, int64_t>, bool> moving = readObjectMotionIfPresent((seq / "objects_motion.txt").string());
 
@@ -130,7 +130,7 @@ ScoreSummary scoreSequence(const std::string& masks_dir, const std::string& sequ
     const cv::Mat inst = readLabel16((seq / "instance" / frameName(frame)).string());
     if (pred.size() != inst.size()) throw std::runtime_error(e.path().string() + ": size differs from the instance mask");
     ++summary.frames;
-    for (const datasets::TrackingLabel& l : labels[frame]) {
+    for (const formats::TrackingLabel& l : labels[frame]) {
       const auto& o = l.object;
       if (std::find(options.types.begin(), options.types.end(), o.type) == options.types.end()) continue;
       const double dist = o.p_cam_bottom.norm();

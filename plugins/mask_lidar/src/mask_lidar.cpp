@@ -10,21 +10,32 @@
 
 namespace {
 
-namespace field = beslam::sdk::field;
+using beslam::mask::BevRefineParams;
+using beslam::mask::MaskOptions;
+using beslam::mask::PointMaskParams;
+using beslam::sdk::nested;
+using beslam::sdk::setting;
 
-const beslam_config_field kFields[] = {
-    BESLAM_MASK_COMMON_FIELDS,
-    field::Bool("refine_boxes", "true", "fine-tune each box to its LiDAR points in the bird's-eye view"),
-    field::Bool("point_masks", "true", "per-object masks from the projected LiDAR points where dense enough"),
-    field::Double("search_margin", "1.0", 0, 10, "m around a box where its points are looked for"),
-    field::Double("ground_clearance", "0.3", 0, 2, "m above the box bottom below which points count as ground (road, kerb, pavement)"),
-    field::Double("yaw_range_deg", "15", 0, 90, "yaw searched around the input box's (degrees)"),
-    field::Int("min_points", "15", 3, 100000, "fewer matched points: the box is not fine-tuned"),
-    field::Int("mask_min_points", "40", 3, 100000, "fewer projected object points: no point mask"),
-    field::Int("splat_half_width", "2", 0, 50, "px: each projected point covers 2w+1 columns"),
-    field::Int("splat_half_height", "4", 0, 50, "px: each projected point covers 2h+1 rows (beam spacing)"),
-    field::Double("max_range", "80", 1, 500, "LiDAR points farther than this (m) are ignored"),
-};
+// The common mask settings, then mask_lidar's own; each declared once against MaskOptions.
+// clang-format off: one setting a line
+const beslam::sdk::Settings<MaskOptions> kSettings(beslam::mask::commonSettings(), {
+    setting(&MaskOptions::refine_boxes, "refine_boxes", "true", "fine-tune each box to its LiDAR points in the bird's-eye view"),
+    setting(&MaskOptions::point_masks, "point_masks", "true", "per-object masks from the projected LiDAR points where dense enough"),
+    nested(&MaskOptions::bev, setting(&BevRefineParams::search_margin, "search_margin", "1.0", 0, 10, "m around a box where its points are looked for")),
+    nested(&MaskOptions::bev, setting(&BevRefineParams::ground_clearance, "ground_clearance", "0.3", 0, 2, "m above the box bottom below which points count as ground (road, kerb, pavement)")),
+    nested(&MaskOptions::bev, setting(&BevRefineParams::yaw_range_deg, "yaw_range_deg", "15", 0, 90, "yaw searched around the input box's (degrees)")),
+    nested(&MaskOptions::bev, setting(&BevRefineParams::min_points, "min_points", "15", 3, 100000, "fewer matched points: the box is not fine-tuned")),
+    nested(&MaskOptions::points, setting(&PointMaskParams::min_points, "mask_min_points", "40", 3, 100000, "fewer projected object points: no point mask")),
+    nested(&MaskOptions::points, setting(&PointMaskParams::splat_half_width, "splat_half_width", "2", 0, 50, "px: each projected point covers 2w+1 columns")),
+    nested(&MaskOptions::points, setting(&PointMaskParams::splat_half_height, "splat_half_height", "4", 0, 50, "px: each projected point covers 2h+1 rows (beam spacing)")),
+    setting(&MaskOptions::max_range, "max_range", "80", 1, 500, "LiDAR points farther than this (m) are ignored"),
+});
+// clang-format on
+
+const beslam::sdk::PluginInfo kInfo(
+    "mask_lidar", "LiDAR-refined mask",
+    "Algorithm 1 with LiDAR: boxes fine-tuned to the scan in BEV, per-object point masks, optional contour refinement",
+    {1, 0, 0}, kSettings);
 
 class MaskLidar : public beslam::sdk::MaskGenerator {
  public:
@@ -43,26 +54,17 @@ class MaskLidar : public beslam::sdk::MaskGenerator {
 
  private:
   static beslam::mask::MaskOptions options(const beslam::sdk::Config& config) {
-    beslam::mask::MaskOptions o;
-    beslam::mask::readCommonOptions(config, o);
+    MaskOptions o = kSettings.read(config);
+    beslam::mask::checkCommonOptions(o);
     o.use_lidar = true;
-    o.refine_boxes = config.getBool("refine_boxes");
-    o.point_masks = config.getBool("point_masks");
-    o.bev.search_margin = config.getDouble("search_margin");
-    o.bev.ground_clearance = config.getDouble("ground_clearance");
-    o.bev.yaw_range_deg = config.getDouble("yaw_range_deg");
-    o.bev.min_points = static_cast<int>(config.getInt("min_points"));
-    o.points.min_points = static_cast<int>(config.getInt("mask_min_points"));
-    o.points.splat_half_width = static_cast<int>(config.getInt("splat_half_width"));
-    o.points.splat_half_height = static_cast<int>(config.getInt("splat_half_height"));
-    o.max_range = config.getDouble("max_range");
     return o;
   }
   static beslam::mask::MaskBuilder make(const beslam::sdk::Context& context, const beslam::sdk::Config& config) {
     if (!context.T_cam_lidar())
       throw beslam::sdk::ConfigError(
           "mask_lidar needs the LiDAR-to-camera extrinsics, and this dataset has none (use mask_box)");
-    return beslam::mask::MaskBuilder(beslam::mask::fromCamera(context.camera()), context.T_cam_lidar(), options(config));
+    return beslam::mask::MaskBuilder(beslam::mask::fromCamera(context.camera()), context.T_cam_lidar(),
+                                     options(config));
   }
   static beslam::mask::MaskBuilder makeBoxOnly(const beslam::sdk::Context& context, const beslam::sdk::Config& config) {
     beslam::mask::MaskOptions o = options(config);
@@ -78,7 +80,4 @@ class MaskLidar : public beslam::sdk::MaskGenerator {
 
 }  // namespace
 
-BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<MaskLidar>(
-    {"mask_lidar", "LiDAR-refined mask",
-     "Algorithm 1 with LiDAR: boxes fine-tuned to the scan in BEV, per-object point masks, optional contour refinement",
-     {1, 0, 0}, kFields}))
+BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<MaskLidar>(kInfo))

@@ -5,37 +5,44 @@
 // never misses a pixel of the object, which is what a cautious ablation wants.
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "beslam/sdk/sdk.hpp"
 
 namespace {
 
-namespace field = beslam::sdk::field;
+using beslam::sdk::setting;
 
-const beslam_config_field kFields[] = {
-    field::Int("margin_px", "4", 0, 200, "pixels added on every side of the rectangle"),
-    field::Bool("unknown_is_dynamic", "true", "treat boxes of unknown motion as dynamic"),
-    field::Double("min_depth", "0.5", 0.01, 100, "corners closer than this (m) are ignored"),
+// Each setting declared once: the schema `beslam plugins` prints and the host validates, and the reader.
+struct Options {
+  int margin_px = 0;
+  bool unknown_is_dynamic = true;
+  double min_depth = 0;
 };
+
+const beslam::sdk::Settings<Options> kSettings{
+    setting(&Options::margin_px, "margin_px", "4", 0, 200, "pixels added on every side of the rectangle"),
+    setting(&Options::unknown_is_dynamic, "unknown_is_dynamic", "true", "treat boxes of unknown motion as dynamic"),
+    setting(&Options::min_depth, "min_depth", "0.5", 0.01, 100, "corners closer than this (m) are ignored"),
+};
+
+// What `beslam plugins` shows: id, name, one line, version, settings.
+const beslam::sdk::PluginInfo kInfo("mask_rect", "Box rectangle mask",
+                                    "Fills each projected 3D box's 2D bounding rectangle (SDK example)", {1, 0, 0},
+                                    kSettings);
 
 class MaskRect : public beslam::sdk::MaskGenerator {
  public:
   MaskRect(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
-      : camera_(context.camera()),
-        margin_(static_cast<int>(config.getInt("margin_px"))),
-        unknown_is_dynamic_(config.getBool("unknown_is_dynamic")),
-        min_depth_(config.getDouble("min_depth")) {}
+      : camera_(context.camera()), options_(kSettings.read(config)) {}
 
-  void generate(const beslam::sdk::Frame& /*frame*/, const std::vector<beslam_box3d>& boxes,
-                cv::Mat& mask) override {
+  void generate(const beslam::sdk::Frame& /*frame*/, const std::vector<beslam_box3d>& boxes, cv::Mat& mask) override {
     for (const beslam_box3d& box : boxes) {
       if (!std::isfinite(box.center_cam[2])) throw std::runtime_error("box with a non-finite centre");
       uint16_t label;
       if (box.motion_state == BESLAM_MOTION_STATIC && box.track_id >= 0)
         label = static_cast<uint16_t>(BESLAM_LABEL_STATIC_BASE + box.track_id);
-      else if (box.motion_state == BESLAM_MOTION_DYNAMIC || unknown_is_dynamic_)
+      else if (box.motion_state == BESLAM_MOTION_DYNAMIC || options_.unknown_is_dynamic)
         label = BESLAM_LABEL_DYNAMIC;
       else
         continue;
@@ -43,15 +50,17 @@ class MaskRect : public beslam::sdk::MaskGenerator {
       double u0 = 1e9, v0 = 1e9, u1 = -1e9, v1 = -1e9;
       int visible = 0;
       for (int i = 0; i < 8; ++i) {
-        if (p_cam(2, i) < min_depth_) continue;
+        if (p_cam(2, i) < options_.min_depth) continue;
         const double u = camera_.fx * p_cam(0, i) / p_cam(2, i) + camera_.cx;
         const double v = camera_.fy * p_cam(1, i) / p_cam(2, i) + camera_.cy;
         u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
         ++visible;
       }
       if (visible == 0) continue;
-      const cv::Rect rect(cv::Point(static_cast<int>(std::floor(u0)) - margin_, static_cast<int>(std::floor(v0)) - margin_),
-                          cv::Point(static_cast<int>(std::ceil(u1)) + margin_ + 1, static_cast<int>(std::ceil(v1)) + margin_ + 1));
+      const cv::Rect rect(cv::Point(static_cast<int>(std::floor(u0)) - options_.margin_px,
+                                    static_cast<int>(std::floor(v0)) - options_.margin_px),
+                          cv::Point(static_cast<int>(std::ceil(u1)) + options_.margin_px + 1,
+                                    static_cast<int>(std::ceil(v1)) + options_.margin_px + 1));
       const cv::Rect clipped = rect & cv::Rect(0, 0, mask.cols, mask.rows);
       if (clipped.area() > 0) mask(clipped).setTo(label);
     }
@@ -59,13 +68,9 @@ class MaskRect : public beslam::sdk::MaskGenerator {
 
  private:
   beslam_camera camera_;
-  int margin_;
-  bool unknown_is_dynamic_;
-  double min_depth_;
+  Options options_;
 };
 
 }  // namespace
 
-BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<MaskRect>(
-    {"mask_rect", "Box rectangle mask", "Fills each projected 3D box's 2D bounding rectangle (SDK example)",
-     {1, 0, 0}, kFields}))
+BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<MaskRect>(kInfo))

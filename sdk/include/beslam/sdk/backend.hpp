@@ -1,9 +1,13 @@
-// Backend base class: the SLAM or odometry behind the pipeline (see beslam/kinds/backend.h for the call
-// order). Override predictPose, track and trajectory; addLandmarks, finish and mapPoints are optional.
+// Backend: the SLAM or odometry behind the pipeline. Per frame: predictPose(frame) (the pose the motion
+// checker uses, empty when unknown), then track(frame, mask, boxes) -> TrackResult (state, T_world_cam,
+// keyframe, world_is_metric once the map is in metres). At the end: finish(), then trajectory(which) and
+// mapPoints(). addLandmarks() receives a reconstructor's objects. Override predictPose, track and
+// trajectory; the rest is optional. Call order: beslam/kinds/backend.h; C glue: detail/backend.hpp.
 #pragma once
 
 #include <utility>
 
+#include "beslam/sdk/detail/named_values.hpp"
 #include "beslam/sdk/landmark.hpp"
 
 namespace beslam::sdk {
@@ -29,9 +33,8 @@ struct TrajectoryEntry {
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
 };
 
-class Backend {
+class Backend : public detail::Kind<Backend, BESLAM_KIND_BACKEND> {
  public:
-  static constexpr int32_t kKind = BESLAM_KIND_BACKEND;
   virtual ~Backend() = default;
   virtual std::optional<Eigen::Isometry3d> predictPose(const Frame& frame) = 0;
   // mask: CV_16UC1 labels, empty without a mask generator; boxes: with track ids and motion states.
@@ -42,112 +45,17 @@ class Backend {
   virtual std::vector<TrajectoryEntry> trajectory(int32_t which) = 0;
   virtual std::vector<beslam_map_point> mapPoints() { return {}; }
 
-  template <class Impl>
-  static const void* functionTable() {
-    static const beslam_backend_v1 table = {
-        sizeof(beslam_backend_v1),
-        0,
-        // predict_pose
-        [](void* instance, const beslam_frame* frame, beslam_pose* T_world_cam, int32_t* valid) -> beslam_status {
-          auto* self = static_cast<detail::Instance<Impl>*>(instance);
-          return detail::guarded(self ? &self->context : nullptr, [&] {
-            if (self == nullptr || T_world_cam == nullptr || valid == nullptr)
-              throw std::invalid_argument("predict_pose: null argument");
-            const auto pose = static_cast<Backend&>(*self->impl).predictPose(toFrame(frame));
-            *valid = pose ? 1 : 0;
-            if (pose) *T_world_cam = toPose(*pose);
-          });
-        },
-        // track
-        [](void* instance, const beslam_frame* frame, const beslam_image_view* mask, const beslam_box_list* boxes,
-           beslam_track_result* result) -> beslam_status {
-          auto* self = static_cast<detail::Instance<Impl>*>(instance);
-          return detail::guarded(self ? &self->context : nullptr, [&] {
-            if (self == nullptr || result == nullptr) throw std::invalid_argument("track: null argument");
-            Backend& b = *self->impl;
-            const TrackResult r = b.track(toFrame(frame), mask ? toMat(*mask) : cv::Mat(), copyBoxes(boxes));
-            b.abi_stage_names_.clear();
-            b.abi_stages_.clear();
-            for (const auto& [name, ms] : r.stage_ms) b.abi_stage_names_.push_back(name);
-            for (size_t i = 0; i < r.stage_ms.size(); ++i)
-              b.abi_stages_.push_back({b.abi_stage_names_[i].c_str(), r.stage_ms[i].second});
-            beslam_track_result c{};
-            c.struct_size = sizeof(c);
-            c.state = r.state;
-            c.is_keyframe = r.is_keyframe ? 1 : 0;
-            c.tracked_points = r.tracked_points;
-            c.keyframe_id = r.keyframe_id;
-            c.T_world_cam = toPose(r.T_world_cam);
-            c.stage_times = b.abi_stages_.empty() ? nullptr : b.abi_stages_.data();
-            c.stage_count = static_cast<uint32_t>(b.abi_stages_.size());
-            c.world_scale = r.world_is_metric ? BESLAM_WORLD_SCALE_METRIC : BESLAM_WORLD_SCALE_UNKNOWN;
-            b.abi_counter_names_.clear();
-            b.abi_counters_.clear();
-            for (const auto& [name, value] : r.counters) b.abi_counter_names_.push_back(name);
-            for (size_t i = 0; i < r.counters.size(); ++i)
-              b.abi_counters_.push_back({b.abi_counter_names_[i].c_str(), r.counters[i].second});
-            c.counters = b.abi_counters_.empty() ? nullptr : b.abi_counters_.data();
-            c.counter_count = static_cast<uint32_t>(b.abi_counters_.size());
-            b.abi_keypoints_ = r.keypoints;
-            c.keypoints = b.abi_keypoints_.empty() ? nullptr : b.abi_keypoints_.data();
-            c.keypoint_count = static_cast<uint32_t>(b.abi_keypoints_.size());
-            c.keypoint_size = sizeof(beslam_keypoint);
-            std::memcpy(result, &c, std::min<size_t>(result->struct_size ? result->struct_size : sizeof(c), sizeof(c)));
-          });
-        },
-        // add_landmarks
-        [](void* instance, const beslam_landmark_list* landmarks) -> beslam_status {
-          auto* self = static_cast<detail::Instance<Impl>*>(instance);
-          return detail::guarded(self ? &self->context : nullptr, [&] {
-            if (self == nullptr) throw std::invalid_argument("add_landmarks: null instance");
-            static_cast<Backend&>(*self->impl).addLandmarks(fromC(landmarks));
-          });
-        },
-        // finish
-        [](void* instance) -> beslam_status {
-          auto* self = static_cast<detail::Instance<Impl>*>(instance);
-          return detail::guarded(self ? &self->context : nullptr, [&] {
-            if (self == nullptr) throw std::invalid_argument("finish: null instance");
-            static_cast<Backend&>(*self->impl).finish();
-          });
-        },
-        // trajectory
-        [](void* instance, int32_t which, beslam_trajectory_list* out) -> beslam_status {
-          auto* self = static_cast<detail::Instance<Impl>*>(instance);
-          return detail::guarded(self ? &self->context : nullptr, [&] {
-            if (self == nullptr || out == nullptr) throw std::invalid_argument("trajectory: null argument");
-            Backend& b = *self->impl;
-            b.abi_trajectory_.clear();
-            for (const TrajectoryEntry& e : b.trajectory(which))
-              b.abi_trajectory_.push_back({e.frame_index, e.timestamp, toPose(e.T_world_cam)});
-            out->entries = b.abi_trajectory_.data();
-            out->count = static_cast<uint32_t>(b.abi_trajectory_.size());
-            out->element_size = sizeof(beslam_trajectory_entry);
-          });
-        },
-        // map_points
-        [](void* instance, beslam_map_point_list* out) -> beslam_status {
-          auto* self = static_cast<detail::Instance<Impl>*>(instance);
-          return detail::guarded(self ? &self->context : nullptr, [&] {
-            if (self == nullptr || out == nullptr) throw std::invalid_argument("map_points: null argument");
-            Backend& b = *self->impl;
-            b.abi_points_ = b.mapPoints();
-            out->points = b.abi_points_.data();
-            out->count = b.abi_points_.size();
-            out->element_size = sizeof(beslam_map_point);
-          });
-        }};
-    return &table;
-  }
-
  private:
-  std::vector<std::string> abi_stage_names_;
-  std::vector<beslam_stage_time> abi_stages_;
-  std::vector<std::string> abi_counter_names_;
-  std::vector<beslam_named_value> abi_counters_;
-  std::vector<beslam_keypoint> abi_keypoints_;
-  std::vector<beslam_trajectory_entry> abi_trajectory_;
-  std::vector<beslam_map_point> abi_points_;
+  friend struct detail::Access;  // the C glue (detail/backend.hpp) keeps here what the host reads
+  struct {
+    detail::NamedValues<beslam_stage_time> stages;
+    detail::NamedValues<beslam_named_value> counters;
+    std::vector<beslam_keypoint> keypoints;
+    std::vector<beslam_trajectory_entry> trajectory;
+    std::vector<beslam_map_point> points;
+  } abi_;
 };
 
 }  // namespace beslam::sdk
+
+#include "beslam/sdk/detail/backend.hpp"

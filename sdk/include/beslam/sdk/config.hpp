@@ -1,5 +1,6 @@
-// Plugin configuration: schema fields a plugin declares (constexpr helpers) and typed reads of the
-// values the host validated against that schema and resolved (defaults filled) before create().
+// Plugin configuration: schema entries (field::*, the raw form settings.hpp builds on) and the values the
+// host validated against that schema and resolved (defaults filled) before create(). Plugins declare
+// their settings with beslam::sdk::Settings (settings.hpp) and read them through it.
 #pragma once
 
 #include <cstdint>
@@ -20,8 +21,7 @@ constexpr beslam_config_field Bool(const char* key, const char* def, const char*
 constexpr beslam_config_field Int(const char* key, const char* def, double min, double max, const char* doc) {
   return {key, BESLAM_CONFIG_INT, def == nullptr, def, min, max, nullptr, doc};
 }
-constexpr beslam_config_field Double(const char* key, const char* def, double min, double max,
-                                     const char* doc) {
+constexpr beslam_config_field Double(const char* key, const char* def, double min, double max, const char* doc) {
   return {key, BESLAM_CONFIG_DOUBLE, def == nullptr, def, min, max, nullptr, doc};
 }
 // choices: "a|b|c" or nullptr for any string.
@@ -32,8 +32,7 @@ constexpr beslam_config_field String(const char* key, const char* def, const cha
 constexpr beslam_config_field Path(const char* key, const char* def, const char* doc) {
   return {key, BESLAM_CONFIG_PATH, def == nullptr, def, kNoMin, kNoMax, nullptr, doc};
 }
-constexpr beslam_config_field DoubleList(const char* key, const char* def, double min, double max,
-                                         const char* doc) {
+constexpr beslam_config_field DoubleList(const char* key, const char* def, double min, double max, const char* doc) {
   return {key, BESLAM_CONFIG_DOUBLE_LIST, def == nullptr, def, min, max, nullptr, doc};
 }
 }  // namespace field
@@ -50,6 +49,13 @@ class Config {
   Config(const beslam_config_value* values, uint32_t count) : values_(values), count_(count) {}
 
   bool has(const char* key) const { return find(key) != nullptr; }
+  uint32_t size() const { return count_; }
+  const beslam_config_value& at(uint32_t i) const { return values_[i]; }
+  const beslam_config_value* find(const char* key) const {
+    for (uint32_t i = 0; i < count_; ++i)
+      if (values_[i].key && std::strcmp(values_[i].key, key) == 0) return &values_[i];
+    return nullptr;
+  }
   bool getBool(const char* key) const { return get(key, BESLAM_CONFIG_BOOL).number != 0.0; }
   int64_t getInt(const char* key) const { return static_cast<int64_t>(get(key, BESLAM_CONFIG_INT).number); }
   double getDouble(const char* key) const { return get(key, BESLAM_CONFIG_DOUBLE).number; }
@@ -65,11 +71,6 @@ class Config {
   }
 
  private:
-  const beslam_config_value* find(const char* key) const {
-    for (uint32_t i = 0; i < count_; ++i)
-      if (values_[i].key && std::strcmp(values_[i].key, key) == 0) return &values_[i];
-    return nullptr;
-  }
   const beslam_config_value& get(const char* key, int32_t type) const {
     const beslam_config_value* v = find(key);
     if (v == nullptr) throw ConfigError(std::string("configuration key '") + key + "' is missing");

@@ -1,4 +1,5 @@
-// Object landmarks (reconstructed static objects) and keyframes in C++ form, with their C conversions.
+// Object landmarks (reconstructed static objects) and keyframes in C++ form; their C conversions are in
+// detail/landmark.hpp.
 #pragma once
 
 #include "beslam/sdk/plugin.hpp"
@@ -18,65 +19,11 @@ struct Landmark {
   int32_t class_id = BESLAM_CLASS_CAR;
   float confidence = 0;
   Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();  // x heading, y left, z up
-  Eigen::Vector3d scale = Eigen::Vector3d::Ones();                    // length, width, height
+  Eigen::Vector3d scale = Eigen::Vector3d::Ones();                   // length, width, height
   std::vector<float> shape_code;
   std::vector<float> surface_points;  // x y z triples in the object frame
 };
 
-inline Keyframe toKeyframe(const beslam_keyframe& kf) {
-  beslam_keyframe k{};
-  std::memcpy(&k, &kf, std::min<size_t>(kf.struct_size, sizeof(k)));
-  return {k.id, k.frame_index, k.timestamp, toIsometry(k.T_world_cam), k.world_scale == BESLAM_WORLD_SCALE_METRIC};
-}
-
-inline beslam_keyframe toC(const Keyframe& kf) {
-  beslam_keyframe k{};
-  k.struct_size = sizeof(k);
-  k.id = kf.id;
-  k.frame_index = kf.frame_index;
-  k.timestamp = kf.timestamp;
-  k.T_world_cam = toPose(kf.T_world_cam);
-  k.world_scale = kf.world_is_metric ? BESLAM_WORLD_SCALE_METRIC : BESLAM_WORLD_SCALE_UNKNOWN;
-  return k;
-}
-
-// Views the landmarks as C structs; the vector of landmarks must outlive the result.
-inline std::vector<beslam_object_landmark> toC(const std::vector<Landmark>& landmarks) {
-  std::vector<beslam_object_landmark> out;
-  out.reserve(landmarks.size());
-  for (const Landmark& l : landmarks) {
-    beslam_object_landmark c{};
-    c.struct_size = sizeof(c);
-    c.track_id = l.track_id;
-    c.class_id = l.class_id;
-    c.confidence = l.confidence;
-    c.T_world_object = toPose(l.T_world_object);
-    for (int i = 0; i < 3; ++i) c.scale[i] = l.scale[i];
-    c.shape_code = l.shape_code.empty() ? nullptr : l.shape_code.data();
-    c.shape_code_size = static_cast<uint32_t>(l.shape_code.size());
-    c.surface_points = l.surface_points.empty() ? nullptr : l.surface_points.data();
-    c.surface_point_count = l.surface_points.size() / 3;
-    out.push_back(c);
-  }
-  return out;
-}
-
-// Copies C landmarks (borrowed) into owned C++ ones.
-inline std::vector<Landmark> fromC(const beslam_landmark_list* list) {
-  std::vector<Landmark> out;
-  if (list == nullptr) return out;
-  for (const beslam_object_landmark& c : copyArray(list->landmarks, list->count, list->element_size)) {
-    Landmark l;
-    l.track_id = c.track_id;
-    l.class_id = c.class_id;
-    l.confidence = c.confidence;
-    l.T_world_object = toIsometry(c.T_world_object);
-    l.scale = Eigen::Vector3d(c.scale[0], c.scale[1], c.scale[2]);
-    if (c.shape_code) l.shape_code.assign(c.shape_code, c.shape_code + c.shape_code_size);
-    if (c.surface_points) l.surface_points.assign(c.surface_points, c.surface_points + 3 * c.surface_point_count);
-    out.push_back(std::move(l));
-  }
-  return out;
-}
-
 }  // namespace beslam::sdk
+
+#include "beslam/sdk/detail/landmark.hpp"

@@ -1,13 +1,14 @@
-// The SDK core: what every plugin instance gets (Context, Frame), the noexcept guard that turns C++
-// exceptions into status codes, the descriptor builder and the one export macro.
+// The SDK core: what every plugin instance gets (Context, Frame), the descriptor and the export macro.
 //
 //   class MyDetector : public beslam::sdk::Detector { ... };            // see detector.hpp etc.
-//   static const beslam_config_field kFields[] = {beslam::sdk::field::Double("min_score", "0.3", 0, 1, "...")};
+//   const beslam::sdk::Settings<Options> kSettings{...};                // see settings.hpp
 //   BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<MyDetector>({"my_detector", "My detector", "One line.",
-//                                                            {1, 0, 0}, kFields}))
+//                                                            {1, 0, 0}, kSettings}))
 //
 // A plugin class is constructed as Impl(const beslam::sdk::Context&, const beslam::sdk::Config&); the
-// Config is borrowed for the constructor only, the Context lives as long as the instance.
+// Config is borrowed for the constructor only, the Context lives as long as the instance. Any exception
+// a plugin throws becomes a status at the C boundary (ConfigError: INVALID_CONFIG, invalid_argument:
+// INVALID_ARGUMENT, others: RUNTIME) with its message logged. The glue is in detail/plugin.hpp.
 #pragma once
 
 #include <cstdio>
@@ -19,6 +20,7 @@
 
 #include "beslam/plugin.h"
 #include "beslam/sdk/config.hpp"
+#include "beslam/sdk/settings.hpp"
 #include "beslam/sdk/views.hpp"
 
 namespace beslam::sdk {
@@ -71,68 +73,6 @@ struct Frame {
   PointMap lidarPoints() const { return toEigen(lidar); }  // 4 x N: x y z intensity, LiDAR frame
 };
 
-inline Frame toFrame(const beslam_frame* frame) {
-  if (frame == nullptr) throw std::invalid_argument("frame is null");
-  beslam_frame f{};
-  std::memcpy(&f, frame, std::min<size_t>(frame->struct_size, sizeof(f)));
-  Frame out;
-  out.index = f.index;
-  out.timestamp = f.timestamp;
-  out.gray = toMat(f.gray);
-  out.color = toMat(f.color);
-  out.lidar = f.lidar;
-  out.image_path = f.image_path ? f.image_path : "";
-  return out;
-}
-
-namespace detail {
-
-// Runs f, mapping every exception to a status and logging its message: nothing crosses the C ABI.
-template <class F>
-beslam_status guarded(const Context* context, F&& f) noexcept {
-  auto report = [context](const char* what) noexcept {
-    try {
-      if (context) context->log(BESLAM_LOG_ERROR, what);
-    } catch (...) {
-    }
-  };
-  try {
-    f();
-    return BESLAM_OK;
-  } catch (const ConfigError& e) {
-    report(e.what());
-    return BESLAM_ERROR_INVALID_CONFIG;
-  } catch (const std::bad_alloc&) {
-    report("out of memory");
-    return BESLAM_ERROR_OUT_OF_MEMORY;
-  } catch (const std::invalid_argument& e) {
-    report(e.what());
-    return BESLAM_ERROR_INVALID_ARGUMENT;
-  } catch (const std::exception& e) {
-    report(e.what());
-    return BESLAM_ERROR_RUNTIME;
-  } catch (...) {
-    report("unknown exception");
-    return BESLAM_ERROR_INTERNAL;
-  }
-}
-
-// An instance as the host sees it: the context outlives the plugin object built from it.
-template <class Impl>
-struct Instance {
-  explicit Instance(const beslam_create_info& info, const char* id) : context(info, id) {}
-  Context context;
-  std::unique_ptr<Impl> impl;
-};
-
-template <class Impl>
-Instance<Impl>* cast(void* instance) {
-  if (instance == nullptr) throw std::invalid_argument("instance is null");
-  return static_cast<Instance<Impl>*>(instance);
-}
-
-}  // namespace detail
-
 struct Version {
   uint32_t major, minor, patch;
 };
@@ -148,8 +88,21 @@ struct PluginInfo {
   template <size_t N>
   PluginInfo(const char* id_, const char* name_, const char* description_, Version version_,
              const beslam_config_field (&fields_)[N])
-      : id(id_), name(name_), description(description_), version(version_), fields(fields_),
+      : id(id_),
+        name(name_),
+        description(description_),
+        version(version_),
+        fields(fields_),
         field_count(static_cast<uint32_t>(N)) {}
+  template <class O>
+  PluginInfo(const char* id_, const char* name_, const char* description_, Version version_,
+             const Settings<O>& settings)
+      : id(id_),
+        name(name_),
+        description(description_),
+        version(version_),
+        fields(settings.fields()),
+        field_count(settings.size()) {}
   PluginInfo(const char* id_, const char* name_, const char* description_, Version version_)
       : id(id_), name(name_), description(description_), version(version_) {}
 };
@@ -157,68 +110,24 @@ struct PluginInfo {
 // The descriptor of plugin class Impl (one per class, built on first use, valid while loaded).
 // Impl derives from one kind base (Detector, MotionChecker, ...), which supplies kKind and its table.
 template <class Impl>
-const beslam_plugin_descriptor* describe(const PluginInfo& info) {
-  static const std::string id = info.id;
-  static beslam_plugin_descriptor d = [&info] {
-    beslam_plugin_descriptor desc{};
-    desc.struct_size = sizeof(beslam_plugin_descriptor);
-    desc.abi_version = BESLAM_ABI_VERSION;
-    desc.id = id.c_str();
-    desc.name = info.name;
-    desc.description = info.description;
-    desc.kind = Impl::kKind;
-    desc.version_major = info.version.major;
-    desc.version_minor = info.version.minor;
-    desc.version_patch = info.version.patch;
-    desc.config_fields = info.fields;
-    desc.config_field_count = info.field_count;
-    desc.config_field_size = sizeof(beslam_config_field);
-    desc.create = [](const beslam_create_info* create_info, void** out) -> beslam_status {
-      if (create_info == nullptr || out == nullptr) return BESLAM_ERROR_INVALID_ARGUMENT;
-      *out = nullptr;
-      detail::Instance<Impl>* instance = nullptr;
-      try {
-        instance = new detail::Instance<Impl>(*create_info, id.c_str());
-      } catch (...) {
-        return BESLAM_ERROR_OUT_OF_MEMORY;
-      }
-      const Config config(create_info->config, create_info->config_count);
-      const beslam_status status = detail::guarded(&instance->context, [&] {
-        instance->impl = std::make_unique<Impl>(instance->context, config);
-      });
-      if (status != BESLAM_OK) {
-        delete instance;
-        return status;
-      }
-      *out = instance;
-      return BESLAM_OK;
-    };
-    desc.destroy = [](void* instance) {
-      try {
-        delete static_cast<detail::Instance<Impl>*>(instance);
-      } catch (...) {
-      }
-    };
-    desc.functions = Impl::template functionTable<Impl>();
-    return desc;
-  }();
-  return &d;
-}
+const beslam_plugin_descriptor* describe(const PluginInfo& info);
 
 }  // namespace beslam::sdk
 
+#include "beslam/sdk/detail/plugin.hpp"
+
 // Exports a library's plugins: BESLAM_EXPORT_PLUGINS(describe<A>({...}), describe<B>({...}))
-#define BESLAM_EXPORT_PLUGINS(...)                                                                     \
-  extern "C" BESLAM_EXPORT uint32_t beslam_plugin_abi_version(void) { return BESLAM_ABI_VERSION; }   \
-  extern "C" BESLAM_EXPORT beslam_status beslam_plugin_list(                                          \
-      const beslam_plugin_descriptor* const** out_descriptors, uint32_t* out_count) {                 \
-    if (out_descriptors == nullptr || out_count == nullptr) return BESLAM_ERROR_INVALID_ARGUMENT;      \
-    try {                                                                                              \
-      static const beslam_plugin_descriptor* const list[] = {__VA_ARGS__};                            \
-      *out_descriptors = list;                                                                         \
-      *out_count = static_cast<uint32_t>(sizeof(list) / sizeof(list[0]));                             \
-      return BESLAM_OK;                                                                                \
-    } catch (...) {                                                                                    \
-      return BESLAM_ERROR_INTERNAL;                                                                    \
-    }                                                                                                  \
+#define BESLAM_EXPORT_PLUGINS(...)                                                                                   \
+  extern "C" BESLAM_EXPORT uint32_t beslam_plugin_abi_version(void) { return BESLAM_ABI_VERSION; }                   \
+  extern "C" BESLAM_EXPORT beslam_status beslam_plugin_list(const beslam_plugin_descriptor* const** out_descriptors, \
+                                                            uint32_t* out_count) {                                   \
+    if (out_descriptors == nullptr || out_count == nullptr) return BESLAM_ERROR_INVALID_ARGUMENT;                    \
+    try {                                                                                                            \
+      static const beslam_plugin_descriptor* const list[] = {__VA_ARGS__};                                           \
+      *out_descriptors = list;                                                                                       \
+      *out_count = static_cast<uint32_t>(sizeof(list) / sizeof(list[0]));                                            \
+      return BESLAM_OK;                                                                                              \
+    } catch (...) {                                                                                                  \
+      return BESLAM_ERROR_INTERNAL;                                                                                  \
+    }                                                                                                                \
   }

@@ -1,29 +1,43 @@
-// Zero-copy views between the C ABI's plain structs and cv::Mat / Eigen, and pose conversions.
+// Zero-copy views between the C ABI's plain structs and cv::Mat / Eigen.
 // Mats made from input views point into host memory that is borrowed for one call: read them, never
 // keep them. Boxes cross as arrays with an element size; copyBoxes/writeBoxes honour it, so a plugin
 // built against an older or newer minor version reads and writes only the fields both sides know.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cstring>
+#include <opencv2/core.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
-#include <opencv2/core.hpp>
-
+#include "beslam/formats/geometry.hpp"
 #include "beslam/plugin.h"
 
 namespace beslam::sdk {
 
+// Pose conversions and box geometry come from the formats component (beslam/formats/geometry.hpp).
+using formats::boxCorners;
+using formats::boxPose;
+using formats::className;
+using formats::motionName;
+using formats::newBox;
+using formats::objectPose;
+using formats::toIsometry;
+using formats::toPose;
+
 inline int pixelCvType(int32_t format) {
   switch (format) {
-    case BESLAM_PIXEL_GRAY8: return CV_8UC1;
+    case BESLAM_PIXEL_GRAY8:
+      return CV_8UC1;
     case BESLAM_PIXEL_BGR8:
-    case BESLAM_PIXEL_RGB8: return CV_8UC3;
-    case BESLAM_PIXEL_LABEL16: return CV_16UC1;
-    default: throw std::invalid_argument("unknown pixel format " + std::to_string(format));
+    case BESLAM_PIXEL_RGB8:
+      return CV_8UC3;
+    case BESLAM_PIXEL_LABEL16:
+      return CV_16UC1;
+    default:
+      throw std::invalid_argument("unknown pixel format " + std::to_string(format));
   }
 }
 
@@ -55,22 +69,7 @@ inline beslam_image_view toView(const cv::Mat& mat, int32_t format) {
 using PointMap = Eigen::Map<const Eigen::Matrix<float, 4, Eigen::Dynamic>, 0, Eigen::OuterStride<>>;
 inline PointMap toEigen(const beslam_point_cloud_view& cloud) {
   const Eigen::Index stride = cloud.stride_bytes >= 16 ? cloud.stride_bytes / 4 : 4;
-  return PointMap(cloud.data, 4, cloud.data ? static_cast<Eigen::Index>(cloud.count) : 0,
-                  Eigen::OuterStride<>(stride));
-}
-
-inline Eigen::Isometry3d toIsometry(const beslam_pose& pose) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) T.matrix()(r, c) = pose.m[r * 4 + c];
-  return T;
-}
-
-inline beslam_pose toPose(const Eigen::Isometry3d& T) {
-  beslam_pose pose{};
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) pose.m[r * 4 + c] = T.matrix()(r, c);
-  return pose;
+  return PointMap(cloud.data, 4, cloud.data ? static_cast<Eigen::Index>(cloud.count) : 0, Eigen::OuterStride<>(stride));
 }
 
 // Copies an element-sized C array into whole structs (unknown trailing fields zero-filled).
@@ -98,55 +97,6 @@ inline void writeBoxes(const std::vector<beslam_box3d>& boxes, beslam_box_array&
   char* base = reinterpret_cast<char*>(array.boxes);
   for (uint32_t i = 0; i < array.count && i < boxes.size(); ++i)
     std::memcpy(base + static_cast<size_t>(i) * array.element_size, &boxes[i], n);
-}
-
-// Pose of a box in the camera frame: rotation yaw about the camera y axis, origin at the box centre.
-// The box frame has x along the heading (length), y down (height), z across (width), KITTI style.
-inline Eigen::Isometry3d boxPose(const beslam_box3d& box) {
-  Eigen::Isometry3d T_cam_box = Eigen::Isometry3d::Identity();
-  T_cam_box.linear() = Eigen::AngleAxisd(box.yaw, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  T_cam_box.translation() = Eigen::Vector3d(box.center_cam[0], box.center_cam[1], box.center_cam[2]);
-  return T_cam_box;
-}
-
-// Pose of a box as an object landmark's body frame (x forward, y left, z up; data.h): T_cam_object.
-inline Eigen::Isometry3d objectPose(const beslam_box3d& box) {
-  Eigen::Matrix3d M;  // columns: body x, y, z in box axes (x heading, y down, z across)
-  M << 1, 0, 0,  //
-      0, 0, -1,  //
-      0, 1, 0;
-  Eigen::Isometry3d T_cam_object = boxPose(box);
-  T_cam_object.linear() = T_cam_object.linear() * M;
-  return T_cam_object;
-}
-
-// The eight corners of a box in the camera frame (columns), bottom face first.
-inline Eigen::Matrix<double, 3, 8> boxCorners(const beslam_box3d& box) {
-  const double l = box.size[0] / 2, w = box.size[1] / 2, h = box.size[2] / 2;
-  Eigen::Matrix<double, 3, 8> p_box;
-  p_box << l, l, -l, -l, l, l, -l, -l,  //
-      h, h, h, h, -h, -h, -h, -h,       // y down: +h is the bottom
-      w, -w, -w, w, w, -w, -w, w;
-  return boxPose(box) * p_box;
-}
-
-inline const char* className(int32_t class_id) {
-  switch (class_id) {
-    case BESLAM_CLASS_CAR: return "Car";
-    case BESLAM_CLASS_PEDESTRIAN: return "Pedestrian";
-    case BESLAM_CLASS_CYCLIST: return "Cyclist";
-    case BESLAM_CLASS_TRUCK: return "Truck";
-    case BESLAM_CLASS_VAN: return "Van";
-    default: return "Misc";
-  }
-}
-
-inline const char* motionName(int32_t state) {
-  switch (state) {
-    case BESLAM_MOTION_STATIC: return "static";
-    case BESLAM_MOTION_DYNAMIC: return "dynamic";
-    default: return "unknown";
-  }
 }
 
 }  // namespace beslam::sdk

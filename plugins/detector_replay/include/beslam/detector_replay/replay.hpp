@@ -23,6 +23,7 @@
 #include <Eigen/Geometry>
 
 #include "beslam/data.h"
+#include "beslam/formats/geometry.hpp"
 
 namespace beslam::detector_replay {
 
@@ -61,8 +62,8 @@ class DetectionTable {
 };
 
 // Class names and ids. Returns false for a name the format does not know (an "unknown class").
-// KITTI: Car Van Truck Pedestrian Person_sitting Cyclist Tram Misc (Tram, Misc -> BESLAM_CLASS_UNKNOWN).
-bool kittiClass(const std::string& name, int32_t& class_id);
+// KITTI names and the KITTI label box geometry come from the SDK's formats (beslam/formats/geometry.hpp).
+using formats::kittiClass;
 // AB3DMOT ids: 1 Pedestrian, 2 Car, 3 Cyclist.
 bool ab3dmotClass(int64_t id, int32_t& class_id);
 // nuScenes detection names: car; truck bus trailer construction_vehicle (-> TRUCK); pedestrian;
@@ -73,8 +74,7 @@ std::vector<int32_t> parseClassList(const std::string& list);
 
 enum class ScoreTransform { none, sigmoid };
 
-// KITTI bottom-centre label geometry to an ABI box (centre y = y_bottom - h / 2).
-beslam_box3d boxFromKitti(int32_t class_id, double h, double w, double l, double x, double y, double z, double ry);
+using formats::boxFromKitti;
 
 // One AB3DMOT row; throws std::runtime_error "path:line: cause" when malformed. `frame` gets the frame.
 beslam_box3d parseAb3dmotRow(const std::string& line, const std::string& path, int line_no, ScoreTransform transform,

@@ -58,7 +58,7 @@ ScoreSummary scoreSequence(const std::string& masks_dir, const std::string& sequ
 
 void summarise(ScoreSummary& summary);
 
-// datasets::readObjectMotion (objects_motion.txt, (frame, track id) -> moving), except that an absent file
+// formats::readObjectMotion (objects_motion.txt, (frame, track id) -> moving), except that an absent file
 // gives an empty map.
 std::map<std::pair<int64_t, int64_t>, bool> readObjectMotionIfPresent(const std::string& path);
 

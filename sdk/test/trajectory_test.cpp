@@ -1,36 +1,24 @@
+#include "beslam/formats/trajectory.hpp"
+
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 
-#include "beslam/common/error.hpp"
-#include "beslam/trajectory/trajectory.hpp"
+#include "beslam/formats/error.hpp"
+#include "temp_files.hpp"
 
 namespace fs = std::filesystem;
-using beslam::trajectory::Trajectory;
-namespace traj = beslam::trajectory;
+using beslam::formats::Trajectory;
+namespace traj = beslam::formats;
 
 namespace {
 
-class TrajectoryFiles : public ::testing::Test {
+class TrajectoryFiles : public TempFiles {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("beslam_trajectory_test_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string write(const std::string& name, const std::string& content) const {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path, std::ios::binary) << content;
-    return path;
-  }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
   // Expects `fn` to throw beslam::Error whose message starts with "path:line:" (or "path:" when line 0)
   // and contains `cause`.
   template <typename Fn>
@@ -46,8 +34,6 @@ class TrajectoryFiles : public ::testing::Test {
       EXPECT_EQ(message.find('\n'), std::string::npos) << "one line only: " << message;
     }
   }
-
-  fs::path dir_;
 };
 
 Trajectory makeTrajectory(int n) {

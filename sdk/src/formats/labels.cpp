@@ -1,17 +1,14 @@
-#include "beslam/datasets/labels.hpp"
+#include "beslam/formats/labels.hpp"
 
 #include <cmath>
 #include <cstdio>
 
-#include "beslam/common/error.hpp"
-#include "beslam/common/file_io.hpp"
-#include "parse_util.hpp"
+#include "beslam/formats/error.hpp"
+#include "beslam/formats/file.hpp"
+#include "beslam/formats/text.hpp"
 
-namespace beslam::datasets {
+namespace beslam::formats {
 namespace {
-
-using detail::parseDouble;
-using detail::parseInt;
 
 const char* const kObjectFields[] = {"type", "truncated", "occluded", "alpha", "x1", "y1", "x2", "y2",
                                      "h",    "w",         "l",        "x",     "y",  "z",  "ry", "score"};
@@ -84,23 +81,23 @@ template <typename Row, typename Parse>
 std::vector<Row> readRows(const std::string& path, Parse parse) {
   const std::string text = readFile(path);
   std::vector<Row> rows;
-  const auto lines = detail::splitLines(text);
+  const auto lines = splitLines(text);
   for (std::size_t i = 0; i < lines.size(); ++i)
-    if (!detail::isBlank(lines[i])) rows.push_back(parse(std::string(lines[i]), path, static_cast<int>(i + 1)));
+    if (!isBlank(lines[i])) rows.push_back(parse(std::string(lines[i]), path, static_cast<int>(i + 1)));
   return rows;
 }
 
 }  // namespace
 
 ObjectLabel parseObjectRow(const std::string& line, const std::string& path, int line_no) {
-  const auto tokens = detail::splitWhitespace(line);
+  const auto tokens = splitWhitespace(line);
   if (tokens.size() != 15 && tokens.size() != 16)
     throwAt(path, "object label row has " + std::to_string(tokens.size()) + " fields, expected 15 or 16", line_no);
   return parseObjectFields(tokens, 0, path, line_no);
 }
 
 TrackingLabel parseTrackingRow(const std::string& line, const std::string& path, int line_no) {
-  const auto tokens = detail::splitWhitespace(line);
+  const auto tokens = splitWhitespace(line);
   if (tokens.size() != 17 && tokens.size() != 18)
     throwAt(path, "tracking label row has " + std::to_string(tokens.size()) + " fields, expected 17 or 18", line_no);
   TrackingLabel t;
@@ -121,10 +118,10 @@ std::vector<TrackingLabel> readTrackingLabels(const std::string& path) {
 
 std::map<std::pair<std::int64_t, std::int64_t>, bool> readObjectMotion(const std::string& path) {
   const std::string text = readFile(path);
-  const auto lines = detail::splitLines(text);
+  const auto lines = splitLines(text);
   std::map<std::pair<std::int64_t, std::int64_t>, bool> moving;
   for (std::size_t i = 0; i < lines.size(); ++i) {
-    const auto tokens = detail::splitWhitespace(lines[i]);
+    const auto tokens = splitWhitespace(lines[i]);
     if (tokens.empty() || tokens[0].front() == '#') continue;
     std::int64_t frame = 0, track = 0;
     double speed = 0;
@@ -149,4 +146,4 @@ std::string formatTrackingRow(const TrackingLabel& label) {
   return out;
 }
 
-}  // namespace beslam::datasets
+}  // namespace beslam::formats

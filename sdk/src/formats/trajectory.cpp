@@ -1,14 +1,14 @@
-#include "beslam/trajectory/trajectory.hpp"
+#include "beslam/formats/trajectory.hpp"
 
 #include <charconv>
 #include <cmath>
 #include <ostream>
 #include <string_view>
 
-#include "beslam/common/error.hpp"
-#include "beslam/common/file_io.hpp"
+#include "beslam/formats/error.hpp"
+#include "beslam/formats/file.hpp"
 
-namespace beslam::trajectory {
+namespace beslam::formats {
 namespace {
 
 constexpr double kMaxRotationDefect = 1e-3;  // |R^T R - I| allowed in a KITTI row (printing precision)
@@ -190,4 +190,4 @@ std::string detectFormat(const std::string& path) {
   return format;
 }
 
-}  // namespace beslam::trajectory
+}  // namespace beslam::formats

@@ -1,4 +1,4 @@
-#include "beslam/common/error.hpp"
+#include "beslam/formats/error.hpp"
 
 namespace beslam {
 

@@ -1,0 +1,85 @@
+// C-to-C++ glue of the Backend kind (included by backend.hpp): the beslam_backend_v1 table. Each function
+// converts the C views, calls the plugin through detail::call (exceptions become a status) and keeps what
+// it returns in storage that lives until the next call.
+#pragma once
+
+namespace beslam::sdk {
+
+namespace detail {
+
+template <class Impl>
+const void* table(Tag<Impl>, const Backend*) {
+  return makeTable<beslam_backend_v1>(
+      // predict_pose
+      [](void* instance, const beslam_frame* frame, beslam_pose* T_world_cam, int32_t* valid) -> beslam_status {
+        return call<Impl, Backend>(instance, "predict_pose", [&](Backend& b) {
+          require("predict_pose", T_world_cam, valid);
+          const auto pose = b.predictPose(toFrame(frame));
+          *valid = pose ? 1 : 0;
+          if (pose) *T_world_cam = toPose(*pose);
+        });
+      },
+      // track
+      [](void* instance, const beslam_frame* frame, const beslam_image_view* mask, const beslam_box_list* boxes,
+         beslam_track_result* result) -> beslam_status {
+        return call<Impl, Backend>(instance, "track", [&](Backend& b) {
+          require("track", result);
+          auto& abi = Access::buffers(b);
+          const TrackResult r = b.track(toFrame(frame), mask ? toMat(*mask) : cv::Mat(), copyBoxes(boxes));
+          abi.stages.set(r.stage_ms);
+          abi.counters.set(r.counters);
+          beslam_track_result c{};
+          c.struct_size = sizeof(c);
+          c.state = r.state;
+          c.is_keyframe = r.is_keyframe ? 1 : 0;
+          c.tracked_points = r.tracked_points;
+          c.keyframe_id = r.keyframe_id;
+          c.T_world_cam = toPose(r.T_world_cam);
+          c.stage_times = abi.stages.data();
+          c.stage_count = abi.stages.size();
+          c.world_scale = r.world_is_metric ? BESLAM_WORLD_SCALE_METRIC : BESLAM_WORLD_SCALE_UNKNOWN;
+          c.counters = abi.counters.data();
+          c.counter_count = abi.counters.size();
+          abi.keypoints = r.keypoints;
+          c.keypoints = abi.keypoints.empty() ? nullptr : abi.keypoints.data();
+          c.keypoint_count = static_cast<uint32_t>(abi.keypoints.size());
+          c.keypoint_size = sizeof(beslam_keypoint);
+          std::memcpy(result, &c, std::min<size_t>(result->struct_size ? result->struct_size : sizeof(c), sizeof(c)));
+        });
+      },
+      // add_landmarks
+      [](void* instance, const beslam_landmark_list* landmarks) -> beslam_status {
+        return call<Impl, Backend>(instance, "add_landmarks", [&](Backend& b) { b.addLandmarks(fromC(landmarks)); });
+      },
+      // finish
+      [](void* instance) -> beslam_status {
+        return call<Impl, Backend>(instance, "finish", [&](Backend& b) { b.finish(); });
+      },
+      // trajectory
+      [](void* instance, int32_t which, beslam_trajectory_list* out) -> beslam_status {
+        return call<Impl, Backend>(instance, "trajectory", [&](Backend& b) {
+          require("trajectory", out);
+          auto& abi = Access::buffers(b);
+          abi.trajectory.clear();
+          for (const TrajectoryEntry& e : b.trajectory(which))
+            abi.trajectory.push_back({e.frame_index, e.timestamp, toPose(e.T_world_cam)});
+          out->entries = abi.trajectory.data();
+          out->count = static_cast<uint32_t>(abi.trajectory.size());
+          out->element_size = sizeof(beslam_trajectory_entry);
+        });
+      },
+      // map_points
+      [](void* instance, beslam_map_point_list* out) -> beslam_status {
+        return call<Impl, Backend>(instance, "map_points", [&](Backend& b) {
+          require("map_points", out);
+          auto& abi = Access::buffers(b);
+          abi.points = b.mapPoints();
+          out->points = abi.points.data();
+          out->count = abi.points.size();
+          out->element_size = sizeof(beslam_map_point);
+        });
+      });
+}
+
+}  // namespace detail
+}  // namespace beslam::sdk

@@ -1,0 +1,62 @@
+// C conversions of keyframes and object landmarks (included by landmark.hpp).
+#pragma once
+
+namespace beslam::sdk {
+
+inline Keyframe toKeyframe(const beslam_keyframe& kf) {
+  beslam_keyframe k{};
+  std::memcpy(&k, &kf, std::min<size_t>(kf.struct_size, sizeof(k)));
+  return {k.id, k.frame_index, k.timestamp, toIsometry(k.T_world_cam), k.world_scale == BESLAM_WORLD_SCALE_METRIC};
+}
+
+inline beslam_keyframe toC(const Keyframe& kf) {
+  beslam_keyframe k{};
+  k.struct_size = sizeof(k);
+  k.id = kf.id;
+  k.frame_index = kf.frame_index;
+  k.timestamp = kf.timestamp;
+  k.T_world_cam = toPose(kf.T_world_cam);
+  k.world_scale = kf.world_is_metric ? BESLAM_WORLD_SCALE_METRIC : BESLAM_WORLD_SCALE_UNKNOWN;
+  return k;
+}
+
+// Views the landmarks as C structs; the vector of landmarks must outlive the result.
+inline std::vector<beslam_object_landmark> toC(const std::vector<Landmark>& landmarks) {
+  std::vector<beslam_object_landmark> out;
+  out.reserve(landmarks.size());
+  for (const Landmark& l : landmarks) {
+    beslam_object_landmark c{};
+    c.struct_size = sizeof(c);
+    c.track_id = l.track_id;
+    c.class_id = l.class_id;
+    c.confidence = l.confidence;
+    c.T_world_object = toPose(l.T_world_object);
+    for (int i = 0; i < 3; ++i) c.scale[i] = l.scale[i];
+    c.shape_code = l.shape_code.empty() ? nullptr : l.shape_code.data();
+    c.shape_code_size = static_cast<uint32_t>(l.shape_code.size());
+    c.surface_points = l.surface_points.empty() ? nullptr : l.surface_points.data();
+    c.surface_point_count = l.surface_points.size() / 3;
+    out.push_back(c);
+  }
+  return out;
+}
+
+// Copies C landmarks (borrowed) into owned C++ ones.
+inline std::vector<Landmark> fromC(const beslam_landmark_list* list) {
+  std::vector<Landmark> out;
+  if (list == nullptr) return out;
+  for (const beslam_object_landmark& c : copyArray(list->landmarks, list->count, list->element_size)) {
+    Landmark l;
+    l.track_id = c.track_id;
+    l.class_id = c.class_id;
+    l.confidence = c.confidence;
+    l.T_world_object = toIsometry(c.T_world_object);
+    l.scale = Eigen::Vector3d(c.scale[0], c.scale[1], c.scale[2]);
+    if (c.shape_code) l.shape_code.assign(c.shape_code, c.shape_code + c.shape_code_size);
+    if (c.surface_points) l.surface_points.assign(c.surface_points, c.surface_points + 3 * c.surface_point_count);
+    out.push_back(std::move(l));
+  }
+  return out;
+}
+
+}  // namespace beslam::sdk

@@ -1,0 +1,28 @@
+// C-to-C++ glue of the MotionChecker kind (included by motion_checker.hpp): the beslam_motion_checker_v1 table. Each
+// function converts the C views, calls the plugin through call() (exceptions become a status) and keeps what it returns
+// in storage that lives until the next call.
+#pragma once
+
+namespace beslam::sdk {
+
+namespace detail {
+
+template <class Impl>
+const void* table(Tag<Impl>, const MotionChecker*) {
+  return makeTable<beslam_motion_checker_v1>([](void* instance, const beslam_frame* frame,
+                                                const beslam_pose* T_world_cam,
+                                                beslam_box_array* boxes) -> beslam_status {
+    return call<Impl, MotionChecker>(instance, "classify", [&](MotionChecker& m) {
+      require("classify", boxes);
+      std::vector<beslam_box3d> local = copyArray(boxes->boxes, boxes->count, boxes->element_size);
+      std::optional<Eigen::Isometry3d> pose;
+      if (T_world_cam) pose = toIsometry(*T_world_cam);
+      m.classify(toFrame(frame), pose, local);
+      if (local.size() != boxes->count) throw std::logic_error("motion checker changed the number of boxes");
+      writeBoxes(local, *boxes);
+    });
+  });
+}
+
+}  // namespace detail
+}  // namespace beslam::sdk

@@ -1,0 +1,29 @@
+// C-to-C++ glue of the Reconstructor kind (included by reconstructor.hpp): the beslam_reconstructor_v1 table. Each
+// function converts the C views, calls the plugin through call() (exceptions become a status) and keeps what it returns
+// in storage that lives until the next call.
+#pragma once
+
+namespace beslam::sdk {
+
+namespace detail {
+
+template <class Impl>
+const void* table(Tag<Impl>, const Reconstructor*) {
+  return makeTable<beslam_reconstructor_v1>(
+      [](void* instance, const beslam_keyframe* keyframe, const beslam_frame* frame, const beslam_box_list* boxes,
+         const beslam_image_view* mask, beslam_landmark_list* out) -> beslam_status {
+        return call<Impl, Reconstructor>(instance, "reconstruct", [&](Reconstructor& r) {
+          require("reconstruct", keyframe, out);
+          auto& abi = Access::buffers(r);
+          abi.landmarks =
+              r.reconstruct(toKeyframe(*keyframe), toFrame(frame), copyBoxes(boxes), mask ? toMat(*mask) : cv::Mat());
+          abi.c_landmarks = toC(abi.landmarks);
+          out->landmarks = abi.c_landmarks.data();
+          out->count = static_cast<uint32_t>(abi.c_landmarks.size());
+          out->element_size = sizeof(beslam_object_landmark);
+        });
+      });
+}
+
+}  // namespace detail
+}  // namespace beslam::sdk

@@ -1,0 +1,1 @@
+int hostValue() { return 1; }

@@ -1,0 +1,1 @@
+int pluginValue() { return 3; }
