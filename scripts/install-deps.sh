@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libopencv-dev libceres-dev libpcl-dev libyaml-cpp-dev
   libboost-dev libboost-filesystem-dev liboctomap-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libjs-three libjs-chart.js chromium   # the HTML report's libraries; chromium for its browser test
 )
 
 missing=()
