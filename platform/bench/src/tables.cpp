@@ -101,15 +101,13 @@ std::string fmt(const json& s, int digits) {
   if (s.is_null()) return "-";
   std::ostringstream o;
   o << std::fixed << std::setprecision(digits) << s["median"].get<double>();
-  if (s["n"].get<int>() > 1) o << " (" << s["min"].get<double>() << "–" << s["max"].get<double>() << ")";
+  if (s["n"].get<int>() > 1 && s["min"] != s["max"]) o << " (" << s["min"].get<double>() << "–" << s["max"].get<double>() << ")";
   return o.str();
 }
 
 std::string csvNum(const json& s, const char* k) {
   if (s.is_null()) return "";
-  std::ostringstream o;
-  o << std::setprecision(17) << s[k].get<double>();
-  return o.str();
+  return json(s[k].get<double>()).dump();  // the shortest text that reads back to the same double
 }
 
 }  // namespace
@@ -195,7 +193,7 @@ json writeTables(const std::string& out_dir) {
   std::ostringstream md;
   md << "# " << all["name"].get<std::string>() << ": " << finished << " of " << bench["cells"].size()
      << " cells finished\n\nMedians over seeds (min–max). APE/RPE: translation RMSE in metres (RPE rot in degrees), "
-        "from each run's summary.json; RPE under the pipeline's own alignment.\n\n"
+        "from each run's summary.json; RPE under the pipeline's own alignment. No range: all runs agree.\n\n"
      << "## Table I: trajectory error\n\n"
      << "| sequence | pipeline | runs | tracked | APE Sim(3) m | APE SE(3) m | Sim(3) scale | RPE trans m | RPE rot deg |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
