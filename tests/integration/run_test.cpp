@@ -2,6 +2,7 @@
 // what a run writes, and that every bad input is one clear line and leaves earlier output intact.
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -27,10 +28,11 @@ std::string slurp(const fs::path& p) {
   return ss.str();
 }
 
-Result beslam(const std::string& args, const fs::path& dir) {
+// Runs `beslam ARGS` with optional environment assignments ("NAME=value ") in front.
+Result beslam(const std::string& args, const fs::path& dir, const std::string& env = "") {
   const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = std::string(BESLAM_BINARY_DIR) + "/bin/beslam " + args + " > " + out.string() + " 2> " +
-                          err.string() + " < /dev/null";
+  const std::string cmd = env + std::string(BESLAM_BINARY_DIR) + "/bin/beslam " + args + " > " + out.string() +
+                          " 2> " + err.string() + " < /dev/null";
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
 }
@@ -100,7 +102,8 @@ TEST_F(RunTest, WritesEveryOutput) {
   // Ground truth is the replayed file itself: zero error.
   EXPECT_NE(r.out.find("APE translation RMSE 0 m"), std::string::npos) << r.out;
   for (const char* f : {"trajectory.tum", "trajectory.kitti", "trajectory_online.tum", "keyframes.tum",
-                        "pipeline.resolved.yaml", "timing.csv", "summary.json", "objects.txt", "masks/000005.png"})
+                        "pipeline.resolved.yaml", "timing.csv", "summary.json", "objects.txt", "masks/000005.png",
+                        "samples/000000.jpg", "samples/000005.jpg"})
     EXPECT_TRUE(fs::exists(dir_ / "out" / f)) << f;
   EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
   EXPECT_EQ(dataLines(slurp(dir_ / "out/keyframes.tum")), 3);
@@ -114,6 +117,58 @@ TEST_F(RunTest, WritesEveryOutput) {
   EXPECT_NE(resolved.find("max_time_diff: 0.02"), std::string::npos) << "defaults filled in";
   const cv::Mat mask = cv::imread((dir_ / "out/masks/000005.png").string(), cv::IMREAD_UNCHANGED);
   EXPECT_EQ(mask.type(), CV_16UC1);
+}
+
+// SIGTERM or SIGINT at any frame: the run ends after that frame, exits 128 + the signal, and leaves the
+// outputs of the frames done (a trajectory `beslam eval` scores, a summary marked interrupted).
+TEST_F(RunTest, InterruptKeepsTheFramesDone) {
+  const std::string p = pipeline("detector: {plugin: fixture_boxes, count: 2}\n");
+  {  // ground truth as TUM, for `beslam eval` on the partial trajectory
+    std::ofstream gt(dir_ / "gt.tum");
+    for (int i = 0; i < kFrames; ++i) gt << 0.1 * i << ' ' << 0.5 * i << " 0 " << 0.1 * i * i << " 0 0 0 1\n";
+  }
+  struct Case {
+    int frame;
+    int signal;
+    const char* name;
+  };
+  for (const Case c : {Case{0, SIGTERM, "SIGTERM"}, Case{2, SIGINT, "SIGINT"}, Case{4, SIGTERM, "SIGTERM"}}) {
+    SCOPED_TRACE(std::string(c.name) + " at frame " + std::to_string(c.frame));
+    const fs::path out = dir_ / ("out_" + std::to_string(c.frame));
+    const Result r = beslam("run " + p + " --out " + out.string(), dir_,
+                            "BESLAM_DEBUG_SIGNAL_AT=" + std::to_string(c.frame) + ":" + c.name + " ");
+    EXPECT_EQ(r.code, 128 + c.signal) << r.err;
+    EXPECT_NE(r.err.find(std::string("interrupted by ") + c.name + " after frame " + std::to_string(c.frame)),
+              std::string::npos)
+        << r.err;
+    const int done = c.frame + 1;
+    EXPECT_EQ(dataLines(slurp(out / "trajectory.tum")), done);
+    EXPECT_EQ(lines(slurp(out / "trajectory.kitti")), done);
+    EXPECT_EQ(lines(slurp(out / "objects.txt")), 2 * done);
+    EXPECT_EQ(lines(slurp(out / "timing.csv")), done + 1);
+    const std::string summary = slurp(out / "summary.json");
+    EXPECT_NE(summary.find("\"interrupted\": true"), std::string::npos) << summary;
+    EXPECT_NE(summary.find("\"interrupted_by\": \"" + std::string(c.name) + "\""), std::string::npos) << summary;
+    EXPECT_NE(summary.find("\"last_frame\": " + std::to_string(c.frame)), std::string::npos) << summary;
+    EXPECT_NE(summary.find("\"frames\": " + std::to_string(done)), std::string::npos) << summary;
+    if (done < 2) continue;  // RPE needs two poses
+    const Result e = beslam("eval --ref " + (dir_ / "gt.tum").string() + " --est " + (out / "trajectory.tum").string() +
+                                " --format tum",
+                            dir_);
+    EXPECT_EQ(e.code, 0) << e.err;
+    EXPECT_NE(e.out.find("pairs: " + std::to_string(done)), std::string::npos) << e.out;
+  }
+  // A run that is not stopped says so.
+  const Result whole = beslam("run " + p + " --out " + (dir_ / "whole").string(), dir_);
+  ASSERT_EQ(whole.code, 0) << whole.err;
+  EXPECT_NE(slurp(dir_ / "whole/summary.json").find("\"interrupted\": false"), std::string::npos);
+}
+
+TEST_F(RunTest, BadDebugSignalSettingIsAUsageError) {
+  const Result r = beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_,
+                          "BESLAM_DEBUG_SIGNAL_AT=soon ");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("BESLAM_DEBUG_SIGNAL_AT"), std::string::npos) << r.err;
 }
 
 TEST_F(RunTest, BrokenYamlIsOneLineNamingFileAndLine) {

@@ -8,6 +8,9 @@
 //   beslam report RUN_DIR [--out DIR]
 // Every failure prints one line "beslam: error: <file or plugin>: <cause>" and exits non-zero
 // (2 for a usage error, 1 for anything else).
+#include <csignal>
+#include <cstdlib>
+#include <functional>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -16,6 +19,7 @@
 
 #include "beslam/bench/bench.hpp"
 #include "beslam/common/error.hpp"
+#include "beslam/common/interrupt.hpp"
 #include "beslam/eval/eval.hpp"
 #include "beslam/motion_score/motion_score.hpp"
 #include "beslam/pipeline/runner.hpp"
@@ -69,6 +73,27 @@ std::string takeValue(const std::vector<std::string>& args, size_t& i) {
   return args[++i];
 }
 
+// BESLAM_DEBUG_SIGNAL_AT=FRAME:SIGNAL (e.g. 3:SIGTERM) makes the run send itself SIGNAL when frame FRAME
+// is done: the tests interrupt a run at a chosen frame through the real signal path, with no timing.
+std::function<void(int64_t)> debugSignalAt() {
+  const char* value = std::getenv("BESLAM_DEBUG_SIGNAL_AT");
+  if (!value || !*value) return {};
+  const std::string text(value);
+  const size_t colon = text.find(':');
+  int64_t frame = -1;
+  try {
+    frame = std::stoll(text.substr(0, colon));
+  } catch (const std::exception&) {
+  }
+  const std::string name = colon == std::string::npos ? "" : text.substr(colon + 1);
+  const int signal_number = name == "SIGINT" ? SIGINT : name == "SIGTERM" ? SIGTERM : 0;
+  if (frame < 0 || signal_number == 0)
+    throw UsageError("BESLAM_DEBUG_SIGNAL_AT must be FRAME:SIGINT or FRAME:SIGTERM, not '" + text + "'");
+  return [frame, signal_number](int64_t done) {
+    if (done == frame) std::raise(signal_number);
+  };
+}
+
 bool wantsHelp(const std::vector<std::string>& args) {
   for (const auto& a : args)
     if (a == "--help" || a == "-h") return true;
@@ -108,7 +133,12 @@ int runCommand(const std::vector<std::string>& args) {
   if (options.log_level <= BESLAM_LOG_INFO)
     for (const auto& problem : registry.problems()) std::cerr << "beslam: skipped " << problem << "\n";
   beslam::pipeline::resolvePlugins(spec, registry);
-  const beslam::pipeline::RunSummary s = beslam::pipeline::run(spec, registry, options);
+  // SIGINT/SIGTERM end the run after the current frame, with every output written; a second one aborts.
+  beslam::InterruptGuard interrupts;
+  options.stop_requested = [] { return beslam::InterruptGuard::requested() != 0; };
+  options.stop_reason = [] { return beslam::signalName(beslam::InterruptGuard::requested()); };
+  options.after_frame = debugSignalAt();
+  const beslam::pipeline::RunSummary s = beslam::pipeline::run(spec, options);
 
   std::cout << "frames " << s.frames << ", tracked " << s.tracked << ", keyframes " << s.keyframes
             << ", median " << s.median_frame_ms << " ms/frame\n";
@@ -143,6 +173,11 @@ int runCommand(const std::vector<std::string>& args) {
                 << " final map points\n";
   }
   std::cout << "output: " << s.output_dir << "\n";
+  if (s.interrupted) {
+    std::cerr << "beslam: interrupted by " << s.interrupted_by << " after frame " << s.last_frame << "; outputs of the "
+              << s.frames << " frames done are written\n";
+    return 128 + beslam::InterruptGuard::requested();  // the shell's convention for a signalled job
+  }
   return 0;
 }
 

@@ -14,7 +14,8 @@ namespace {
 
 double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
-// The image rectangle of the box's corners in front of the camera, clipped to the image.
+}  // namespace
+
 void projectBox(const beslam_box3d& box, const beslam_camera& camera, double bbox[4]) {
   const Eigen::Matrix<double, 3, 8> corners_cam = sdk::boxCorners(box);
   double u0 = 1e18, v0 = 1e18, u1 = -1e18, v1 = -1e18;
@@ -37,8 +38,6 @@ void projectBox(const beslam_box3d& box, const beslam_camera& camera, double bbo
   bbox[2] = std::clamp(u1, 0.0, W);
   bbox[3] = std::clamp(v1, 0.0, H);
 }
-
-}  // namespace
 
 std::string formatObjectRow(int64_t frame_index, const beslam_box3d& box, const beslam_camera& camera) {
   datasets::TrackingLabel label;

@@ -1,29 +1,24 @@
 #include "beslam/pipeline/runner.hpp"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <iomanip>
 #include <iostream>
-#include <map>
 #include <sstream>
 #include <unistd.h>
 
-#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
+#include "beslam/common/yaml_set.hpp"
 #include "beslam/datasets/dataset.hpp"
-#include "beslam/eval/eval.hpp"
 #include "beslam/pipeline/objects.hpp"
 #include "beslam/registry/instance.hpp"
 #include "beslam/sdk/views.hpp"  // the host uses the SDK's zero-copy view helpers too
 #include "beslam/sim/synth.hpp"
-#include "beslam/common/yaml_set.hpp"
-#include "beslam/trajectory/trajectory.hpp"
+#include "run_outputs.hpp"
+#include "sample_frames.hpp"
 
 namespace fs = std::filesystem;
 
@@ -33,9 +28,19 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+// Times one stage into a frame's timing row: `auto t = timer("detector"); ...` records on scope exit.
+class StageTimer {
+ public:
+  StageTimer(detail::TimingRow& row, std::string name) : row_(row), name_(std::move(name)), t0_(Clock::now()) {}
+  ~StageTimer() { row_.stages.emplace_back(std::move(name_), std::chrono::duration<double, std::milli>(Clock::now() - t0_).count()); }
+  StageTimer(const StageTimer&) = delete;
+  StageTimer& operator=(const StageTimer&) = delete;
+
+ private:
+  detail::TimingRow& row_;
+  std::string name_;
+  Clock::time_point t0_;
+};
 
 // Boxes from a detector must be finite and sized before any other plugin sees them.
 void checkBoxes(const std::vector<beslam_box3d>& boxes, const registry::Plugin& detector,
@@ -53,34 +58,6 @@ void checkBoxes(const std::vector<beslam_box3d>& boxes, const registry::Plugin& 
       throw Error("plugin " + detector.id + " (" + detector.library_path + "): frame " + std::to_string(frame.index) +
                   " (" + frame.image_path + "): box " + std::to_string(i) + " has " + bad);
   }
-}
-
-void writeTrajectory(const std::string& dir, const std::string& stem, const std::vector<registry::PoseEntry>& poses,
-                     bool kitti_too) {
-  trajectory::Trajectory t;
-  for (const auto& p : poses) t.push_back(p.timestamp, p.T_world_cam);
-  trajectory::writeTum((fs::path(dir) / (stem + ".tum")).string(), t);
-  if (kitti_too) trajectory::writeKitti((fs::path(dir) / (stem + ".kitti")).string(), t);
-}
-
-void writePly(const std::string& path, const std::vector<beslam_map_point>& points) {
-  writeFileAtomic(path, [&](std::ostream& out) {
-    out << "ply\nformat ascii 1.0\ncomment BE-SLAM map points (world frame)\n"
-        << "element vertex " << points.size() << "\n"
-        << "property float x\nproperty float y\nproperty float z\n"
-        << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
-        << "property int observations\nend_header\n";
-    out << std::setprecision(7);
-    for (const auto& p : points)
-      out << p.p_world[0] << ' ' << p.p_world[1] << ' ' << p.p_world[2] << ' ' << int(p.color[0]) << ' '
-          << int(p.color[1]) << ' ' << int(p.color[2]) << ' ' << p.observations << '\n';
-  });
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
 }
 
 struct SynthSource {
@@ -104,330 +81,278 @@ SynthSource synthSource(const DatasetSpec& dataset) {
   return {seq, sim::synthConfigFromYaml(node, "dataset.synth_set")};
 }
 
-struct TimingRow {
-  int64_t index;
-  std::vector<std::pair<std::string, double>> stages;
+// Everything one frame carries from stage to stage.
+struct FrameState {
+  size_t position = 0;  // in the selected range
+  datasets::Frame frame;
+  beslam_frame view{};  // the ABI view of `frame` (points into it)
+  std::optional<Eigen::Isometry3d> T_world_cam_predicted;
+  std::vector<beslam_box3d> boxes;
+  cv::Mat mask;  // CV_16UC1 labels, empty without a mask generator
+  registry::TrackOutput tracked;
+  detail::TimingRow timing;
+};
+
+// One run: the plugins, the dataset and what the frame loop gathers. The stages of a frame are the
+// member functions load .. write, called in that order; data only flows forward through FrameState.
+class Run {
+ public:
+  Run(const PipelineSpec& spec, const RunOptions& options)
+      : spec_(spec), options_(options), log_(options.log_level) {
+    out_dir_ = !options.output_dir.empty() ? options.output_dir : spec.output.dir;
+    if (out_dir_.empty()) throwAt(spec.path, "no output folder: set output.dir or pass --out DIR");
+    openDataset();
+    makeDirectories(out_dir_);
+    if (spec.output.masks) makeDirectories((fs::path(out_dir_) / "masks").string());
+    sample_positions_ = detail::samplePositions(dataset_->size(), spec.output.samples);
+    if (!sample_positions_.empty()) makeDirectories((fs::path(out_dir_) / "samples").string());
+    createPlugins();
+  }
+
+  RunSummary execute() {
+    const bool tty = options_.progress && isatty(STDERR_FILENO);
+    const size_t n = dataset_->size();
+    for (size_t i = 0; i < n; ++i) {
+      const auto t_frame = Clock::now();
+      FrameState f;
+      load(i, f);
+      predict(f);
+      detect(f);
+      classify(f);
+      mask(f);
+      track(f);
+      reconstruct(f);
+      write(f);
+      const double total = std::chrono::duration<double, std::milli>(Clock::now() - t_frame).count();
+      f.timing.stages.emplace_back("total", total);
+      record_.frame_ms.push_back(total);
+      record_.timings.push_back(std::move(f.timing));
+      summary_.last_frame = f.frame.index;
+      if (tty) std::cerr << "\rframe " << (i + 1) << "/" << n << std::flush;
+      if (options_.after_frame) options_.after_frame(f.frame.index);
+      if (options_.stop_requested && options_.stop_requested()) {
+        summary_.interrupted = true;
+        summary_.interrupted_by = options_.stop_reason ? options_.stop_reason() : "stop requested";
+        break;
+      }
+    }
+    if (tty) std::cerr << "\n";
+    backend_->finish();
+    detail::writeRunOutputs(spec_, out_dir_, dataset_record_, *dataset_, *backend_, record_, summary_);
+    return summary_;
+  }
+
+ private:
+  void openDataset() {
+    datasets::DatasetOptions dopt;
+    dopt.type = spec_.dataset.type;
+    dopt.root = spec_.dataset.root;
+    dopt.sequence = spec_.dataset.sequence;
+    if (spec_.dataset.type == "synth") {
+      const SynthSource source = synthSource(spec_.dataset);
+      if (options_.progress)
+        std::cerr << "synthetic sequence " << source.name << " (cached in " << spec_.dataset.root << ")\n";
+      dopt.type = "kitti_odometry";
+      dopt.root = sim::ensureSequence(spec_.dataset.root, source.config, source.name,
+                                      options_.progress && isatty(STDERR_FILENO) ? &std::cerr : nullptr);
+      dopt.sequence = source.config.sequence;
+    }
+    dopt.camera = spec_.dataset.camera;
+    dopt.load_color = spec_.dataset.color;
+    dopt.load_lidar = spec_.dataset.lidar;
+    dopt.first = spec_.dataset.first;
+    dopt.last = spec_.dataset.last;
+    dopt.step = spec_.dataset.step;
+    dopt.ego_poses = spec_.dataset.ego_poses;
+    dataset_ = datasets::openDataset(dopt);
+    if (dataset_->size() == 0) throw Error(dataset_->describe() + ": no frames in the selected range");
+    dataset_record_.description = dataset_->describe();
+    if (dopt.type == "kitti_odometry") {
+      dataset_record_.kitti_root = dopt.root;
+      dataset_record_.kitti_sequence = dopt.sequence;
+    }
+  }
+
+  void createPlugins() {
+    beslam_create_info base{};
+    base.struct_size = sizeof(base);
+    base.host = log_.host();
+    const datasets::Camera& camera = dataset_->camera();
+    base.camera.struct_size = sizeof(beslam_camera);
+    base.camera.width = camera.width;
+    base.camera.height = camera.height;
+    base.camera.fx = camera.fx;
+    base.camera.fy = camera.fy;
+    base.camera.cx = camera.cx;
+    base.camera.cy = camera.cy;
+    if (const auto T = dataset_->T_cam_lidar()) {
+      base.has_lidar_extrinsics = 1;
+      base.T_cam_lidar = sdk::toPose(*T);
+    }
+    abs_out_dir_ = fs::absolute(out_dir_).string();
+    base.output_dir = abs_out_dir_.c_str();
+    base.camera_height =
+        spec_.dataset.camera_height > 0 ? spec_.dataset.camera_height : dataset_->cameraHeight().value_or(0);
+    camera_ = base.camera;
+    summary_.output_dir = out_dir_;
+    summary_.camera_height = base.camera_height;
+
+    auto infoFor = [&](const SlotSpec& slot) {
+      beslam_create_info info = base;
+      info.config = slot.config.values().data();
+      info.config_count = static_cast<uint32_t>(slot.config.values().size());
+      return info;
+    };
+    auto make = [&](const char* name, auto& instance) {
+      const SlotSpec& slot = spec_.slots.at(name);
+      if (slot.plugin)
+        instance = std::make_unique<typename std::decay_t<decltype(instance)>::element_type>(*slot.plugin, infoFor(slot), log_);
+    };
+    if (!spec_.slots.at("backend").plugin) throwAt(spec_.path, "backend: no plugin resolved");
+    make("detector", detector_);
+    make("motion_checker", motion_);
+    make("mask_generator", masker_);
+    make("reconstructor", reconstructor_);
+    make("backend", backend_);
+  }
+
+  // load: the frame from the dataset, and its ABI view.
+  void load(size_t i, FrameState& f) {
+    StageTimer timer(f.timing, "load");
+    f.position = i;
+    f.frame = dataset_->load(i);
+    f.timing.index = f.frame.index;
+    beslam_frame& cf = f.view;
+    cf.struct_size = sizeof(cf);
+    cf.index = f.frame.index;
+    cf.timestamp = f.frame.timestamp;
+    cf.gray = sdk::toView(f.frame.gray, BESLAM_PIXEL_GRAY8);
+    cf.color = sdk::toView(f.frame.color, BESLAM_PIXEL_BGR8);
+    if (!f.frame.lidar_xyzi.empty()) {
+      cf.lidar.data = f.frame.lidar_xyzi.data();
+      cf.lidar.count = f.frame.lidar_xyzi.size() / 4;
+      cf.lidar.stride_bytes = 4 * sizeof(float);
+    }
+    cf.image_path = f.frame.image_path.c_str();
+  }
+
+  // predict: the backend's T_world_cam guess, asked only when the motion checker will use it. A pose in
+  // an unknown unit would make parked cars seem to move (and cars keeping pace with the ego seem parked),
+  // so the checker gets none until the backend's world is metric.
+  void predict(FrameState& f) {
+    if (!motion_ || !world_metric_) return;
+    StageTimer timer(f.timing, "predict");
+    f.T_world_cam_predicted = backend_->predictPose(f.view);
+  }
+
+  // detect: boxes, checked for NaN/inf before anything else sees them.
+  void detect(FrameState& f) {
+    if (!detector_) return;
+    StageTimer timer(f.timing, "detector");
+    f.boxes = detector_->detect(f.view);
+    checkBoxes(f.boxes, detector_->plugin(), f.frame);
+  }
+
+  // classify: each box's motion state.
+  void classify(FrameState& f) {
+    if (motion_) {
+      StageTimer timer(f.timing, "motion_checker");
+      motion_->classify(f.view, f.T_world_cam_predicted, f.boxes);
+    }
+    for (const beslam_box3d& b : f.boxes)
+      ++(b.motion_state == BESLAM_MOTION_STATIC    ? summary_.detections_static
+         : b.motion_state == BESLAM_MOTION_DYNAMIC ? summary_.detections_dynamic
+                                                   : summary_.detections_unknown);
+  }
+
+  // mask: the per-pixel labels the backend extracts features by.
+  void mask(FrameState& f) {
+    if (!masker_) return;
+    StageTimer timer(f.timing, "mask_generator");
+    f.mask = cv::Mat::zeros(camera_.height, camera_.width, CV_16UC1);
+    beslam_mask_buffer buffer{reinterpret_cast<uint16_t*>(f.mask.data), f.mask.cols, f.mask.rows,
+                              static_cast<int32_t>(f.mask.step[0]), 0};
+    masker_->generate(f.view, f.boxes, buffer);
+    if (cv::countNonZero(f.mask) > 0) ++summary_.frames_with_masks;
+  }
+
+  // track: the backend's pose for the frame, its stage times and counters; the world unit follows the
+  // backend's latest word (a reset map is unknown again); the summary keeps the frame from which the
+  // world stayed metric.
+  void track(FrameState& f) {
+    {
+      StageTimer timer(f.timing, "backend");
+      f.tracked = backend_->track(f.view, sdk::toView(f.mask, BESLAM_PIXEL_LABEL16), f.boxes);
+    }
+    for (const auto& [name, ms] : f.tracked.stage_ms) f.timing.stages.emplace_back("backend." + name, ms);
+    if (f.tracked.result.state == BESLAM_TRACKING_OK) ++summary_.tracked_online;
+    record_.frame_indices.push_back(f.frame.index);
+    for (const auto& [name, value] : f.tracked.counters) record_.counter_sums[name] += value;
+    if (f.tracked.worldIsMetric() != world_metric_) {
+      world_metric_ = f.tracked.worldIsMetric();
+      summary_.metric_from_frame = world_metric_ ? f.frame.index : -1;
+    }
+  }
+
+  // reconstruct: objects on new keyframes, in metres only (nothing before the world is metric); the
+  // landmarks go back to the backend.
+  void reconstruct(FrameState& f) {
+    if (!reconstructor_ || !f.tracked.result.is_keyframe || !world_metric_) return;
+    StageTimer timer(f.timing, "reconstructor");
+    beslam_keyframe kf{};
+    kf.struct_size = sizeof(kf);
+    kf.id = f.tracked.result.keyframe_id;
+    kf.frame_index = f.frame.index;
+    kf.timestamp = f.frame.timestamp;
+    kf.T_world_cam = f.tracked.result.T_world_cam;
+    kf.world_scale = BESLAM_WORLD_SCALE_METRIC;
+    const registry::Landmarks landmarks =
+        reconstructor_->reconstruct(kf, f.view, f.boxes, sdk::toView(f.mask, BESLAM_PIXEL_LABEL16));
+    if (!landmarks.landmarks.empty()) backend_->addLandmarks(landmarks);
+  }
+
+  // write: the per-frame outputs (objects.txt rows, masks/NNNNNN.png, samples/NNNNNN.jpg); everything
+  // else at the end.
+  void write(FrameState& f) {
+    StageTimer timer(f.timing, "write");
+    if (detector_)
+      for (const beslam_box3d& b : f.boxes) record_.object_rows.push_back(formatObjectRow(f.frame.index, b, camera_));
+    if (spec_.output.masks) {
+      const std::string path =
+          (fs::path(out_dir_) / "masks" / (std::to_string(1000000 + f.frame.index).substr(1) + ".png")).string();
+      std::vector<uchar> png;
+      const cv::Mat labels = f.mask.empty() ? cv::Mat::zeros(camera_.height, camera_.width, CV_16UC1) : f.mask;
+      if (!cv::imencode(".png", labels, png)) throwAt(path, "cannot encode mask");
+      writeFileAtomic(path, std::string(png.begin(), png.end()));
+    }
+    if (sample_positions_.count(f.position)) {
+      const cv::Mat& image = f.frame.color.empty() ? f.frame.gray : f.frame.color;
+      detail::writeSampleFrame(
+          (fs::path(out_dir_) / "samples" / (std::to_string(1000000 + f.frame.index).substr(1) + ".jpg")).string(),
+          detail::drawSampleFrame(image, f.mask, f.tracked.keypoints, f.boxes, camera_));
+    }
+  }
+
+  const PipelineSpec& spec_;
+  const RunOptions& options_;
+  registry::HostLog log_;
+  std::string out_dir_, abs_out_dir_;
+  std::unique_ptr<datasets::Dataset> dataset_;
+  detail::DatasetRecord dataset_record_;
+  beslam_camera camera_{};
+  std::unique_ptr<registry::DetectorInstance> detector_;
+  std::unique_ptr<registry::MotionCheckerInstance> motion_;
+  std::unique_ptr<registry::MaskGeneratorInstance> masker_;
+  std::unique_ptr<registry::ReconstructorInstance> reconstructor_;
+  std::unique_ptr<registry::BackendInstance> backend_;
+  bool world_metric_ = false;  // the backend's world unit, as its last track() said (data.h)
+  std::set<size_t> sample_positions_;
+  detail::RunRecord record_;
+  RunSummary summary_;
 };
 
 }  // namespace
 
-RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, const RunOptions& options) {
-  (void)registry;
-  const std::string out_dir = !options.output_dir.empty() ? options.output_dir : spec.output.dir;
-  if (out_dir.empty()) throwAt(spec.path, "no output folder: set output.dir or pass --out DIR");
-
-  datasets::DatasetOptions dopt;
-  dopt.type = spec.dataset.type;
-  dopt.root = spec.dataset.root;
-  dopt.sequence = spec.dataset.sequence;
-  if (spec.dataset.type == "synth") {
-    const SynthSource source = synthSource(spec.dataset);
-    if (options.progress) std::cerr << "synthetic sequence " << source.name << " (cached in " << spec.dataset.root << ")\n";
-    dopt.type = "kitti_odometry";
-    dopt.root = sim::ensureSequence(spec.dataset.root, source.config, source.name,
-                                    options.progress && isatty(STDERR_FILENO) ? &std::cerr : nullptr);
-    dopt.sequence = source.config.sequence;
-  }
-  dopt.camera = spec.dataset.camera;
-  dopt.load_color = spec.dataset.color;
-  dopt.load_lidar = spec.dataset.lidar;
-  dopt.first = spec.dataset.first;
-  dopt.last = spec.dataset.last;
-  dopt.step = spec.dataset.step;
-  dopt.ego_poses = spec.dataset.ego_poses;
-  std::unique_ptr<datasets::Dataset> dataset = datasets::openDataset(dopt);
-  if (dataset->size() == 0) throw Error(dataset->describe() + ": no frames in the selected range");
-
-  makeDirectories(out_dir);
-  if (spec.output.masks) makeDirectories((fs::path(out_dir) / "masks").string());
-
-  registry::HostLog log(options.log_level);
-  beslam_create_info base{};
-  base.struct_size = sizeof(base);
-  base.host = log.host();
-  const datasets::Camera& camera = dataset->camera();
-  base.camera.struct_size = sizeof(beslam_camera);
-  base.camera.width = camera.width;
-  base.camera.height = camera.height;
-  base.camera.fx = camera.fx;
-  base.camera.fy = camera.fy;
-  base.camera.cx = camera.cx;
-  base.camera.cy = camera.cy;
-  if (const auto T = dataset->T_cam_lidar()) {
-    base.has_lidar_extrinsics = 1;
-    base.T_cam_lidar = sdk::toPose(*T);
-  }
-  const std::string abs_out = fs::absolute(out_dir).string();
-  base.output_dir = abs_out.c_str();
-  base.camera_height = spec.dataset.camera_height > 0 ? spec.dataset.camera_height : dataset->cameraHeight().value_or(0);
-
-  auto infoFor = [&](const SlotSpec& slot) {
-    beslam_create_info info = base;
-    info.config = slot.config.values().data();
-    info.config_count = static_cast<uint32_t>(slot.config.values().size());
-    return info;
-  };
-  auto slot = [&](const char* name) -> const SlotSpec& { return spec.slots.at(name); };
-  auto used = [&](const char* name) { return slot(name).plugin != nullptr; };
-
-  std::unique_ptr<registry::DetectorInstance> detector;
-  std::unique_ptr<registry::MotionCheckerInstance> motion;
-  std::unique_ptr<registry::MaskGeneratorInstance> masker;
-  std::unique_ptr<registry::ReconstructorInstance> reconstructor;
-  if (!used("backend")) throwAt(spec.path, "backend: no plugin resolved");
-  if (used("detector")) detector = std::make_unique<registry::DetectorInstance>(*slot("detector").plugin, infoFor(slot("detector")), log);
-  if (used("motion_checker"))
-    motion = std::make_unique<registry::MotionCheckerInstance>(*slot("motion_checker").plugin, infoFor(slot("motion_checker")), log);
-  if (used("mask_generator"))
-    masker = std::make_unique<registry::MaskGeneratorInstance>(*slot("mask_generator").plugin, infoFor(slot("mask_generator")), log);
-  if (used("reconstructor"))
-    reconstructor = std::make_unique<registry::ReconstructorInstance>(*slot("reconstructor").plugin, infoFor(slot("reconstructor")), log);
-  auto backend = std::make_unique<registry::BackendInstance>(*slot("backend").plugin, infoFor(slot("backend")), log);
-
-  RunSummary summary;
-  summary.output_dir = out_dir;
-  summary.camera_height = base.camera_height;
-  bool world_metric = false;  // the backend's world unit, as its last track() said (data.h)
-  std::map<std::string, double> counter_sums;
-  std::vector<TimingRow> timings;
-  std::vector<std::string> object_rows;
-  std::vector<double> frame_ms;
-  std::vector<int64_t> frame_indices;
-  const bool tty = options.progress && isatty(STDERR_FILENO);
-  const size_t n = dataset->size();
-
-  for (size_t i = 0; i < n; ++i) {
-    const auto t_frame = Clock::now();
-    TimingRow timing;
-    auto t0 = Clock::now();
-    const datasets::Frame frame = dataset->load(i);
-    timing.index = frame.index;
-    timing.stages.emplace_back("load", msSince(t0));
-
-    beslam_frame cf{};
-    cf.struct_size = sizeof(cf);
-    cf.index = frame.index;
-    cf.timestamp = frame.timestamp;
-    cf.gray = sdk::toView(frame.gray, BESLAM_PIXEL_GRAY8);
-    cf.color = sdk::toView(frame.color, BESLAM_PIXEL_BGR8);
-    if (!frame.lidar_xyzi.empty()) {
-      cf.lidar.data = frame.lidar_xyzi.data();
-      cf.lidar.count = frame.lidar_xyzi.size() / 4;
-      cf.lidar.stride_bytes = 4 * sizeof(float);
-    }
-    cf.image_path = frame.image_path.c_str();
-
-    t0 = Clock::now();
-    const std::optional<Eigen::Isometry3d> T_world_cam_predicted = backend->predictPose(cf);
-    timing.stages.emplace_back("predict", msSince(t0));
-
-    std::vector<beslam_box3d> boxes;
-    if (detector) {
-      t0 = Clock::now();
-      boxes = detector->detect(cf);
-      checkBoxes(boxes, detector->plugin(), frame);
-      timing.stages.emplace_back("detector", msSince(t0));
-    }
-    if (motion) {
-      t0 = Clock::now();
-      // A pose in an unknown unit would make parked cars seem to move (and cars keeping pace with the
-      // ego seem parked): the checker gets none until the backend's world is metric.
-      motion->classify(cf, world_metric ? T_world_cam_predicted : std::nullopt, boxes);
-      timing.stages.emplace_back("motion_checker", msSince(t0));
-    }
-    for (const beslam_box3d& b : boxes)
-      ++(b.motion_state == BESLAM_MOTION_STATIC    ? summary.detections_static
-         : b.motion_state == BESLAM_MOTION_DYNAMIC ? summary.detections_dynamic
-                                                   : summary.detections_unknown);
-    cv::Mat mask;
-    if (masker) {
-      t0 = Clock::now();
-      mask = cv::Mat::zeros(camera.height, camera.width, CV_16UC1);
-      beslam_mask_buffer buffer{reinterpret_cast<uint16_t*>(mask.data), mask.cols, mask.rows,
-                                static_cast<int32_t>(mask.step[0]), 0};
-      masker->generate(cf, boxes, buffer);
-      timing.stages.emplace_back("mask_generator", msSince(t0));
-      if (cv::countNonZero(mask) > 0) ++summary.frames_with_masks;
-    }
-    const beslam_image_view mask_view = sdk::toView(mask, BESLAM_PIXEL_LABEL16);
-
-    t0 = Clock::now();
-    const registry::TrackOutput tracked = backend->track(cf, mask_view, boxes);
-    timing.stages.emplace_back("backend", msSince(t0));
-    for (const auto& [name, ms] : tracked.stage_ms) timing.stages.emplace_back("backend." + name, ms);
-    if (tracked.result.state == BESLAM_TRACKING_OK) ++summary.tracked_online;
-    frame_indices.push_back(frame.index);
-    for (const auto& [name, value] : tracked.counters) counter_sums[name] += value;
-    // The unit follows the backend's latest word (a reset map is unknown again); the summary keeps the frame
-    // from which the world stayed metric.
-    if (tracked.worldIsMetric() != world_metric) {
-      world_metric = tracked.worldIsMetric();
-      summary.metric_from_frame = world_metric ? frame.index : -1;
-    }
-
-    // Objects are reconstructed in metres only: nothing before the world is metric.
-    if (reconstructor && tracked.result.is_keyframe && world_metric) {
-      t0 = Clock::now();
-      beslam_keyframe kf{};
-      kf.struct_size = sizeof(kf);
-      kf.id = tracked.result.keyframe_id;
-      kf.frame_index = frame.index;
-      kf.timestamp = frame.timestamp;
-      kf.T_world_cam = tracked.result.T_world_cam;
-      kf.world_scale = BESLAM_WORLD_SCALE_METRIC;
-      const registry::Landmarks landmarks = reconstructor->reconstruct(kf, cf, boxes, mask_view);
-      if (!landmarks.landmarks.empty()) backend->addLandmarks(landmarks);
-      timing.stages.emplace_back("reconstructor", msSince(t0));
-    }
-
-    if (detector)
-      for (const beslam_box3d& b : boxes) object_rows.push_back(formatObjectRow(frame.index, b, base.camera));
-    if (spec.output.masks) {
-      const std::string path = (fs::path(out_dir) / "masks" / (std::to_string(1000000 + frame.index).substr(1) + ".png")).string();
-      std::vector<uchar> png;
-      if (!cv::imencode(".png", mask.empty() ? cv::Mat::zeros(camera.height, camera.width, CV_16UC1) : mask, png))
-        throwAt(path, "cannot encode mask");
-      writeFileAtomic(path, std::string(png.begin(), png.end()));
-    }
-
-    const double total = msSince(t_frame);
-    timing.stages.emplace_back("total", total);
-    frame_ms.push_back(total);
-    timings.push_back(std::move(timing));
-    if (tty) std::cerr << "\rframe " << (i + 1) << "/" << n << std::flush;
-  }
-  if (tty) std::cerr << "\n";
-
-  backend->finish();
-  summary.frames = static_cast<int64_t>(n);
-  const auto final_poses = backend->trajectory(BESLAM_TRAJECTORY_FINAL);
-  const auto online_poses = backend->trajectory(BESLAM_TRAJECTORY_ONLINE);
-  const auto keyframe_poses = backend->trajectory(BESLAM_TRAJECTORY_KEYFRAMES);
-  summary.keyframes = static_cast<int64_t>(keyframe_poses.size());
-  {  // a frame counts as tracked when the backend's final trajectory has it (an initialisation
-     // reference frame gets its pose once the map exists)
-    std::vector<int64_t> in_final;
-    for (const auto& p : final_poses) in_final.push_back(p.frame_index);
-    std::sort(in_final.begin(), in_final.end());
-    for (int64_t index : frame_indices)
-      if (std::binary_search(in_final.begin(), in_final.end(), index)) ++summary.tracked;
-      else summary.untracked.push_back(index);
-  }
-  writeTrajectory(out_dir, "trajectory", final_poses, true);
-  writeTrajectory(out_dir, "trajectory_online", online_poses, false);
-  writeTrajectory(out_dir, "keyframes", keyframe_poses, false);
-  {
-    const auto points = backend->mapPoints();
-    summary.map_points = static_cast<int64_t>(points.size());
-    for (const auto& p : points) summary.map_points_static += (p.flags & BESLAM_MAP_POINT_STATIC_OBJECT) ? 1 : 0;
-    if (spec.output.map_points && !points.empty()) writePly((fs::path(out_dir) / "map_points.ply").string(), points);
-  }
-  summary.backend_counters.assign(counter_sums.begin(), counter_sums.end());
-  if (detector) {
-    writeFileAtomic((fs::path(out_dir) / "objects.txt").string(), [&](std::ostream& out) {
-      for (const auto& row : object_rows) out << row << '\n';
-    });
-  }
-
-  {  // resolved pipeline
-    YAML::Emitter emitter;
-    emitter << spec.document;
-    writeFileAtomic((fs::path(out_dir) / "pipeline.resolved.yaml").string(),
-                    "# " + spec.path + " as run, with every default filled in\n" + std::string(emitter.c_str()) + "\n");
-  }
-
-  {  // timing.csv: one row a frame, one column a stage (ms); stages a frame skipped are empty
-    std::vector<std::string> columns;
-    for (const auto& row : timings)
-      for (const auto& [name, ms] : row.stages)
-        if (std::find(columns.begin(), columns.end(), name) == columns.end()) columns.push_back(name);
-    writeFileAtomic((fs::path(out_dir) / "timing.csv").string(), [&](std::ostream& out) {
-      out << "frame";
-      for (const auto& c : columns) out << ',' << c << "_ms";
-      out << '\n' << std::fixed << std::setprecision(3);
-      for (const auto& row : timings) {
-        out << row.index;
-        for (const auto& c : columns) {
-          out << ',';
-          double sum = 0;
-          bool any = false;
-          for (const auto& [name, ms] : row.stages)
-            if (name == c) sum += ms, any = true;
-          if (any) out << sum;
-        }
-        out << '\n';
-      }
-    });
-  }
-
-  summary.median_frame_ms = median(frame_ms);
-  nlohmann::json json;
-  json["pipeline"] = spec.path;
-  json["dataset"] = dataset->describe();
-  if (dopt.type == "kitti_odometry") {  // where truth files of a synthetic sequence are (beslam eval-motion)
-    json["dataset_path"] = fs::absolute(fs::path(dopt.root) / "sequences" / dopt.sequence).string();
-    json["dataset_sequence"] = dopt.sequence;
-  }
-  json["frames"] = summary.frames;
-  json["tracked"] = summary.tracked;
-  json["tracked_when_seen"] = summary.tracked_online;
-  json["untracked_frames"] = summary.untracked;
-  json["keyframes"] = summary.keyframes;
-  json["median_frame_ms"] = summary.median_frame_ms;
-  for (const auto& [name, s] : spec.slots)
-    json["plugins"][name] = s.plugin ? nlohmann::json(s.plugin->id + " " + s.plugin->version) : nlohmann::json(nullptr);
-  json["world"] = {{"metric", summary.metric_from_frame >= 0},
-                   {"metric_from_frame", summary.metric_from_frame >= 0 ? nlohmann::json(summary.metric_from_frame)
-                                                                         : nlohmann::json(nullptr)},
-                   {"camera_height_m", summary.camera_height > 0 ? nlohmann::json(summary.camera_height)
-                                                                  : nlohmann::json(nullptr)}};
-  json["detections"] = {{"static", summary.detections_static},
-                        {"dynamic", summary.detections_dynamic},
-                        {"unknown", summary.detections_unknown}};
-  json["frames_with_masks"] = summary.frames_with_masks;
-  json["map_points"] = {{"total", summary.map_points}, {"on_static_objects", summary.map_points_static}};
-  json["backend_counters"] = nlohmann::json::object();
-  for (const auto& [name, value] : summary.backend_counters) json["backend_counters"][name] = value;
-
-  if (spec.evaluation.enabled && !final_poses.empty()) {
-    if (const auto gt = dataset->groundTruth()) {
-      trajectory::Trajectory est;
-      for (const auto& p : final_poses) est.push_back(p.timestamp, p.T_world_cam);
-      eval::EvalOptions eopt;
-      eopt.format = "tum";
-      eopt.alignment = eval::parseAlignmentType(spec.evaluation.alignment);
-      eopt.delta = static_cast<std::size_t>(spec.evaluation.rpe_delta);
-      try {
-        const eval::PairedTrajectories paired = eval::associateByTime(*gt, est, 1e-3);
-        const eval::EvalResult result = eval::evaluatePaired(paired.ref, paired.est, eopt);
-        summary.has_ape = true;
-        summary.ape_trans_rmse = result.ape.trans.rmse;
-        summary.rpe_trans_rmse = result.rpe.trans.rmse;
-        summary.ape_alignment_scale = result.alignment.scale;
-        json["evaluation"] = nlohmann::json::parse(eval::toJson(result));
-        // Both alignments side by side: with a metric map, SE(3) APE close to Sim(3) APE says the scale is right.
-        auto with = [&](eval::AlignmentType type) {  // the configured alignment is already evaluated
-          if (eopt.alignment == type) return result;
-          eval::EvalOptions o = eopt;
-          o.alignment = type;
-          return eval::evaluatePaired(paired.ref, paired.est, o);
-        };
-        const eval::EvalResult r_sim3 = with(eval::AlignmentType::kSim3);
-        const eval::EvalResult r_se3 = with(eval::AlignmentType::kSe3);
-        summary.ape_sim3_rmse = r_sim3.ape.trans.rmse;
-        summary.ape_se3_rmse = r_se3.ape.trans.rmse;
-        json["ape"] = {{"sim3_rmse", r_sim3.ape.trans.rmse},
-                       {"sim3_scale", r_sim3.alignment.scale},
-                       {"se3_rmse", r_se3.ape.trans.rmse}};
-      } catch (const Error& e) {
-        // A degenerate or too short trajectory cannot be aligned: the run is still good, say why.
-        summary.evaluation_error = e.what();
-        json["evaluation"] = {{"error", e.what()}};
-      }
-    }
-  }
-  writeFileAtomic((fs::path(out_dir) / "summary.json").string(), json.dump(2) + "\n");
-  return summary;
-}
+RunSummary run(const PipelineSpec& spec, const RunOptions& options) { return Run(spec, options).execute(); }
 
 }  // namespace beslam::pipeline

@@ -124,6 +124,11 @@ std::vector<ConfigField> outputFields() {
       {"dir", BESLAM_CONFIG_STRING, false, "\"\"", 1, 0, "", "output folder (relative to the working folder)"},
       {"masks", BESLAM_CONFIG_BOOL, false, "false", 1, 0, "", "write masks/NNNNNN.png"},
       {"map_points", BESLAM_CONFIG_BOOL, false, "true", 1, 0, "", "write map_points.ply"},
+      {"samples", BESLAM_CONFIG_INT, false, "6", 0, 1000, "",
+       "frames spread over the run drawn to samples/NNNNNN.jpg with their masks and features"},
+      {"octomap", BESLAM_CONFIG_BOOL, false, "false", 1, 0, "",
+       "write static_map.bt, an OctoMap of the static world (LiDAR scans, else map points)"},
+      {"octomap_resolution", BESLAM_CONFIG_DOUBLE, false, "0.2", 0.02, 10, "", "OctoMap voxel edge, metres"},
   };
 }
 
@@ -311,6 +316,9 @@ PipelineSpec loadPipeline(const std::string& path, const std::vector<std::string
   spec.output.dir = value(output, "dir").text;
   spec.output.masks = value(output, "masks").number != 0;
   spec.output.map_points = value(output, "map_points").number != 0;
+  spec.output.samples = static_cast<int>(value(output, "samples").number);
+  spec.output.octomap = value(output, "octomap").number != 0;
+  spec.output.octomap_resolution = value(output, "octomap_resolution").number;
 
   if (!doc["evaluation"].IsDefined() || doc["evaluation"].IsNull())
     doc["evaluation"] = YAML::Node(YAML::NodeType::Map);

@@ -153,6 +153,14 @@ TrackOutput BackendInstance::track(const beslam_frame& frame, const beslam_image
   for (uint32_t i = 0; i < out.result.counter_count && out.result.counters; ++i)
     out.counters.emplace_back(out.result.counters[i].name ? out.result.counters[i].name : "?",
                               out.result.counters[i].value);
+  if (out.result.keypoints && out.result.keypoint_size >= sizeof(beslam_keypoint)) {
+    const auto* bytes = reinterpret_cast<const uint8_t*>(out.result.keypoints);
+    out.keypoints.resize(out.result.keypoint_count);
+    for (uint32_t i = 0; i < out.result.keypoint_count; ++i)
+      std::memcpy(&out.keypoints[i], bytes + size_t(i) * out.result.keypoint_size, sizeof(beslam_keypoint));
+  }
+  out.result.keypoints = nullptr;
+  out.result.keypoint_count = 0;
   out.result.stage_times = nullptr;  // plugin memory: not to be kept
   out.result.stage_count = 0;
   out.result.counters = nullptr;

@@ -237,6 +237,15 @@ struct OrbSlam::Impl {
     result.features = feature_count;
     result.features_static = features_static;
     result.tracked_static = tracker.trackedOnStaticObjects();
+    {
+      const std::vector<bool> matched = tracker.matchedKeypoints(index);
+      result.keypoints.reserve(features->size());
+      for (size_t i = 0; i < features->size(); ++i) {
+        const cv::KeyPoint& k = features->keypoints[i];
+        result.keypoints.push_back({k.pt.x, k.pt.y, features->labels[i], i < matched.size() && matched[i],
+                                    static_cast<uint8_t>(k.octave)});
+      }
+    }
     // The two-view map's unit settles over its first keyframes (KITTI 00: 0.76 of the later one at frames
     // 0-5): poses from then would bias the parked-car fits, so they start once local BA has run a few times.
     if (options.metric_scale && options.object_scale && !object_scale_done && result.state == TrackingState::Ok &&

@@ -123,6 +123,9 @@ class OrbBackend : public beslam::sdk::Backend {
     out.stage_ms = r.stage_ms;
     out.world_is_metric = r.world_is_metric;
     out.counters = {{"features", r.features}, {"features_static", r.features_static}, {"tracked_static", r.tracked_static}};
+    out.keypoints.reserve(r.keypoints.size());
+    for (const auto& k : r.keypoints)
+      out.keypoints.push_back({k.x, k.y, k.label, static_cast<uint8_t>(k.matched ? BESLAM_KEYPOINT_MATCHED : 0u), k.octave});
     return out;
   }
 

@@ -18,6 +18,16 @@ extern "C" {
 #define BESLAM_TRACKING_OK 1
 #define BESLAM_TRACKING_LOST 2
 
+/* One feature of a tracked frame (ABI 1.2), for drawing and diagnostics. */
+#define BESLAM_KEYPOINT_MATCHED 0x1u /* matched to a map point and an inlier of the frame's pose */
+
+typedef struct beslam_keypoint {
+  float x, y;      /* pixels of the full-resolution image */
+  uint16_t label;  /* the mask label under it (BESLAM_LABEL_*; 0 without a mask) */
+  uint8_t flags;   /* BESLAM_KEYPOINT_* */
+  uint8_t octave;  /* pyramid level it was detected at */
+} beslam_keypoint;
+
 typedef struct beslam_track_result {
   uint32_t struct_size;
   int32_t state;                   /* BESLAM_TRACKING_* */
@@ -35,6 +45,11 @@ typedef struct beslam_track_result {
    * "features_static" (keypoints on static-object labels), "tracked_static" (map points on static objects
    * matched in this frame). Instance-owned until its next call; may be NULL. */
   const beslam_named_value* counters;
+  /* ABI 1.2. The frame's features (may be NULL); instance-owned until its next call. keypoint_size is
+   * sizeof(beslam_keypoint) as the plugin was built, so the struct can grow at its end. */
+  const beslam_keypoint* keypoints;
+  uint32_t keypoint_count;
+  uint32_t keypoint_size;
 } beslam_track_result;
 
 #define BESLAM_TRAJECTORY_FINAL 0     /* every tracked frame, relative to its keyframe after optimisation */

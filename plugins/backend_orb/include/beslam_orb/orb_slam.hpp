@@ -115,6 +115,14 @@ struct TrackResult {
   int features = 0, features_static = 0;                           // keypoints; on static-object labels
   int tracked_static = 0;                                          // inliers on static-object map points
   std::vector<std::pair<std::string, double>> stage_ms;            // extract, track, local_map, mapping...
+  // The frame's keypoints: pixel, mask label under it, matched to a map point (pose inlier), octave.
+  struct Keypoint {
+    float x = 0, y = 0;
+    uint16_t label = 0;
+    bool matched = false;
+    uint8_t octave = 0;
+  };
+  std::vector<Keypoint> keypoints;
 };
 
 struct FramePose {

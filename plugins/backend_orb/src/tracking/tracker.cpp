@@ -279,6 +279,14 @@ int Tracker::trackedOnStaticObjects() const {
   return n;
 }
 
+std::vector<bool> Tracker::matchedKeypoints(int64_t index) const {
+  if (last_.index != index) return {};
+  std::vector<bool> matched(last_.points.size(), false);
+  for (size_t i = 0; i < last_.points.size(); ++i)
+    matched[i] = last_.points[i] && !last_.points[i]->bad && !last_.outlier[i];
+  return matched;
+}
+
 void Tracker::rescale(double s) {
   for (Frame* f : {&current_, &last_, &init_frame_}) f->T_cw.translation() *= s;
   for (Frame& f : init_between_) f.T_cw.translation() *= s;

@@ -50,6 +50,9 @@ class Tracker {
   KeyFrame* lastKeyFrame() const { return last_kf_; }
   // Matched map points of the last tracked frame that lie on static objects (inliers only).
   int trackedOnStaticObjects() const;
+  // Per keypoint of frame `index`, whether it is matched to a good map point and a pose inlier; empty
+  // when `index` is not the last tracked frame.
+  std::vector<bool> matchedKeypoints(int64_t index) const;
   // The map's unit became s times smaller (Map::rescale): scale every stored translation with it.
   void rescale(double s);
   // The map's newer part was scaled about c (Map::rescaleFrom): frames after keyframe first_kf follow.

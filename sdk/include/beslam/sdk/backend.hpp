@@ -19,6 +19,8 @@ struct TrackResult {
   bool world_is_metric = false;
   // Named per-frame counts the host sums into summary.json ("features", "features_static", "tracked_static").
   std::vector<std::pair<std::string, double>> counters;
+  // The frame's features (ABI 1.2), for drawing: pixel, mask label, BESLAM_KEYPOINT_* flags, octave.
+  std::vector<beslam_keypoint> keypoints;
 };
 
 struct TrajectoryEntry {
@@ -86,6 +88,10 @@ class Backend {
               b.abi_counters_.push_back({b.abi_counter_names_[i].c_str(), r.counters[i].second});
             c.counters = b.abi_counters_.empty() ? nullptr : b.abi_counters_.data();
             c.counter_count = static_cast<uint32_t>(b.abi_counters_.size());
+            b.abi_keypoints_ = r.keypoints;
+            c.keypoints = b.abi_keypoints_.empty() ? nullptr : b.abi_keypoints_.data();
+            c.keypoint_count = static_cast<uint32_t>(b.abi_keypoints_.size());
+            c.keypoint_size = sizeof(beslam_keypoint);
             std::memcpy(result, &c, std::min<size_t>(result->struct_size ? result->struct_size : sizeof(c), sizeof(c)));
           });
         },
@@ -139,6 +145,7 @@ class Backend {
   std::vector<beslam_stage_time> abi_stages_;
   std::vector<std::string> abi_counter_names_;
   std::vector<beslam_named_value> abi_counters_;
+  std::vector<beslam_keypoint> abi_keypoints_;
   std::vector<beslam_trajectory_entry> abi_trajectory_;
   std::vector<beslam_map_point> abi_points_;
 };

@@ -10,6 +10,10 @@
 
 namespace beslam::pipeline {
 
+// The image rectangle [u0, v0, u1, v1] of the box's corners in front of the camera, clipped to the
+// image; all -1 when no corner is in front.
+void projectBox(const beslam_box3d& box, const beslam_camera& camera, double bbox[4]);
+
 std::string formatObjectRow(int64_t frame_index, const beslam_box3d& box, const beslam_camera& camera);
 
 }  // namespace beslam::pipeline

@@ -1,14 +1,17 @@
-// The per-frame runner: dataset -> detector -> motion checker -> mask generator -> backend
-// (-> reconstructor on new keyframes -> landmarks back to the backend).
-//
-// For each frame the backend first offers a predicted T_world_cam, which the motion checker uses to
-// place boxes in the world frame; boxes from the detector are checked for NaN/inf before anything else
-// sees them. Every stage's wall time is recorded. At the end the run writes, each file atomically:
-// trajectory.kitti / trajectory.tum (final poses), trajectory_online.tum, keyframes.tum,
-// pipeline.resolved.yaml, timing.csv, summary.json, objects.txt (with a detector), masks/NNNNNN.png
-// (with output.masks), map_points.ply (when the backend has a map). Frames the backend did not track
-// are absent from the trajectories and listed in summary.json. On an error nothing partial replaces
-// an earlier run's files: per-frame files go to their own names, the rest is written at the end.
+// The per-frame runner. Each frame passes through named stages, in this order, data flowing one way:
+//   load -> predict -> detect -> classify -> mask -> track -> reconstruct -> write
+// load reads the dataset frame; predict asks the backend for T_world_cam (only when a motion checker
+// will use it, and only once the backend's world is metric); detect runs the detector and rejects
+// NaN/inf boxes; classify gives each box a motion state; mask makes the per-pixel labels; track runs the
+// backend; reconstruct (on metric keyframes) gives object landmarks back to the backend; write keeps the
+// per-frame outputs. Every stage's wall time goes to timing.csv (docs/architecture.md has the diagram).
+// At the end the run writes, each file atomically: trajectory.kitti / trajectory.tum (final poses),
+// trajectory_online.tum, keyframes.tum, pipeline.resolved.yaml, timing.csv, summary.json, objects.txt
+// (with a detector), masks/NNNNNN.png (with output.masks), map_points.ply (when the backend has a map).
+// Frames the backend did not track are absent from the trajectories and listed in summary.json. On an
+// error nothing partial replaces an earlier run's files. When options.stop_requested says so after a
+// frame (SIGINT/SIGTERM in the CLI), the loop ends there and the outputs of the frames done are written,
+// with summary.json "interrupted": true.
 #pragma once
 
 #include <functional>
@@ -23,11 +26,18 @@ struct RunOptions {
   std::string output_dir;             // overrides spec.output.dir when not empty
   bool progress = false;              // a progress line on stderr
   int32_t log_level = BESLAM_LOG_WARNING;
+  // Asked after every frame: true ends the loop there (the outputs of the frames done are written).
+  std::function<bool()> stop_requested;
+  std::function<std::string()> stop_reason;      // e.g. "SIGTERM", for summary.json
+  std::function<void(int64_t)> after_frame;       // called with each finished frame's index
 };
 
 struct RunSummary {
   std::string output_dir;
-  int64_t frames = 0;
+  int64_t frames = 0;                 // frames processed (all of the range unless interrupted)
+  int64_t last_frame = -1;            // index of the last frame processed
+  bool interrupted = false;           // the loop ended early on options.stop_requested
+  std::string interrupted_by;
   int64_t tracked = 0;                // frames in the backend's final trajectory
   int64_t tracked_online = 0;         // frames the backend reported OK when it tracked them
   int64_t keyframes = 0;
@@ -50,7 +60,8 @@ struct RunSummary {
   int64_t map_points = 0, map_points_static = 0;  // final map; on static objects (trusted)
 };
 
-// Runs a loaded and resolved pipeline. Throws beslam::Error (naming the file or plugin) on failure.
-RunSummary run(const PipelineSpec& spec, const registry::Registry& registry, const RunOptions& options);
+// Runs a loaded and resolved pipeline (resolvePlugins). Throws beslam::Error (naming the file or plugin)
+// on failure.
+RunSummary run(const PipelineSpec& spec, const RunOptions& options);
 
 }  // namespace beslam::pipeline

@@ -69,6 +69,9 @@ struct OutputSpec {
   std::string dir;
   bool masks = false;
   bool map_points = true;
+  int samples = 6;                  // frames drawn to samples/ (0: none)
+  bool octomap = false;             // static_map.bt
+  double octomap_resolution = 0.2;  // metres
 };
 
 struct EvaluationSpec {

@@ -86,6 +86,7 @@ struct TrackOutput {
   beslam_track_result result{};  // stage_times and counters cleared (plugin memory): read the copies below
   std::vector<std::pair<std::string, double>> stage_ms;
   std::vector<std::pair<std::string, double>> counters;
+  std::vector<beslam_keypoint> keypoints;  // ABI 1.2 (empty from older backends)
   bool worldIsMetric() const { return result.world_scale == BESLAM_WORLD_SCALE_METRIC; }
 };
 

@@ -1,0 +1,195 @@
+#include "run_outputs.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <iomanip>
+#include <ostream>
+
+#include "beslam/common/error.hpp"
+#include "beslam/common/file_io.hpp"
+#include "beslam/eval/eval.hpp"
+#include "beslam/trajectory/trajectory.hpp"
+
+namespace fs = std::filesystem;
+
+namespace beslam::pipeline::detail {
+
+namespace {
+
+trajectory::Trajectory toTrajectory(const std::vector<registry::PoseEntry>& poses) {
+  trajectory::Trajectory t;
+  for (const auto& p : poses) t.push_back(p.timestamp, p.T_world_cam);
+  return t;
+}
+
+void writeTrajectory(const std::string& dir, const std::string& stem, const std::vector<registry::PoseEntry>& poses,
+                     bool kitti_too) {
+  const trajectory::Trajectory t = toTrajectory(poses);
+  trajectory::writeTum((fs::path(dir) / (stem + ".tum")).string(), t);
+  if (kitti_too) trajectory::writeKitti((fs::path(dir) / (stem + ".kitti")).string(), t);
+}
+
+void writePly(const std::string& path, const std::vector<beslam_map_point>& points) {
+  writeFileAtomic(path, [&](std::ostream& out) {
+    out << "ply\nformat ascii 1.0\ncomment BE-SLAM map points (world frame)\n"
+        << "element vertex " << points.size() << "\n"
+        << "property float x\nproperty float y\nproperty float z\n"
+        << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+        << "property int observations\nend_header\n";
+    out << std::setprecision(7);
+    for (const auto& p : points)
+      out << p.p_world[0] << ' ' << p.p_world[1] << ' ' << p.p_world[2] << ' ' << int(p.color[0]) << ' '
+          << int(p.color[1]) << ' ' << int(p.color[2]) << ' ' << p.observations << '\n';
+  });
+}
+
+// timing.csv: one row a frame, one column a stage (ms); stages a frame skipped are empty.
+void writeTimingCsv(const std::string& path, const std::vector<TimingRow>& timings) {
+  std::vector<std::string> columns;
+  for (const auto& row : timings)
+    for (const auto& stage : row.stages)
+      if (std::find(columns.begin(), columns.end(), stage.first) == columns.end()) columns.push_back(stage.first);
+  writeFileAtomic(path, [&](std::ostream& out) {
+    out << "frame";
+    for (const auto& c : columns) out << ',' << c << "_ms";
+    out << '\n' << std::fixed << std::setprecision(3);
+    for (const auto& row : timings) {
+      out << row.index;
+      for (const auto& c : columns) {
+        out << ',';
+        double sum = 0;
+        bool any = false;
+        for (const auto& [name, ms] : row.stages)
+          if (name == c) sum += ms, any = true;
+        if (any) out << sum;
+      }
+      out << '\n';
+    }
+  });
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// APE/RPE with the configured alignment, plus Sim(3) and SE(3) APE side by side: with a metric map,
+// SE(3) APE close to Sim(3) APE says the scale is right.
+void evaluate(const PipelineSpec& spec, datasets::Dataset& dataset, const std::vector<registry::PoseEntry>& final_poses,
+              RunSummary& summary, nlohmann::json& json) {
+  if (!spec.evaluation.enabled || final_poses.empty()) return;
+  const auto gt = dataset.groundTruth();
+  if (!gt) return;
+  const trajectory::Trajectory est = toTrajectory(final_poses);
+  eval::EvalOptions eopt;
+  eopt.format = "tum";
+  eopt.alignment = eval::parseAlignmentType(spec.evaluation.alignment);
+  eopt.delta = static_cast<std::size_t>(spec.evaluation.rpe_delta);
+  try {
+    const eval::PairedTrajectories paired = eval::associateByTime(*gt, est, 1e-3);
+    const eval::EvalResult result = eval::evaluatePaired(paired.ref, paired.est, eopt);
+    summary.has_ape = true;
+    summary.ape_trans_rmse = result.ape.trans.rmse;
+    summary.rpe_trans_rmse = result.rpe.trans.rmse;
+    summary.ape_alignment_scale = result.alignment.scale;
+    json["evaluation"] = nlohmann::json::parse(eval::toJson(result));
+    auto with = [&](eval::AlignmentType type) {  // the configured alignment is already evaluated
+      if (eopt.alignment == type) return result;
+      eval::EvalOptions o = eopt;
+      o.alignment = type;
+      return eval::evaluatePaired(paired.ref, paired.est, o);
+    };
+    const eval::EvalResult r_sim3 = with(eval::AlignmentType::kSim3);
+    const eval::EvalResult r_se3 = with(eval::AlignmentType::kSe3);
+    summary.ape_sim3_rmse = r_sim3.ape.trans.rmse;
+    summary.ape_se3_rmse = r_se3.ape.trans.rmse;
+    json["ape"] = {{"sim3_rmse", r_sim3.ape.trans.rmse},
+                   {"sim3_scale", r_sim3.alignment.scale},
+                   {"se3_rmse", r_se3.ape.trans.rmse}};
+  } catch (const Error& e) {
+    // A degenerate or too short trajectory cannot be aligned: the run is still good, say why.
+    summary.evaluation_error = e.what();
+    json["evaluation"] = {{"error", e.what()}};
+  }
+}
+
+nlohmann::json orNull(bool present, const nlohmann::json& value) { return present ? value : nlohmann::json(nullptr); }
+
+}  // namespace
+
+void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const DatasetRecord& dataset_record,
+                     datasets::Dataset& dataset, registry::BackendInstance& backend, const RunRecord& record,
+                     RunSummary& summary) {
+  const fs::path dir(out_dir);
+  summary.frames = static_cast<int64_t>(record.frame_indices.size());
+  const auto final_poses = backend.trajectory(BESLAM_TRAJECTORY_FINAL);
+  const auto online_poses = backend.trajectory(BESLAM_TRAJECTORY_ONLINE);
+  const auto keyframe_poses = backend.trajectory(BESLAM_TRAJECTORY_KEYFRAMES);
+  summary.keyframes = static_cast<int64_t>(keyframe_poses.size());
+  {  // a frame counts as tracked when the backend's final trajectory has it (an initialisation
+     // reference frame gets its pose once the map exists)
+    std::vector<int64_t> in_final;
+    for (const auto& p : final_poses) in_final.push_back(p.frame_index);
+    std::sort(in_final.begin(), in_final.end());
+    for (int64_t index : record.frame_indices)
+      if (std::binary_search(in_final.begin(), in_final.end(), index)) ++summary.tracked;
+      else summary.untracked.push_back(index);
+  }
+  writeTrajectory(out_dir, "trajectory", final_poses, true);
+  writeTrajectory(out_dir, "trajectory_online", online_poses, false);
+  writeTrajectory(out_dir, "keyframes", keyframe_poses, false);
+  {
+    const auto points = backend.mapPoints();
+    summary.map_points = static_cast<int64_t>(points.size());
+    for (const auto& p : points) summary.map_points_static += (p.flags & BESLAM_MAP_POINT_STATIC_OBJECT) ? 1 : 0;
+    if (spec.output.map_points && !points.empty()) writePly((dir / "map_points.ply").string(), points);
+  }
+  summary.backend_counters.assign(record.counter_sums.begin(), record.counter_sums.end());
+  if (spec.slots.at("detector").plugin)
+    writeFileAtomic((dir / "objects.txt").string(), [&](std::ostream& out) {
+      for (const auto& row : record.object_rows) out << row << '\n';
+    });
+  {
+    YAML::Emitter emitter;
+    emitter << spec.document;
+    writeFileAtomic((dir / "pipeline.resolved.yaml").string(),
+                    "# " + spec.path + " as run, with every default filled in\n" + std::string(emitter.c_str()) + "\n");
+  }
+  writeTimingCsv((dir / "timing.csv").string(), record.timings);
+
+  summary.median_frame_ms = median(record.frame_ms);
+  nlohmann::json json;
+  json["pipeline"] = spec.path;
+  json["dataset"] = dataset_record.description;
+  if (!dataset_record.kitti_root.empty()) {  // where truth files of a synthetic sequence are (beslam eval-motion)
+    json["dataset_path"] =
+        fs::absolute(fs::path(dataset_record.kitti_root) / "sequences" / dataset_record.kitti_sequence).string();
+    json["dataset_sequence"] = dataset_record.kitti_sequence;
+  }
+  json["frames"] = summary.frames;
+  json["interrupted"] = summary.interrupted;
+  json["last_frame"] = orNull(!record.frame_indices.empty(), summary.last_frame);
+  if (summary.interrupted) json["interrupted_by"] = summary.interrupted_by;
+  json["tracked"] = summary.tracked;
+  json["tracked_when_seen"] = summary.tracked_online;
+  json["untracked_frames"] = summary.untracked;
+  json["keyframes"] = summary.keyframes;
+  json["median_frame_ms"] = summary.median_frame_ms;
+  for (const auto& [name, s] : spec.slots)
+    json["plugins"][name] = s.plugin ? nlohmann::json(s.plugin->id + " " + s.plugin->version) : nlohmann::json(nullptr);
+  json["world"] = {{"metric", summary.metric_from_frame >= 0},
+                   {"metric_from_frame", orNull(summary.metric_from_frame >= 0, summary.metric_from_frame)},
+                   {"camera_height_m", orNull(summary.camera_height > 0, summary.camera_height)}};
+  json["detections"] = {{"static", summary.detections_static},
+                        {"dynamic", summary.detections_dynamic},
+                        {"unknown", summary.detections_unknown}};
+  json["frames_with_masks"] = summary.frames_with_masks;
+  json["map_points"] = {{"total", summary.map_points}, {"on_static_objects", summary.map_points_static}};
+  json["backend_counters"] = nlohmann::json::object();
+  for (const auto& [name, value] : summary.backend_counters) json["backend_counters"][name] = value;
+  evaluate(spec, dataset, final_poses, summary, json);
+  writeFileAtomic((dir / "summary.json").string(), json.dump(2) + "\n");
+}
+
+}  // namespace beslam::pipeline::detail
