@@ -232,7 +232,9 @@ bool cellFinished(const std::string& run_dir) {
   if (!in) return false;
   try {
     const nlohmann::json j = nlohmann::json::parse(in);
-    return j.is_object() && j.contains("frames") && j["frames"].is_number() && j.contains("tracked");
+    // A run stopped by a signal writes its summary too, marked interrupted: not finished.
+    return j.is_object() && j.contains("frames") && j["frames"].is_number() && j.contains("tracked") &&
+           !j.value("interrupted", false);
   } catch (const nlohmann::json::exception&) {
     return false;
   }

@@ -228,6 +228,12 @@ TEST(BenchCommand, TinyBenchTablesResumeSlurmAndMerge) {
   EXPECT_EQ(fs::last_write_time(out / "runs/beslam/ds/seed2/summary.json"), stamp);
 
   // A broken summary is not a finished cell: --cell reruns it.
+  {  // an interrupted run (SIGINT) writes a summary too: not finished
+    json j = json::parse(slurp(out / "runs/plain/ds/seed1/summary.json"));
+    j["interrupted"] = true;
+    std::ofstream(out / "runs/plain/ds/seed1/summary.json") << j.dump();
+    EXPECT_FALSE(beslam::bench::cellFinished((out / "runs/plain/ds/seed1").string()));
+  }
   std::ofstream(out / "runs/plain/ds/seed1/summary.json") << "{\"frames\": ";
   EXPECT_FALSE(beslam::bench::cellFinished((out / "runs/plain/ds/seed1").string()));
   r = shell(kBeslam + " bench --cell 0 " + out.string(), dir);
@@ -252,4 +258,28 @@ TEST(BenchCommand, TinyBenchTablesResumeSlurmAndMerge) {
   ASSERT_EQ(r.code, 0) << r.err;
   expectTablesMatchSummaries(sl, 4);
   EXPECT_TRUE(fs::exists(sl / "report/index.html"));
+}
+
+// A cell whose run was interrupted (SIGINT at frame 3, through the runner's real signal path) wrote a
+// summary marked interrupted: the bench says the cell failed, and running it again reruns that cell.
+TEST(BenchCommand, InterruptedCellIsRunAgain) {
+  const fs::path dir = tempDir("interrupted");
+  const fs::path cache = fs::path(BESLAM_BINARY_DIR) / "test-bench-synth-cache";
+  write(dir / "m.yaml",
+        "name: interrupted\nseeds: [1]\nsequences:\n"
+        "  - label: ds\n    sequence: dynamic_street\n    root: " + cache.string() + "\n"
+        "    set: [\"dataset.synth_set=lidar.enabled=false,camera.colour=false,frames=60\"]\n"
+        "pipelines:\n  - {label: plain, file: " + kAblation + "synth_no_semantics.yaml}\n");
+  const std::string bench = kBeslam + " bench " + (dir / "m.yaml").string() + " --out " + (dir / "out").string();
+  Result r = shell("BESLAM_DEBUG_SIGNAL_AT=3:SIGINT " + bench, dir);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("FAILED runs/plain/ds/seed1 (exit 130"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("beslam: error: " + (dir / "out").string() + ": 1 of 1 cells failed"), std::string::npos) << r.err;
+  const json s = json::parse(slurp(dir / "out/runs/plain/ds/seed1/summary.json"));
+  EXPECT_TRUE(s["interrupted"].get<bool>());
+  EXPECT_EQ(json::parse(slurp(dir / "out/tables.json"))["finished"], 0);
+  r = shell(bench, dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("0 already finished, 1 to run"), std::string::npos) << r.err;
+  EXPECT_EQ(json::parse(slurp(dir / "out/tables.json"))["finished"], 1);
 }

@@ -349,7 +349,8 @@ json runData(const fs::path& run, const std::string& label, size_t max_points, c
   if (fs::is_directory(run / "samples")) {
     std::vector<fs::path> pngs;
     for (const auto& e : fs::directory_iterator(run / "samples"))
-      if (e.path().extension() == ".png") pngs.push_back(e.path());
+      if (e.path().extension() == ".png" || e.path().extension() == ".jpg" || e.path().extension() == ".jpeg")
+        pngs.push_back(e.path());
     std::sort(pngs.begin(), pngs.end());
     const size_t step = std::max<size_t>(1, (pngs.size() + kMaxSamples - 1) / kMaxSamples);
     if (!pngs.empty()) makeDirectories(samples_out.string());
@@ -430,8 +431,14 @@ void writeBenchReport(const std::string& bench_dir) {
     const fs::path run = dir / c["dir"].get<std::string>();
     if (!fs::exists(run / "summary.json")) continue;
     const std::string k = std::to_string(runs.size());
+    bool interrupted = false;
+    try {
+      interrupted = json::parse(readFile((run / "summary.json").string())).value("interrupted", false);
+    } catch (const json::exception&) {
+      continue;  // a summary being written or broken: not a run to show
+    }
     runs.push_back(runData(run, c["pipeline"].get<std::string>() + " / " + c["sequence"].get<std::string>() + " / seed " +
-                                    std::to_string(c["seed"].get<long>()),
+                                    std::to_string(c["seed"].get<long>()) + (interrupted ? " (interrupted)" : ""),
                            50000, out / "samples" / k, "samples/" + k));
   }
   writePage(out, "BE-SLAM bench " + bench.value("name", std::string()), tables, runs);

@@ -77,6 +77,8 @@ fs::path makeRun(const fs::path& dir) {
                                            "property int observations\nend_header\n1 0 5 10 20 30 2\n2 -1 6 40 50 60 3\n"
                                            "0 0 7 70 80 90 2\n";
   cv::imwrite((run / "samples" / "000010.png").string(), cv::Mat(20, 40, CV_8UC3, cv::Scalar(0, 0, 255)));
+  cv::imwrite((run / "samples" / "000020.jpg").string(), cv::Mat(20, 40, CV_8UC3, cv::Scalar(0, 255, 0)));
+  std::ofstream(run / "samples" / "notes.txt") << "not a frame\n";
   return run;
 }
 
@@ -150,7 +152,7 @@ TEST(Report, HandMadeRunFigures) {
   // Ground truth in the map's frame: the inverse alignment ((x + 2) / 2, y / 2, z / 2).
   EXPECT_NEAR(d["view"]["ground_truth"][3 * 10 + 2].get<double>(), 5.0, 1e-9);
   EXPECT_NEAR(d["view"]["ground_truth"][3 * 10].get<double>(), 1.0, 1e-9);
-  EXPECT_EQ(d["samples"], json({"samples/0/000010.png"}));
+  EXPECT_EQ(d["samples"], json({"samples/0/000010.png", "samples/0/000020.jpg"}));
 }
 
 TEST(Report, ErrorsNameTheFile) {

@@ -8,7 +8,7 @@
 // - Cells are ordered seed, pipeline, sequence (outermost first): a partial bench still compares every
 //   pipeline, and the first parallel cells render different synthetic sequences.
 // - A cell's folder is OUT/runs/<pipeline>/<sequence>/seed<N>; it is finished when its summary.json parses
-//   as a run summary. Finished cells are skipped; the child's output goes to the folder's beslam.log.
+//   as a run summary not marked interrupted. Finished cells are skipped; the child's output goes to the folder's beslam.log.
 // - OUT/bench.json (written before any cell starts) freezes the cell list and the command of each cell, so
 //   `--cell K OUT`, `--merge OUT` and the emitted Slurm script need only the folder.
 // - Tables are computed from finished cells only (medians over seeds, even counts: mean of the middle
@@ -58,7 +58,7 @@ struct Cell {
 Matrix loadMatrix(const std::string& path);
 std::vector<Cell> makeCells(const Matrix& matrix, const std::string& out_dir);
 
-// True when DIR/summary.json parses as a run summary.
+// True when DIR/summary.json parses as a run summary of a run that was not interrupted.
 bool cellFinished(const std::string& run_dir);
 
 // Median (mean of the two middle values for an even count), min, max, count of the finite values.

@@ -2,7 +2,7 @@
 //
 // Contract:
 // - writeRunReport(RUN, OUT) reads what `beslam run` wrote in RUN (summary.json required; trajectory.tum,
-//   timing.csv, keyframes.tum, map_points.ply, objects.txt, samples/*.png where present) and the ground
+//   timing.csv, keyframes.tum, map_points.ply, objects.txt, samples/*.png|jpg where present) and the ground
 //   truth the summary names (dataset_path: KITTI layout, poses/NN.txt + times.txt) and writes OUT/index.html
 //   with per run: top view of the trajectory against the aligned ground truth, APE over time, scale over
 //   time, per-stage timing, static/dynamic counts, sample frames, and a 3D map viewer.
