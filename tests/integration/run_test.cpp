@@ -164,6 +164,20 @@ TEST_F(RunTest, InterruptKeepsTheFramesDone) {
   EXPECT_NE(slurp(dir_ / "whole/summary.json").find("\"interrupted\": false"), std::string::npos);
 }
 
+// output.octomap: the runner hands the static map its input and writes static_map.bt (here the map-point
+// route: no LiDAR, and the replay backend has no map points, so an empty but valid tree).
+TEST_F(RunTest, OctomapIsWritten) {
+  const Result r = beslam("run " + pipeline("output: {octomap: true, octomap_resolution: 0.5}\n") + " --out " +
+                              (dir_ / "out").string(),
+                          dir_);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string bt = slurp(dir_ / "out/static_map.bt");
+  EXPECT_EQ(bt.rfind("# Octomap OcTree binary file", 0), 0u);
+  EXPECT_NE(bt.find("res 0.5"), std::string::npos);
+  const std::string summary = slurp(dir_ / "out/summary.json");
+  EXPECT_NE(summary.find("\"source\": \"map_points\""), std::string::npos) << summary;
+}
+
 TEST_F(RunTest, BadDebugSignalSettingIsAUsageError) {
   const Result r = beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_,
                           "BESLAM_DEBUG_SIGNAL_AT=soon ");

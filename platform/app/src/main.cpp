@@ -3,6 +3,7 @@
 //   beslam plugins [--plugin-path DIR]... [--json]
 //   beslam eval --ref FILE --est FILE [...]
 //   beslam eval-motion --run DIR [...]
+//   beslam eval-static-map --run DIR [...]
 //   beslam synth --config FILE --out DIR [--set key=value]...
 //   beslam bench MATRIX.yaml [--out DIR] [--jobs N] [--emit slurm] | --merge DIR | --cell K DIR
 //   beslam report RUN_DIR [--out DIR]
@@ -26,6 +27,7 @@
 #include "beslam/pipeline/spec.hpp"
 #include "beslam/registry/registry.hpp"
 #include "beslam/report/report.hpp"
+#include "beslam/static_map/score.hpp"
 #ifdef BESLAM_WITH_SIM
 #include "beslam/sim/synth.hpp"
 #endif
@@ -40,6 +42,7 @@ constexpr const char* kUsage =
     "  plugins             list every plugin found, with its configuration schema\n"
     "  eval                APE/RPE of a trajectory against a reference (evo's definitions)\n"
     "  eval-motion         a run's static/dynamic calls scored against synthetic truth\n"
+    "  eval-static-map     a run's static_map.bt (OctoMap) scored against synthetic truth\n"
     "  synth               render a synthetic sequence with full ground truth\n"
     "  bench MATRIX.yaml   pipelines x sequences x seeds: runs, tables, report (docs/benchmarks.md)\n"
     "  report RUN_DIR      a self-contained HTML report of one run\n"
@@ -256,6 +259,7 @@ int main(int argc, char** argv) {
     if (command == "bench") return beslam::bench::runBenchCommand(args, std::cout, std::cerr);
     if (command == "report") return beslam::report::runReportCommand(args, std::cout, std::cerr);
     if (command == "eval-motion") return beslam::motion_score::runCommand(args, std::cout, std::cerr);
+    if (command == "eval-static-map") return beslam::static_map::runEvalCommand(args, std::cout, std::cerr);
 #ifdef BESLAM_WITH_SIM
     if (command == "synth") return beslam::sim::runSynthCommand(args, std::cout, std::cerr);
 #endif

@@ -120,7 +120,7 @@ nlohmann::json orNull(bool present, const nlohmann::json& value) { return presen
 
 void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const DatasetRecord& dataset_record,
                      datasets::Dataset& dataset, registry::BackendInstance& backend, const RunRecord& record,
-                     RunSummary& summary) {
+                     static_map::StaticMapBuilder* static_map, RunSummary& summary) {
   const fs::path dir(out_dir);
   summary.frames = static_cast<int64_t>(record.frame_indices.size());
   const auto final_poses = backend.trajectory(BESLAM_TRAJECTORY_FINAL);
@@ -139,11 +139,28 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
   writeTrajectory(out_dir, "trajectory", final_poses, true);
   writeTrajectory(out_dir, "trajectory_online", online_poses, false);
   writeTrajectory(out_dir, "keyframes", keyframe_poses, false);
-  {
-    const auto points = backend.mapPoints();
-    summary.map_points = static_cast<int64_t>(points.size());
-    for (const auto& p : points) summary.map_points_static += (p.flags & BESLAM_MAP_POINT_STATIC_OBJECT) ? 1 : 0;
-    if (spec.output.map_points && !points.empty()) writePly((dir / "map_points.ply").string(), points);
+  const auto points = backend.mapPoints();
+  summary.map_points = static_cast<int64_t>(points.size());
+  for (const auto& p : points) summary.map_points_static += (p.flags & BESLAM_MAP_POINT_STATIC_OBJECT) ? 1 : 0;
+  if (spec.output.map_points && !points.empty()) writePly((dir / "map_points.ply").string(), points);
+  nlohmann::json static_map_json;
+  if (static_map) {  // static_map.bt from the final poses
+    std::map<int64_t, Eigen::Isometry3d> T_world_cam;
+    for (const auto& p : final_poses) T_world_cam[p.frame_index] = p.T_world_cam;
+    std::vector<Eigen::Vector3d> p_world, keyframe_centres;
+    for (const auto& p : points) p_world.emplace_back(p.p_world[0], p.p_world[1], p.p_world[2]);
+    for (const auto& k : keyframe_poses) keyframe_centres.push_back(k.T_world_cam.translation());
+    const auto tree = static_map->build(T_world_cam, p_world, keyframe_centres);
+    static_map::writeTree(*tree, (dir / "static_map.bt").string());
+    const static_map::Stats& st = static_map->stats();
+    static_map_json = {{"file", "static_map.bt"},
+                       {"resolution_m", tree->getResolution()},
+                       {"source", st.scans > 0 ? "lidar" : "map_points"},
+                       {"scans", st.scans},
+                       {"points_inserted", st.scans > 0 ? st.points_inserted : st.map_points},
+                       {"points_in_boxes_not_static", st.points_in_boxes},
+                       {"points_outside_view", st.points_outside_view},
+                       {"leaf_nodes", tree->getNumLeafNodes()}};
   }
   summary.backend_counters.assign(record.counter_sums.begin(), record.counter_sums.end());
   if (spec.slots.at("detector").plugin)
@@ -186,6 +203,7 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
                         {"unknown", summary.detections_unknown}};
   json["frames_with_masks"] = summary.frames_with_masks;
   json["map_points"] = {{"total", summary.map_points}, {"on_static_objects", summary.map_points_static}};
+  if (static_map) json["static_map"] = static_map_json;
   json["backend_counters"] = nlohmann::json::object();
   for (const auto& [name, value] : summary.backend_counters) json["backend_counters"][name] = value;
   evaluate(spec, dataset, final_poses, summary, json);

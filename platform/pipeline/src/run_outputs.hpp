@@ -12,6 +12,7 @@
 #include "beslam/datasets/dataset.hpp"
 #include "beslam/pipeline/runner.hpp"
 #include "beslam/registry/instance.hpp"
+#include "beslam/static_map/static_map.hpp"
 
 namespace beslam::pipeline::detail {
 
@@ -37,9 +38,10 @@ struct DatasetRecord {
 };
 
 // Writes every end-of-run file into `out_dir` and completes `summary` (frames, tracked, keyframes,
-// map points, APE). Throws beslam::Error naming the file on a write failure.
+// map points, APE); static_map.bt too when `static_map` is given. Throws beslam::Error naming the file
+// on a write failure.
 void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const DatasetRecord& dataset_record,
                      datasets::Dataset& dataset, registry::BackendInstance& backend, const RunRecord& record,
-                     RunSummary& summary);
+                     static_map::StaticMapBuilder* static_map, RunSummary& summary);
 
 }  // namespace beslam::pipeline::detail

@@ -107,6 +107,12 @@ class Run {
     sample_positions_ = detail::samplePositions(dataset_->size(), spec.output.samples);
     if (!sample_positions_.empty()) makeDirectories((fs::path(out_dir_) / "samples").string());
     createPlugins();
+    if (spec.output.octomap) {
+      static_map::Options o;
+      o.resolution = spec.output.octomap_resolution;
+      o.camera = camera_;
+      static_map_ = std::make_unique<static_map::StaticMapBuilder>(o);
+    }
   }
 
   RunSummary execute() {
@@ -138,7 +144,8 @@ class Run {
     }
     if (tty) std::cerr << "\n";
     backend_->finish();
-    detail::writeRunOutputs(spec_, out_dir_, dataset_record_, *dataset_, *backend_, record_, summary_);
+    detail::writeRunOutputs(spec_, out_dir_, dataset_record_, *dataset_, *backend_, record_, static_map_.get(),
+                            summary_);
     return summary_;
   }
 
@@ -311,8 +318,8 @@ class Run {
     if (!landmarks.landmarks.empty()) backend_->addLandmarks(landmarks);
   }
 
-  // write: the per-frame outputs (objects.txt rows, masks/NNNNNN.png, samples/NNNNNN.jpg); everything
-  // else at the end.
+  // write: the per-frame outputs (objects.txt rows, masks/NNNNNN.png, samples/NNNNNN.jpg) and what the
+  // static map needs (keyframes' scans, boxes not called static); everything else at the end.
   void write(FrameState& f) {
     StageTimer timer(f.timing, "write");
     if (detector_)
@@ -331,6 +338,13 @@ class Run {
           (fs::path(out_dir_) / "samples" / (std::to_string(1000000 + f.frame.index).substr(1) + ".jpg")).string(),
           detail::drawSampleFrame(image, f.mask, f.tracked.keypoints, f.boxes, camera_));
     }
+    if (static_map_) {
+      static_map_->addBoxes(f.frame.index, f.boxes);
+      const auto T_cam_lidar = dataset_->T_cam_lidar();
+      if (f.tracked.result.is_keyframe && T_cam_lidar && !f.frame.lidar_xyzi.empty())
+        static_map_->addScan(f.frame.index, f.frame.lidar_xyzi.data(), f.frame.lidar_xyzi.size() / 4,
+                             4 * sizeof(float), *T_cam_lidar, f.boxes);
+    }
   }
 
   const PipelineSpec& spec_;
@@ -347,6 +361,7 @@ class Run {
   std::unique_ptr<registry::BackendInstance> backend_;
   bool world_metric_ = false;  // the backend's world unit, as its last track() said (data.h)
   std::set<size_t> sample_positions_;
+  std::unique_ptr<static_map::StaticMapBuilder> static_map_;  // with output.octomap
   detail::RunRecord record_;
   RunSummary summary_;
 };
