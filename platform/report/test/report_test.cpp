@@ -215,7 +215,7 @@ TEST(ReportBrowser, ChromiumDrawsPlotsAndThe3DView) {
   const std::string chromium =
       "chromium --headless --no-sandbox --disable-gpu --enable-unsafe-swiftshader --disable-quic --no-first-run "
       "--disable-background-networking --disable-component-update --disable-sync --hide-scrollbars "
-      "--window-size=1280,1840 --virtual-time-budget=15000 --user-data-dir=" +
+      "--window-size=1280,1990 --virtual-time-budget=15000 --user-data-dir=" +
       (dir / "profile").string() + " ";
   const std::string url = "file://" + fs::absolute(rep / "index.html").string();
   ASSERT_EQ(shell(chromium + "--dump-dom " + url + " > " + (dir / "dom.html").string() + " 2> " +
