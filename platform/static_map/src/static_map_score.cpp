@@ -28,23 +28,6 @@ constexpr double kGroundBand = 0.3;  // metres
 
 bool carLike(const std::string& type) { return type == "Car" || type == "Van" || type == "Truck"; }
 
-// (frame, track) -> moving, from objects_motion.txt rows "frame track_id moving speed".
-std::map<std::pair<int64_t, int64_t>, bool> readMotion(const std::string& path) {
-  std::istringstream in(readFile(path));
-  std::map<std::pair<int64_t, int64_t>, bool> moving;
-  int line_no = 0;
-  for (std::string line; std::getline(in, line);) {
-    ++line_no;
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream row(line);
-    int64_t frame = 0, track = 0;
-    int flag = 0;
-    if (!(row >> frame >> track >> flag)) throwAt(path, "expected 'frame track_id moving speed'", line_no);
-    moving[{frame, track}] = flag != 0;
-  }
-  return moving;
-}
-
 struct WorldBox {
   Eigen::Isometry3d T_box_world;     // world -> box frame (x length, y height, z width)
   Eigen::Vector3d half;              // half extents in the box frame
@@ -129,7 +112,7 @@ MapScore scoreStaticMap(const octomap::OcTree& tree, const std::string& sequence
   const std::string motion_path = (fs::path(sequence_dir) / "objects_motion.txt").string();
   const std::string poses_path = (fs::path(sequence_dir).parent_path().parent_path() / "poses" / (sequence + ".txt")).string();
   const auto labels = datasets::readTrackingLabels(labels_path);
-  const auto moving = readMotion(motion_path);
+  const auto moving = datasets::readObjectMotion(motion_path);
   const trajectory::Trajectory poses = trajectory::readKitti(poses_path);
 
   std::set<int64_t> ever_moving;
