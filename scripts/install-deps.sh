@@ -9,6 +9,7 @@ packages=(
   libboost-dev libboost-filesystem-dev liboctomap-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev clang-format
+  libjs-three libjs-chart.js chromium   # the HTML report's libraries; chromium for its browser test
 )
 
 missing=()

@@ -5,6 +5,8 @@
 //   beslam eval-motion --run DIR [...]
 //   beslam eval-static-map --run DIR [...]
 //   beslam synth --config FILE --out DIR [--set key=value]...
+//   beslam bench MATRIX.yaml [--out DIR] [--jobs N] [--emit slurm] | --merge DIR | --cell K DIR
+//   beslam report RUN_DIR [--out DIR]
 // Every failure prints one line "beslam: error: <file or plugin>: <cause>" and exits non-zero
 // (2 for a usage error, 1 for anything else).
 #include <csignal>
@@ -16,6 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "beslam/bench/bench.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/interrupt.hpp"
 #include "beslam/eval/eval.hpp"
@@ -23,6 +26,7 @@
 #include "beslam/pipeline/runner.hpp"
 #include "beslam/pipeline/spec.hpp"
 #include "beslam/registry/registry.hpp"
+#include "beslam/report/report.hpp"
 #include "beslam/static_map/score.hpp"
 #ifdef BESLAM_WITH_SIM
 #include "beslam/sim/synth.hpp"
@@ -40,6 +44,8 @@ constexpr const char* kUsage =
     "  eval-motion         a run's static/dynamic calls scored against synthetic truth\n"
     "  eval-static-map     a run's static_map.bt (OctoMap) scored against synthetic truth\n"
     "  synth               render a synthetic sequence with full ground truth\n"
+    "  bench MATRIX.yaml   pipelines x sequences x seeds: runs, tables, report (docs/benchmarks.md)\n"
+    "  report RUN_DIR      a self-contained HTML report of one run\n"
     "\n"
     "`beslam <command> --help` describes a command's options.\n";
 
@@ -250,6 +256,8 @@ int main(int argc, char** argv) {
     if (command == "run") return runCommand(args);
     if (command == "plugins") return pluginsCommand(args);
     if (command == "eval") return beslam::eval::runEvalCommand(args, std::cout, std::cerr);
+    if (command == "bench") return beslam::bench::runBenchCommand(args, std::cout, std::cerr);
+    if (command == "report") return beslam::report::runReportCommand(args, std::cout, std::cerr);
     if (command == "eval-motion") return beslam::motion_score::runCommand(args, std::cout, std::cerr);
     if (command == "eval-static-map") return beslam::static_map::runEvalCommand(args, std::cout, std::cerr);
 #ifdef BESLAM_WITH_SIM

@@ -1,0 +1,243 @@
+// The matrix file: parse, validate, enumerate cells.
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "beslam/bench/bench.hpp"
+#include "beslam/common/error.hpp"
+#include "beslam/pipeline/spec.hpp"
+#include "beslam/registry/registry.hpp"
+
+namespace fs = std::filesystem;
+
+namespace beslam::bench {
+namespace {
+
+int lineOf(const YAML::Node& node) { return node.Mark().line >= 0 ? node.Mark().line + 1 : 0; }
+
+struct Reader {
+  std::string path;
+  fs::path base;
+
+  [[noreturn]] void fail(const YAML::Node& node, const std::string& message) const {
+    throwAt(path, message, lineOf(node));
+  }
+
+  void onlyKeys(const YAML::Node& map, const std::set<std::string>& allowed, const std::string& where) const {
+    for (const auto& kv : map) {
+      const std::string key = kv.first.as<std::string>();
+      if (!allowed.count(key)) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        fail(kv.first, where + ": unknown key '" + key + "' (expected " + list + ")");
+      }
+    }
+  }
+
+  std::string scalar(const YAML::Node& node, const std::string& what) const {
+    if (!node.IsScalar()) fail(node, what + ": expected a single value");
+    return node.Scalar();
+  }
+
+  std::string label(const YAML::Node& entry, const std::string& where) const {
+    const YAML::Node n = entry["label"];
+    if (!n.IsDefined()) fail(entry, where + ": 'label' is missing");
+    const std::string s = scalar(n, where + ".label");
+    static const std::regex ok("[A-Za-z0-9_.-]+");
+    if (!std::regex_match(s, ok) || s == "." || s == "..")
+      fail(n, where + ".label: '" + s + "' is not a folder-safe name (letters, digits, _ . -)");
+    return s;
+  }
+
+  // `set:` is a list of "key=value" strings or a map {key: value}.
+  std::vector<std::string> sets(const YAML::Node& entry, const std::string& where) const {
+    std::vector<std::string> out;
+    const YAML::Node n = entry["set"];
+    if (!n.IsDefined() || n.IsNull()) return out;
+    if (n.IsSequence()) {
+      for (const auto& item : n) {
+        const std::string s = scalar(item, where + ".set");
+        if (s.find('=') == std::string::npos || s.front() == '=')
+          fail(item, where + ".set: '" + s + "' is not key=value");
+        out.push_back(s);
+      }
+    } else if (n.IsMap()) {
+      for (const auto& kv : n) {
+        YAML::Emitter e;
+        e << YAML::Flow << kv.second;
+        out.push_back(kv.first.as<std::string>() + "=" + std::string(e.c_str()));
+      }
+    } else {
+      fail(n, where + ".set: expected a list of key=value or a map");
+    }
+    return out;
+  }
+
+  std::string file(const YAML::Node& n, const std::string& what) const {
+    fs::path p = scalar(n, what);
+    if (p.is_relative()) p = base / p;
+    p = p.lexically_normal();
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec)) fail(n, what + ": no such file " + p.string());
+    return p.string();
+  }
+};
+
+}  // namespace
+
+Matrix loadMatrix(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throwAt(path, "no such matrix file");
+  if (fs::is_directory(path, ec)) throwAt(path, "is a folder, not a matrix file");
+  YAML::Node doc;
+  try {
+    doc = YAML::LoadFile(path);
+  } catch (const YAML::ParserException& e) {
+    throwAt(path, "YAML syntax error: " + e.msg, e.mark.line + 1);
+  } catch (const YAML::Exception& e) {
+    throwAt(path, "cannot read YAML: " + e.msg);
+  }
+  if (!doc.IsMap()) throwAt(path, "a matrix must be a map with pipelines, sequences and seeds", lineOf(doc));
+  Reader r{path, fs::absolute(path).parent_path()};
+  r.onlyKeys(doc, {"name", "seeds", "seed_key", "sequences", "pipelines"}, "matrix");
+
+  Matrix m;
+  m.path = path;
+  m.name = doc["name"].IsDefined() ? r.scalar(doc["name"], "name") : fs::path(path).stem().string();
+  if (doc["seed_key"].IsDefined()) m.seed_key = r.scalar(doc["seed_key"], "seed_key");
+
+  const YAML::Node seeds = doc["seeds"];
+  if (!seeds.IsDefined()) throwAt(path, "seeds: missing (a list of integers, e.g. [42, 1, 2])");
+  if (!seeds.IsSequence() || seeds.size() == 0) r.fail(seeds, "seeds: expected a non-empty list of integers");
+  for (const auto& s : seeds) {
+    int64_t v = 0;
+    try {
+      v = s.as<int64_t>();
+    } catch (const YAML::Exception&) {
+      r.fail(s, "seeds: '" + (s.IsScalar() ? s.Scalar() : std::string("?")) + "' is not an integer");
+    }
+    if (std::find(m.seeds.begin(), m.seeds.end(), v) != m.seeds.end())
+      r.fail(s, "seeds: " + std::to_string(v) + " is listed twice");
+    m.seeds.push_back(v);
+  }
+
+  const YAML::Node seqs = doc["sequences"];
+  if (!seqs.IsDefined()) throwAt(path, "sequences: missing");
+  if (!seqs.IsSequence() || seqs.size() == 0) r.fail(seqs, "sequences: expected a non-empty list");
+  for (size_t i = 0; i < seqs.size(); ++i) {
+    const YAML::Node e = seqs[i];
+    const std::string where = "sequences[" + std::to_string(i) + "]";
+    if (!e.IsMap()) r.fail(e, where + ": expected a map with label and sequence");
+    r.onlyKeys(e, {"label", "sequence", "root", "set"}, where);
+    SequenceEntry s;
+    s.label = r.label(e, where);
+    for (const auto& other : m.sequences)
+      if (other.label == s.label) r.fail(e["label"], where + ".label: '" + s.label + "' is used twice");
+    if (!e["sequence"].IsDefined()) r.fail(e, where + ": 'sequence' is missing (a KITTI sequence or synth preset)");
+    s.sets.push_back("dataset.sequence=\"" + r.scalar(e["sequence"], where + ".sequence") + "\"");
+    if (e["root"].IsDefined()) {
+      fs::path root = r.scalar(e["root"], where + ".root");
+      if (root.is_relative()) root = r.base / root;
+      s.sets.push_back("dataset.root=\"" + root.lexically_normal().string() + "\"");
+    }
+    for (auto& x : r.sets(e, where)) s.sets.push_back(x);
+    m.sequences.push_back(s);
+  }
+
+  const YAML::Node pipes = doc["pipelines"];
+  if (!pipes.IsDefined()) throwAt(path, "pipelines: missing");
+  if (!pipes.IsSequence() || pipes.size() == 0) r.fail(pipes, "pipelines: expected a non-empty list");
+  for (size_t i = 0; i < pipes.size(); ++i) {
+    const YAML::Node e = pipes[i];
+    const std::string where = "pipelines[" + std::to_string(i) + "]";
+    if (!e.IsMap()) r.fail(e, where + ": expected a map with label and file");
+    r.onlyKeys(e, {"label", "file", "set", "sequences"}, where);
+    PipelineEntry p;
+    p.label = r.label(e, where);
+    for (const auto& other : m.pipelines)
+      if (other.label == p.label) r.fail(e["label"], where + ".label: '" + p.label + "' is used twice");
+    if (!e["file"].IsDefined()) r.fail(e, where + ": 'file' is missing (a pipeline YAML)");
+    p.file = r.file(e["file"], where + ".file");
+    p.sets = r.sets(e, where);
+    if (e["sequences"].IsDefined()) {
+      const YAML::Node only = e["sequences"];
+      if (!only.IsSequence() || only.size() == 0) r.fail(only, where + ".sequences: expected a non-empty list of sequence labels");
+      for (const auto& l : only) {
+        const std::string s = r.scalar(l, where + ".sequences");
+        bool known = false;
+        for (const auto& q : m.sequences) known |= q.label == s;
+        if (!known) r.fail(l, where + ".sequences: no sequence is labelled '" + s + "'");
+        p.sequences.push_back(s);
+      }
+    }
+    m.pipelines.push_back(p);
+  }
+
+  // Every cell's pipeline must load with its overrides and name plugins that exist with valid settings.
+  registry::Registry registry;
+  bool scanned = false;
+  for (size_t i = 0; i < m.pipelines.size(); ++i) {
+    const PipelineEntry& p = m.pipelines[i];
+    for (const auto& s : m.sequences) {
+      if (!p.sequences.empty() && std::find(p.sequences.begin(), p.sequences.end(), s.label) == p.sequences.end())
+        continue;
+      std::vector<std::string> sets = s.sets;
+      sets.insert(sets.end(), p.sets.begin(), p.sets.end());
+      sets.push_back(m.seed_key + "=" + std::to_string(m.seeds.front()));
+      try {
+        pipeline::PipelineSpec spec = pipeline::loadPipeline(p.file, sets);
+        if (!scanned) {
+          for (const auto& extra : spec.plugin_paths) registry.addSearchPath(extra);
+          registry.scan();
+          scanned = true;
+        }
+        pipeline::resolvePlugins(spec, registry);
+      } catch (const Error& e) {
+        r.fail(pipes[i], "pipeline '" + p.label + "' on sequence '" + s.label + "': " + e.what());
+      }
+    }
+  }
+  return m;
+}
+
+std::vector<Cell> makeCells(const Matrix& m, const std::string& out_dir) {
+  (void)out_dir;
+  std::vector<Cell> cells;
+  for (int64_t seed : m.seeds)
+    for (const auto& p : m.pipelines)
+      for (const auto& s : m.sequences) {
+        if (!p.sequences.empty() && std::find(p.sequences.begin(), p.sequences.end(), s.label) == p.sequences.end())
+          continue;
+        Cell c;
+        c.index = static_cast<int>(cells.size());
+        c.pipeline = p.label;
+        c.sequence = s.label;
+        c.seed = seed;
+        c.dir = "runs/" + p.label + "/" + s.label + "/seed" + std::to_string(seed);
+        c.args = {"run", p.file, "--quiet"};
+        for (const auto& x : s.sets) c.args.insert(c.args.end(), {"--set", x});
+        for (const auto& x : p.sets) c.args.insert(c.args.end(), {"--set", x});
+        c.args.insert(c.args.end(), {"--set", m.seed_key + "=" + std::to_string(seed)});
+        cells.push_back(c);
+      }
+  return cells;
+}
+
+bool cellFinished(const std::string& run_dir) {
+  std::ifstream in(fs::path(run_dir) / "summary.json");
+  if (!in) return false;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    // A run stopped by a signal writes its summary too, marked interrupted: not finished.
+    return j.is_object() && j.contains("frames") && j["frames"].is_number() && j.contains("tracked") &&
+           !j.value("interrupted", false);
+  } catch (const nlohmann::json::exception&) {
+    return false;
+  }
+}
+
+}  // namespace beslam::bench
