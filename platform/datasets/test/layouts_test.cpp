@@ -361,11 +361,14 @@ struct ObjectFixture {
     for (int i : {3, 7}) {
       test::writePng(dir / ("image_2/" + name6(i) + ".png"), kW, kH, 3, i);
       test::writeScan(dir / ("velodyne/" + name6(i) + ".bin"), 4);
-      writeText(dir / ("calib/" + name6(i) + ".txt"), kProjections + "R0_rect: " + kR0 + "\nTr_velo_to_cam: " + kTr + "\n");
+      writeText(dir / ("calib/" + name6(i) + ".txt"),
+                kProjections + "R0_rect: " + kR0 + "\nTr_velo_to_cam: " + kTr + "\n");
     }
     writeText(dir / "label_2/000007.txt", "Car 0 0 -1.5 10 20 30 40 1.5 1.6 3.9 1 1.7 20 -1.5\n");
   }
-  DatasetOptions options(const std::string& sequence) const { return test::datasetOptions("kitti_object", dir.str(), sequence); }
+  DatasetOptions options(const std::string& sequence) const {
+    return test::datasetOptions("kitti_object", dir.str(), sequence);
+  }
 };
 
 TEST(KittiObject, OneFrameOrAll) {

@@ -40,7 +40,8 @@ inline double positiveNumber(const std::string& flag, const std::string& text) {
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used != text.size() || !(v > 0)) throw std::invalid_argument(flag + " expects a positive number, not '" + text + "'");
+  if (used != text.size() || !(v > 0))
+    throw std::invalid_argument(flag + " expects a positive number, not '" + text + "'");
   return v;
 }
 
