@@ -173,3 +173,35 @@ TEST_F(TemplateBuild, TheOutOfTreeReplayPluginReadsLabelsThroughTheSdkFormats) {
               std::string::npos) << e.what();
   }
 }
+
+// The built-in plugins a newcomer is most likely to copy (the replay detectors and the pose-replay
+// backend) build out of tree from the installed SDK alone: their own folders, added to a project that
+// knows nothing but find_package(beslam_sdk); no host library exists there to link.
+TEST_F(TemplateBuild, BuiltInReplayPluginsBuildFromTheInstalledSdkAlone) {
+  ASSERT_TRUE(built_);
+  const fs::path project = root_ / "replays";
+  fs::create_directories(project);
+  std::ofstream(project / "CMakeLists.txt")
+      << "cmake_minimum_required(VERSION 3.19)\n"
+      << "project(builtin_replays CXX)\n"
+      << "find_package(beslam_sdk REQUIRED)\n"
+      << "if(TARGET beslam_registry OR TARGET beslam_datasets)\n"
+      << "  message(FATAL_ERROR \"a host library is visible\")\n"
+      << "endif()\n"
+      << "foreach(p detector_replay detector_oracle backend_pose_replay)\n"
+      << "  add_subdirectory(" << BESLAM_SOURCE_DIR << "/plugins/${p} ${p})\n"
+      << "endforeach()\n";
+  ASSERT_EQ(shell("cmake -S " + project.string() + " -B " + (project / "build").string() +
+                      " -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=" + (root_ / "prefix").string() +
+                      " && cmake --build " + (project / "build").string() + " -j2",
+                  root_ / "replays.log"),
+            0)
+      << slurp(root_ / "replays.log");
+  const fs::path plugins = project / "build" / "plugins";
+  const fs::path out = root_ / "replays_listed.txt";
+  ASSERT_EQ(shell(std::string(BESLAM_BINARY_DIR) + "/bin/beslam plugins --json --plugin-path " + plugins.string(), out), 0)
+      << slurp(out);
+  const std::string text = slurp(out);
+  for (const char* id : {"detector_replay", "detector_oracle", "backend_pose_replay"})
+    EXPECT_NE(text.find(plugins.string() + "/" + id + ".so"), std::string::npos) << id << " not built out of tree:\n" << text;
+}
