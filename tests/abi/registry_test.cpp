@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <string>
 
 #include "beslam/common/error.hpp"
@@ -27,6 +28,23 @@ std::string refusal(const std::string& path) {
   return {};
 }
 
+// The message of the beslam::Error that f throws (a failure when it throws none).
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const beslam::Error& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no beslam::Error thrown";
+  return {};
+}
+
+// Loads a library expecting a refusal whose message contains every one of `parts`.
+void expectRefusal(const std::string& path, std::initializer_list<const char*> parts) {
+  const std::string message = refusal(path);
+  for (const char* part : parts) EXPECT_NE(message.find(part), std::string::npos) << message;
+}
+
 beslam_create_info createInfo(const beslam::registry::HostLog& log, const std::vector<beslam_config_value>& config) {
   beslam_create_info info{};
   info.struct_size = sizeof(info);
@@ -45,36 +63,34 @@ beslam_config_value number(const char* key, int32_t type, double v) {
   return c;
 }
 
+// The error creating the detector `plugin` of the SDK fixtures with `config` (a failure when it is created).
+std::string createError(const std::string& plugin, const std::vector<beslam_config_value>& config) {
+  Registry registry;
+  registry.loadLibrary(fixture("sdk_fixtures"));
+  beslam::registry::HostLog log;
+  return errorOf([&] { beslam::registry::DetectorInstance d(registry.find(plugin), createInfo(log, config), log); });
+}
+
 }  // namespace
 
 TEST(Registry, RefusesWrongMajorVersion) {
-  const std::string message = refusal(fixture("wrong_major"));
-  EXPECT_NE(message.find("wrong_major.so"), std::string::npos) << message;
-  EXPECT_NE(message.find("ABI 2.0"), std::string::npos) << message;
-  EXPECT_NE(message.find("major versions must match"), std::string::npos) << message;
+  expectRefusal(fixture("wrong_major"), {"wrong_major.so", "ABI 2.0", "major versions must match"});
 }
 
 TEST(Registry, RefusesShortDescriptor) {
-  const std::string message = refusal(fixture("short_struct"));
-  EXPECT_NE(message.find("short_struct.so"), std::string::npos) << message;
-  EXPECT_NE(message.find("struct_size 16"), std::string::npos) << message;
+  expectRefusal(fixture("short_struct"), {"short_struct.so", "struct_size 16"});
 }
 
 TEST(Registry, RefusesMissingEntryPoint) {
-  const std::string message = refusal(fixture("missing_function"));
-  EXPECT_NE(message.find("missing_function.so"), std::string::npos) << message;
-  EXPECT_NE(message.find("missing symbol beslam_plugin_list"), std::string::npos) << message;
+  expectRefusal(fixture("missing_function"), {"missing_function.so", "missing symbol beslam_plugin_list"});
 }
 
 TEST(Registry, RefusesLibraryThatIsNotAPlugin) {
-  const std::string message = refusal(fixture("not_a_plugin"));
-  EXPECT_NE(message.find("not a BE-SLAM plugin"), std::string::npos) << message;
+  expectRefusal(fixture("not_a_plugin"), {"not a BE-SLAM plugin"});
 }
 
 TEST(Registry, RefusesNullFunctionInTable) {
-  const std::string message = refusal(fixture("null_function"));
-  EXPECT_NE(message.find("null_function.so"), std::string::npos) << message;
-  EXPECT_NE(message.find("function of its table is null"), std::string::npos) << message;
+  expectRefusal(fixture("null_function"), {"null_function.so", "function of its table is null"});
 }
 
 TEST(Registry, RefusesMissingFileAndNonLibrary) {
@@ -90,18 +106,10 @@ TEST(Registry, ScanCollectsProblemsAndKeepsGoodPlugins) {
   registry.scan();
   EXPECT_EQ(registry.problems().size(), 5u);
   EXPECT_NO_THROW(registry.find("fixture_boxes", BESLAM_KIND_DETECTOR));
-  try {
-    registry.find("fixture_boxes", BESLAM_KIND_BACKEND);
-    FAIL();
-  } catch (const beslam::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("is a detector, not a backend"), std::string::npos);
-  }
-  try {
-    registry.find("no_such_plugin", BESLAM_KIND_DETECTOR);
-    FAIL();
-  } catch (const beslam::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("known: fixture_throwing, fixture_boxes"), std::string::npos) << e.what();
-  }
+  EXPECT_NE(errorOf([&] { registry.find("fixture_boxes", BESLAM_KIND_BACKEND); }).find("is a detector, not a backend"),
+            std::string::npos);
+  const std::string unknown = errorOf([&] { registry.find("no_such_plugin", BESLAM_KIND_DETECTOR); });
+  EXPECT_NE(unknown.find("known: fixture_throwing, fixture_boxes"), std::string::npos) << unknown;
 }
 
 TEST(Registry, ListsSchemaOfSdkPlugin) {
@@ -117,32 +125,15 @@ TEST(Registry, ListsSchemaOfSdkPlugin) {
 }
 
 TEST(Registry, ExceptionInCreateBecomesAnErrorWithItsMessage) {
-  Registry registry;
-  registry.loadLibrary(fixture("sdk_fixtures"));
-  beslam::registry::HostLog log;
-  const std::vector<beslam_config_value> none;
-  try {
-    beslam::registry::DetectorInstance d(registry.find("fixture_throwing"), createInfo(log, none), log);
-    FAIL() << "create should fail";
-  } catch (const beslam::Error& e) {
-    const std::string m = e.what();
-    EXPECT_NE(m.find("fixture_throwing"), std::string::npos) << m;
-    EXPECT_NE(m.find("create failed (runtime error): constructor exploded on purpose"), std::string::npos) << m;
-  }
+  const std::string m = createError("fixture_throwing", {});
+  EXPECT_NE(m.find("fixture_throwing"), std::string::npos) << m;
+  EXPECT_NE(m.find("create failed (runtime error): constructor exploded on purpose"), std::string::npos) << m;
 }
 
 TEST(Registry, MissingConfigValueIsInvalidConfig) {
-  Registry registry;
-  registry.loadLibrary(fixture("sdk_fixtures"));
-  beslam::registry::HostLog log;
-  const std::vector<beslam_config_value> partial = {number("emit_nan", BESLAM_CONFIG_BOOL, 0)};
-  try {
-    beslam::registry::DetectorInstance d(registry.find("fixture_boxes"), createInfo(log, partial), log);
-    FAIL();
-  } catch (const beslam::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("invalid configuration"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("'depth' is missing"), std::string::npos) << e.what();
-  }
+  const std::string m = createError("fixture_boxes", {number("emit_nan", BESLAM_CONFIG_BOOL, 0)});
+  EXPECT_NE(m.find("invalid configuration"), std::string::npos) << m;
+  EXPECT_NE(m.find("'depth' is missing"), std::string::npos) << m;
 }
 
 TEST(Registry, DetectAndClassifyRoundTrip) {
@@ -184,14 +175,8 @@ TEST(Registry, DetectAndClassifyRoundTrip) {
   // An exception inside a call becomes a status and a message, never a crash.
   beslam_frame empty{};
   empty.struct_size = sizeof(empty);
-  try {
-    detector.detect(empty);
-    FAIL();
-  } catch (const beslam::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("detect failed (invalid argument): frame without a grey image"),
-              std::string::npos)
-        << e.what();
-  }
+  const std::string m = errorOf([&] { detector.detect(empty); });
+  EXPECT_NE(m.find("detect failed (invalid argument): frame without a grey image"), std::string::npos) << m;
 }
 
 TEST(Registry, FindsBuiltInPluginsThroughEnvironment) {

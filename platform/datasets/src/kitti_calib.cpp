@@ -129,17 +129,29 @@ std::map<std::string, CalibEntry> readCalibEntries(const std::string& path, cons
   return entries;
 }
 
-KittiCalib readOdometryCalib(const std::string& path) {
-  const auto entries = readCalibEntries(path, {"P0", "P1", "P2", "P3", "Tr"});
+namespace {
+
+// A calibration of `path` with the projections P0..P3 from the entries prefix + "0" .. prefix + "3" (each
+// checked); all four must be there when `required`, else those present are taken.
+KittiCalib withProjections(const std::map<std::string, CalibEntry>& entries, const std::string& path,
+                           const std::string& prefix, bool required) {
   KittiCalib calib;
   calib.path = path;
   for (int i = 0; i < 4; ++i) {
-    const std::string name = "P" + std::to_string(i);
-    if (const CalibEntry* e = find(entries, path, {name}, 12)) {
-      calib.P[static_cast<std::size_t>(i)] = toMatrix34(*e);
-      checkProjection(toMatrix34(*e), path, name, e->line);
-    }
+    const std::string name = prefix + std::to_string(i);
+    const CalibEntry* e = required ? &require(entries, path, {name}, 12) : find(entries, path, {name}, 12);
+    if (!e) continue;
+    calib.P[static_cast<std::size_t>(i)] = toMatrix34(*e);
+    checkProjection(toMatrix34(*e), path, name, e->line);
   }
+  return calib;
+}
+
+}  // namespace
+
+KittiCalib readOdometryCalib(const std::string& path) {
+  const auto entries = readCalibEntries(path, {"P0", "P1", "P2", "P3", "Tr"});
+  KittiCalib calib = withProjections(entries, path, "P", false);
   if (!calib.P[0]) throwAt(path, "missing calibration entry P0");
   if (const CalibEntry* e = find(entries, path, {"Tr", "Tr_velo_to_cam"}, 12))
     calib.T_cam0_velo = toIsometry(*e, path, "Tr");
@@ -148,14 +160,7 @@ KittiCalib readOdometryCalib(const std::string& path) {
 
 KittiCalib readObjectCalib(const std::string& path) {
   const auto entries = readCalibEntries(path);
-  KittiCalib calib;
-  calib.path = path;
-  for (int i = 0; i < 4; ++i) {
-    const std::string name = "P" + std::to_string(i);
-    const CalibEntry& e = require(entries, path, {name}, 12);
-    calib.P[static_cast<std::size_t>(i)] = toMatrix34(e);
-    checkProjection(toMatrix34(e), path, name, e.line);
-  }
+  KittiCalib calib = withProjections(entries, path, "P", true);
   const CalibEntry& r0 = require(entries, path, {"R0_rect", "R_rect"}, 9);
   calib.R0_rect = toMatrix3(r0);
   checkRotation(calib.R0_rect, path, "R0_rect", r0.line);
@@ -168,15 +173,7 @@ KittiCalib readObjectCalib(const std::string& path) {
 
 KittiCalib readRawCalib(const std::string& cam_to_cam_path, const std::string& velo_to_cam_path) {
   const auto cam = readCalibEntries(cam_to_cam_path, {}, {"calib_time"});
-  KittiCalib calib;
-  calib.path = cam_to_cam_path;
-  for (int i = 0; i < 4; ++i) {
-    const std::string name = "P_rect_0" + std::to_string(i);
-    if (const CalibEntry* e = find(cam, cam_to_cam_path, {name}, 12)) {
-      calib.P[static_cast<std::size_t>(i)] = toMatrix34(*e);
-      checkProjection(toMatrix34(*e), cam_to_cam_path, name, e->line);
-    }
-  }
+  KittiCalib calib = withProjections(cam, cam_to_cam_path, "P_rect_0", false);
   const CalibEntry& r0 = require(cam, cam_to_cam_path, {"R_rect_00"}, 9);
   calib.R0_rect = toMatrix3(r0);
   checkRotation(calib.R0_rect, cam_to_cam_path, "R_rect_00", r0.line);

@@ -21,6 +21,8 @@ const std::string kP3 = "705 0 25 -339.5 0 705 15 2.2 0 0 1 0.0027";
 const std::string kR0 =
     "0.9999239 0.00983776 -0.007445048 -0.009869795 0.9999421 -0.004278459 0.007402527 0.004351614 0.9999631";
 const std::string kTr = "0 -1 0 0.1 0 0 -1 -0.08 1 0 0 -0.27";
+// The four projection rows as the odometry, tracking and object calibration files write them.
+const std::string kProjections = "P0: " + kP0 + "\nP1: " + kP1 + "\nP2: " + kP2 + "\nP3: " + kP3 + "\n";
 
 std::string name6(int i) {
   char buf[16];
@@ -43,18 +45,11 @@ struct OdometryFixture {
       times += std::to_string(0.1 * i) + "\n";
       poses += poseRow(1.0 * i);
     }
-    writeText(seq + "/calib.txt",
-              "P0: " + kP0 + "\nP1: " + kP1 + "\nP2: " + kP2 + "\nP3: " + kP3 + "\nTr: " + kTr + "\n");
+    writeText(seq + "/calib.txt", kProjections + "Tr: " + kTr + "\n");
     writeText(seq + "/times.txt", times);
     writeText(dir / "poses/07.txt", poses);
   }
-  DatasetOptions options() const {
-    DatasetOptions o;
-    o.type = "kitti_odometry";
-    o.root = dir.str();
-    o.sequence = "07";
-    return o;
-  }
+  DatasetOptions options() const { return test::datasetOptions("kitti_odometry", dir.str(), "07"); }
 };
 
 TEST(KittiOdometry, OpensAndLoads) {
@@ -229,18 +224,12 @@ struct TrackingFixture {
       test::writeScan(dir / ("velodyne/0003/" + name6(i) + ".bin"), 5);
       poses += poseRow(0.5 * i);
     }
-    writeText(dir / "calib/0003.txt", "P0: " + kP0 + "\nP1: " + kP1 + "\nP2: " + kP2 + "\nP3: " + kP3 + "\nR_rect " +
-                                          kR0 + "\nTr_velo_cam " + kTr + "\nTr_imu_velo " + kTr + "\n");
+    writeText(dir / "calib/0003.txt",
+              kProjections + "R_rect " + kR0 + "\nTr_velo_cam " + kTr + "\nTr_imu_velo " + kTr + "\n");
     writeText(dir / "label_02/0003.txt", "0 0 Car 0 0 -1.5 10 20 30 40 1.5 1.6 3.9 1 1.7 20 -1.5\n");
     writeText(dir / "ego/0003.txt", poses);
   }
-  DatasetOptions options() const {
-    DatasetOptions o;
-    o.type = "kitti_tracking";
-    o.root = dir.str();
-    o.sequence = "0003";
-    return o;
-  }
+  DatasetOptions options() const { return test::datasetOptions("kitti_tracking", dir.str(), "0003"); }
 };
 
 TEST(KittiTracking, OpensAndLoads) {
@@ -288,8 +277,7 @@ TEST(KittiTracking, LayoutErrors) {
   EXPECT_BESLAM_ERROR(openDataset(bad), fx.dir / "calib/0004.txt", "missing calibration file");
   writeText(fx.dir / "calib/0004.txt", "P0: " + kP0 + "\n");
   EXPECT_BESLAM_ERROR(openDataset(bad), fx.dir / "calib/0004.txt", "missing calibration entry P1");
-  writeText(fx.dir / "calib/0004.txt",
-            "P0: " + kP0 + "\nP1: " + kP1 + "\nP2: " + kP2 + "\nP3: " + kP3 + "\nR_rect " + kR0 + "\n");
+  writeText(fx.dir / "calib/0004.txt", kProjections + "R_rect " + kR0 + "\n");
   EXPECT_BESLAM_ERROR(openDataset(bad), "image_02/0004", "missing image folder");
 
   std::filesystem::remove(fx.dir / "label_02/0003.txt");
@@ -325,13 +313,7 @@ struct RawFixture {
     writeText(date + "/calib_velo_to_cam.txt",
               "calib_time: 15-Mar-2012 11:37:16\nR: 0 -1 0 0 0 -1 1 0 0\nT: 0.1 -0.08 -0.27\n");
   }
-  DatasetOptions options() const {
-    DatasetOptions o;
-    o.type = "kitti_raw";
-    o.root = dir.str();
-    o.sequence = "2011_09_26_drive_0001_sync";
-    return o;
-  }
+  DatasetOptions options() const { return test::datasetOptions("kitti_raw", dir.str(), "2011_09_26_drive_0001_sync"); }
 };
 
 TEST(KittiRaw, OpensAndLoads) {
@@ -379,17 +361,13 @@ struct ObjectFixture {
     for (int i : {3, 7}) {
       test::writePng(dir / ("image_2/" + name6(i) + ".png"), kW, kH, 3, i);
       test::writeScan(dir / ("velodyne/" + name6(i) + ".bin"), 4);
-      writeText(dir / ("calib/" + name6(i) + ".txt"), "P0: " + kP0 + "\nP1: " + kP1 + "\nP2: " + kP2 + "\nP3: " + kP3 +
-                                                          "\nR0_rect: " + kR0 + "\nTr_velo_to_cam: " + kTr + "\n");
+      writeText(dir / ("calib/" + name6(i) + ".txt"),
+                kProjections + "R0_rect: " + kR0 + "\nTr_velo_to_cam: " + kTr + "\n");
     }
     writeText(dir / "label_2/000007.txt", "Car 0 0 -1.5 10 20 30 40 1.5 1.6 3.9 1 1.7 20 -1.5\n");
   }
   DatasetOptions options(const std::string& sequence) const {
-    DatasetOptions o;
-    o.type = "kitti_object";
-    o.root = dir.str();
-    o.sequence = sequence;
-    return o;
+    return test::datasetOptions("kitti_object", dir.str(), sequence);
   }
 };
 

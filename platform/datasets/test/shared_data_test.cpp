@@ -19,10 +19,7 @@ namespace {
 
 TEST(SharedData, KittiOdometry06BareCalib) {
   REQUIRE_SHARED(root, "kitti/odometry/sequences/06");
-  DatasetOptions o;
-  o.type = "kitti_odometry";
-  o.root = test::sharedData("kitti/odometry");
-  o.sequence = "06";
+  DatasetOptions o = test::datasetOptions("kitti_odometry", test::sharedData("kitti/odometry"), "06");
   const auto ds = openDataset(o);
   EXPECT_EQ(ds->size(), 51u);
   EXPECT_EQ(ds->describe(), "KITTI odometry 06 (51 frames, image_0, ground truth)");
@@ -47,10 +44,7 @@ TEST(SharedData, KittiOdometry06BareCalib) {
 
 TEST(SharedData, KittiOdometry00NamedCalib) {
   REQUIRE_SHARED(root, "kitti/odometry/sequences/00");
-  DatasetOptions o;
-  o.type = "kitti_odometry";
-  o.root = test::sharedData("kitti/odometry");
-  o.sequence = "00";
+  DatasetOptions o = test::datasetOptions("kitti_odometry", test::sharedData("kitti/odometry"), "00");
   o.first = 100;
   o.step = 10;
   const auto ds = openDataset(o);
@@ -83,10 +77,7 @@ bool insideBox(const ObjectLabel& box, const Eigen::Vector3d& p_rect0) {
 
 TEST(SharedData, KittiObject000008LidarLandsInCarBoxes) {
   REQUIRE_SHARED(root, "kitti/object/training/calib/000008.txt");
-  DatasetOptions o;
-  o.type = "kitti_object";
-  o.root = test::sharedData("kitti/object/training");
-  o.sequence = "000008";
+  DatasetOptions o = test::datasetOptions("kitti_object", test::sharedData("kitti/object/training"), "000008");
   o.load_lidar = true;
   o.load_color = true;
   const auto ds = openDataset(o);
@@ -166,10 +157,7 @@ TEST(SharedData, KittiTrackingLabelsAndCalib) {
     }
   }
   // The excerpt has no images, so the tracking layout names what is missing.
-  DatasetOptions o;
-  o.type = "kitti_tracking";
-  o.root = training;
-  o.sequence = "0000";
+  DatasetOptions o = test::datasetOptions("kitti_tracking", training, "0000");
   EXPECT_BESLAM_ERROR(openDataset(o), "image_02/0000", "missing image folder");
 
   // With ego poses it opens image-less: one frame a pose row, camera 2 from the calibration, no image.

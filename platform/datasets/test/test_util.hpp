@@ -12,6 +12,7 @@
 #include <string>
 
 #include "beslam/common/error.hpp"
+#include "beslam/datasets/dataset.hpp"
 #include "beslam/datasets/velodyne.hpp"
 
 namespace beslam::datasets::test {
@@ -91,6 +92,15 @@ inline void truncateFile(const std::string& path, std::size_t keep) {
 inline std::string sharedData(const std::string& rel) {
   const fs::path path = fs::path(BESLAM_SHARED_DATA) / rel;
   return fs::exists(path) ? path.string() : std::string();
+}
+
+// The options that open `sequence` of the layout `type` under root.
+inline DatasetOptions datasetOptions(const std::string& type, const std::string& root, const std::string& sequence) {
+  DatasetOptions o;
+  o.type = type;
+  o.root = root;
+  o.sequence = sequence;
+  return o;
 }
 
 }  // namespace beslam::datasets::test

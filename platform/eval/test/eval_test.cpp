@@ -44,6 +44,19 @@ void expectRelative(double actual, double expected, const char* what) {
   EXPECT_NEAR(actual, expected, 1e-6 * std::abs(expected)) << what;
 }
 
+// evo's four RMSE figures: APE and RPE, translation and rotation.
+void expectEvoRmse(const EvalResult& r, double ape_trans, double ape_rot, double rpe_trans, double rpe_rot) {
+  expectRelative(r.ape.trans.rmse, ape_trans, "APE trans RMSE");
+  expectRelative(r.ape.rot.rmse, ape_rot, "APE rot RMSE");
+  expectRelative(r.rpe.trans.rmse, rpe_trans, "RPE trans RMSE");
+  expectRelative(r.rpe.rot.rmse, rpe_rot, "RPE rot RMSE");
+}
+
+// Declares `var`, the shared evo data folder, or skips the test where it is absent.
+#define REQUIRE_EVO_DATA(var)                           \
+  const std::string var = beslam::eval::test::evoDataDir(); \
+  if (var.empty()) GTEST_SKIP() << "shared evo data (" << BESLAM_SHARED_DATA << "/evo) not found"
+
 const Eigen::Matrix3d kR_ref_est =
     (Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized())).toRotationMatrix();
 const Eigen::Vector3d kt_ref_est(12.0, -3.5, 0.25);
@@ -53,24 +66,19 @@ const Eigen::Vector3d kt_ref_est(12.0, -3.5, 0.25);
 // --- evo reference figures (/work/shared/data/README.md) ---------------------------------------------
 
 TEST(EvoReference, Kitti00OrbSim3) {
-  const std::string dir = beslam::eval::test::evoDataDir();
-  if (dir.empty()) GTEST_SKIP() << "shared evo data (" << BESLAM_SHARED_DATA << "/evo) not found";
+  REQUIRE_EVO_DATA(dir);
   EvalOptions options;
   options.alignment = AlignmentType::kSim3;
   const EvalResult r = evaluateFiles(dir + "/KITTI_00_gt.txt", dir + "/KITTI_00_ORB.txt", options);
   EXPECT_EQ(r.pairs, 4541u);
   EXPECT_EQ(r.format, "kitti");
-  expectRelative(r.ape.trans.rmse, 0.937709074, "APE trans RMSE");
-  expectRelative(r.ape.rot.rmse, 0.756300514, "APE rot RMSE");
-  expectRelative(r.rpe.trans.rmse, 0.027822453, "RPE trans RMSE");
-  expectRelative(r.rpe.rot.rmse, 0.114973521, "RPE rot RMSE");
+  expectEvoRmse(r, 0.937709074, 0.756300514, 0.027822453, 0.114973521);
   EXPECT_EQ(r.ape.trans.count, 4541u);
   EXPECT_EQ(r.rpe.trans.count, 4540u);
 }
 
 TEST(EvoReference, Freiburg1XyzOrbKeyframesSim3) {
-  const std::string dir = beslam::eval::test::evoDataDir();
-  if (dir.empty()) GTEST_SKIP() << "shared evo data (" << BESLAM_SHARED_DATA << "/evo) not found";
+  REQUIRE_EVO_DATA(dir);
   EvalOptions options;
   options.alignment = AlignmentType::kSim3;
   options.max_diff = 0.01;
@@ -78,17 +86,13 @@ TEST(EvoReference, Freiburg1XyzOrbKeyframesSim3) {
       evaluateFiles(dir + "/freiburg1_xyz-groundtruth.txt", dir + "/freiburg1_xyz-ORB_kf_mono.txt", options);
   EXPECT_EQ(r.pairs, 32u);
   EXPECT_EQ(r.format, "tum");
-  expectRelative(r.ape.trans.rmse, 0.009754582, "APE trans RMSE");
-  expectRelative(r.ape.rot.rmse, 2.371823868, "APE rot RMSE");
-  expectRelative(r.rpe.trans.rmse, 0.013834918, "RPE trans RMSE");
-  expectRelative(r.rpe.rot.rmse, 0.884848960, "RPE rot RMSE");
+  expectEvoRmse(r, 0.009754582, 2.371823868, 0.013834918, 0.884848960);
 }
 
 TEST(EvoReference, RotationAngleMustComeFromTheQuaternionNotFromTheTrace) {
   // KITTI rotations are printed with 7-9 digits, so they are slightly non-orthonormal; evo's angle
   // (through scipy's quaternion) differs from acos((trace - 1) / 2) by percents for small angles.
-  const std::string dir = beslam::eval::test::evoDataDir();
-  if (dir.empty()) GTEST_SKIP() << "shared evo data (" << BESLAM_SHARED_DATA << "/evo) not found";
+  REQUIRE_EVO_DATA(dir);
   const Trajectory ref = beslam::trajectory::readKitti(dir + "/KITTI_00_gt.txt");
   const Trajectory est = beslam::trajectory::readKitti(dir + "/KITTI_00_ORB.txt");
   const Trajectory aligned = applyAlignment(est, computeAlignment(ref, est, AlignmentType::kSim3));

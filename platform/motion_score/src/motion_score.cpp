@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/datasets/labels.hpp"
@@ -120,39 +121,21 @@ constexpr const char* kUsage =
 int runCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   std::string objects, labels, motion, run, json_path;
   Options options;
-  auto number = [&](size_t& i) {
-    if (i + 1 >= args.size()) throw std::invalid_argument(args[i] + " needs a value");
-    const std::string& text = args[++i];
-    size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(text, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != text.size() || !(v > 0)) throw std::invalid_argument(args[i - 1] + " expects a positive number, not '" + text + "'");
-    return v;
-  };
   try {
-    for (size_t i = 0; i < args.size(); ++i) {
-      const std::string& a = args[i];
-      auto text = [&]() -> std::string {
-        if (i + 1 >= args.size()) throw std::invalid_argument(a + " needs a value");
-        return args[++i];
-      };
-      if (a == "--help" || a == "-h") {
-        out << kUsage;
-        return 0;
-      } else if (a == "--objects") objects = text();
+    const bool help = cli::forEachFlag(args, [&] { out << kUsage; }, [&](const std::string& a, size_t& i) {
+      auto text = [&] { return cli::nextValue(args, i); };
+      auto number = [&] { return cli::nextPositiveNumber(args, i); };
+      if (a == "--objects") objects = text();
       else if (a == "--labels") labels = text();
       else if (a == "--motion") motion = text();
       else if (a == "--run") run = text();
       else if (a == "--json") json_path = text();
-      else if (a == "--max-range") options.max_range = number(i);
-      else if (a == "--static-range") options.static_range = number(i);
-      else if (a == "--match") options.match_distance = number(i);
+      else if (a == "--max-range") options.max_range = number();
+      else if (a == "--static-range") options.static_range = number();
+      else if (a == "--match") options.match_distance = number();
       else throw std::invalid_argument("unknown argument '" + a + "'");
-    }
+    });
+    if (help) return 0;
     if (run.empty() && (objects.empty() || labels.empty() || motion.empty()))
       throw std::invalid_argument("give --run DIR, or --objects, --labels and --motion");
   } catch (const std::invalid_argument& e) {

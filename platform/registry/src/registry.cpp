@@ -76,34 +76,24 @@ uint32_t minTableSize(int32_t kind) {
   }
 }
 
+// True when every named function pointer of the kind's table `Table` is set.
+template <class Table, class... Fns>
+bool allSet(const void* table, Fns Table::*... fns) {
+  const auto* t = static_cast<const Table*>(table);
+  return ((t->*fns != nullptr) && ...);
+}
+
 // Every function pointer of a kind's table must be set (ABI 1.0 has no optional calls).
 bool tableComplete(int32_t kind, const void* table) {
-  auto all = [](std::initializer_list<const void*> fns) {
-    return std::all_of(fns.begin(), fns.end(), [](const void* f) { return f != nullptr; });
-  };
   switch (kind) {
-    case BESLAM_KIND_DETECTOR: {
-      auto t = static_cast<const beslam_detector_v1*>(table);
-      return all({reinterpret_cast<const void*>(t->detect)});
-    }
-    case BESLAM_KIND_MOTION_CHECKER: {
-      auto t = static_cast<const beslam_motion_checker_v1*>(table);
-      return all({reinterpret_cast<const void*>(t->classify)});
-    }
-    case BESLAM_KIND_MASK_GENERATOR: {
-      auto t = static_cast<const beslam_mask_generator_v1*>(table);
-      return all({reinterpret_cast<const void*>(t->generate)});
-    }
-    case BESLAM_KIND_RECONSTRUCTOR: {
-      auto t = static_cast<const beslam_reconstructor_v1*>(table);
-      return all({reinterpret_cast<const void*>(t->reconstruct)});
-    }
-    case BESLAM_KIND_BACKEND: {
-      auto t = static_cast<const beslam_backend_v1*>(table);
-      return all({reinterpret_cast<const void*>(t->predict_pose), reinterpret_cast<const void*>(t->track),
-                  reinterpret_cast<const void*>(t->add_landmarks), reinterpret_cast<const void*>(t->finish),
-                  reinterpret_cast<const void*>(t->trajectory), reinterpret_cast<const void*>(t->map_points)});
-    }
+    case BESLAM_KIND_DETECTOR: return allSet<beslam_detector_v1>(table, &beslam_detector_v1::detect);
+    case BESLAM_KIND_MOTION_CHECKER: return allSet<beslam_motion_checker_v1>(table, &beslam_motion_checker_v1::classify);
+    case BESLAM_KIND_MASK_GENERATOR: return allSet<beslam_mask_generator_v1>(table, &beslam_mask_generator_v1::generate);
+    case BESLAM_KIND_RECONSTRUCTOR: return allSet<beslam_reconstructor_v1>(table, &beslam_reconstructor_v1::reconstruct);
+    case BESLAM_KIND_BACKEND:
+      return allSet<beslam_backend_v1>(table, &beslam_backend_v1::predict_pose, &beslam_backend_v1::track,
+                                       &beslam_backend_v1::add_landmarks, &beslam_backend_v1::finish,
+                                       &beslam_backend_v1::trajectory, &beslam_backend_v1::map_points);
     default: return false;
   }
 }

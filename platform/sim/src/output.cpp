@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/common/yaml_set.hpp"
@@ -344,49 +345,27 @@ int runSynthCommand(const std::vector<std::string>& args, std::ostream& out, std
   std::string configPath, outDir, previewDir;
   int previewFrame = 0;
   std::vector<std::string> sets;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    auto value = [&](const char* flag) -> const std::string* {
-      if (i + 1 >= args.size()) {
-        err << "beslam synth: " << flag << " needs a value\n";
-        return nullptr;
-      }
-      return &args[++i];
-    };
-    if (a == "--help" || a == "-h") {
-      printUsage(out);
-      return 0;
-    } else if (a == "--config") {
-      const auto* v = value("--config");
-      if (!v) return 2;
-      configPath = *v;
-    } else if (a == "--out") {
-      const auto* v = value("--out");
-      if (!v) return 2;
-      outDir = *v;
-    } else if (a == "--set") {
-      const auto* v = value("--set");
-      if (!v) return 2;
-      sets.push_back(*v);
-    } else if (a == "--preview") {
-      const auto* v = value("--preview");
-      if (!v) return 2;
-      previewDir = *v;
-    } else if (a == "--frame") {
-      const auto* v = value("--frame");
-      if (!v) return 2;
-      try {
-        std::size_t pos = 0;
-        previewFrame = std::stoi(*v, &pos);
-        if (pos != v->size()) throw std::invalid_argument("");
-      } catch (...) {
-        err << "beslam synth: --frame expects an integer, got '" << *v << "'\n";
-        return 2;
-      }
-    } else {
-      err << "beslam synth: unknown argument '" << a << "' (see --help)\n";
-      return 2;
-    }
+  try {
+    const bool help = cli::forEachFlag(args, [&] { printUsage(out); }, [&](const std::string& a, std::size_t& i) {
+      if (a == "--config") configPath = cli::nextValue(args, i);
+      else if (a == "--out") outDir = cli::nextValue(args, i);
+      else if (a == "--set") sets.push_back(cli::nextValue(args, i));
+      else if (a == "--preview") previewDir = cli::nextValue(args, i);
+      else if (a == "--frame") {
+        const std::string v = cli::nextValue(args, i);
+        try {
+          std::size_t pos = 0;
+          previewFrame = std::stoi(v, &pos);
+          if (pos != v.size()) throw std::invalid_argument("");
+        } catch (...) {
+          throw std::invalid_argument("--frame expects an integer, got '" + v + "'");
+        }
+      } else throw std::invalid_argument("unknown argument '" + a + "' (see --help)");
+    });
+    if (help) return 0;
+  } catch (const std::invalid_argument& e) {
+    err << "beslam synth: " << e.what() << "\n";
+    return 2;
   }
   if (configPath.empty() || (outDir.empty() && previewDir.empty())) {
     err << "beslam synth: --config and --out (or --preview) are required\n";

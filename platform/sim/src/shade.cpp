@@ -16,6 +16,21 @@ inline float ffloor(float x) {
 }
 inline float fract(float x) { return x - ffloor(x); }
 
+// Value noise at tile pixel (x, y) with `period` lattice cells across the tile: the lattice values
+// L(a, b) (L wraps a and b itself) interpolated with a smoothstep between the four corners.
+template <class Lattice>
+float latticeNoise(int x, int y, int period, const Lattice& L) {
+  const float cell = static_cast<float>(kTile) / period;
+  const float fx = x / cell, fy = y / cell;
+  const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
+  float tx = fx - x0, ty = fy - y0;
+  tx = tx * tx * (3 - 2 * tx);
+  ty = ty * ty * (3 - 2 * ty);
+  const float top = L(x0, y0) + tx * (L(x0 + 1, y0) - L(x0, y0));
+  const float bot = L(x0, y0 + 1) + tx * (L(x0 + 1, y0 + 1) - L(x0, y0 + 1));
+  return top + ty * (bot - top);
+}
+
 struct Tile {
   float v[kTile * kTile];
   Tile() {
@@ -25,19 +40,9 @@ struct Tile {
     for (int period = 4; period <= 128; period *= 2) {
       std::vector<float> lattice(static_cast<std::size_t>(period) * period);
       for (int i = 0; i < period * period; ++i) lattice[i] = hashf(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(period), 12345u);
-      const float cell = static_cast<float>(kTile) / period;
+      auto L = [&](int a, int b) { return lattice[(b % period) * period + (a % period)]; };
       for (int y = 0; y < kTile; ++y)
-        for (int x = 0; x < kTile; ++x) {
-          const float fx = x / cell, fy = y / cell;
-          const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
-          float tx = fx - x0, ty = fy - y0;
-          tx = tx * tx * (3 - 2 * tx);
-          ty = ty * ty * (3 - 2 * ty);
-          auto L = [&](int a, int b) { return lattice[(b % period) * period + (a % period)]; };
-          const float top = L(x0, y0) + tx * (L(x0 + 1, y0) - L(x0, y0));
-          const float bot = L(x0, y0 + 1) + tx * (L(x0 + 1, y0 + 1) - L(x0, y0 + 1));
-          acc[y * kTile + x] += amp * (top + ty * (bot - top));
-        }
+        for (int x = 0; x < kTile; ++x) acc[y * kTile + x] += amp * latticeNoise(x, y, period, L);
       total += amp;
       amp *= 0.62f;
     }
@@ -59,19 +64,9 @@ struct CellTile {
   float v[kTile * kTile];
   CellTile() {
     const int period = 64;
-    const float cell = static_cast<float>(kTile) / period;
+    auto L = [&](int a, int b) { return hashf(static_cast<std::uint32_t>(a % period), static_cast<std::uint32_t>(b % period), 999u); };
     for (int y = 0; y < kTile; ++y)
-      for (int x = 0; x < kTile; ++x) {
-        const float fx = x / cell, fy = y / cell;
-        const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
-        float tx = fx - x0, ty = fy - y0;
-        tx = tx * tx * (3 - 2 * tx);
-        ty = ty * ty * (3 - 2 * ty);
-        auto L = [&](int a, int b) { return hashf(static_cast<std::uint32_t>(a % period), static_cast<std::uint32_t>(b % period), 999u); };
-        const float top = L(x0, y0) + tx * (L(x0 + 1, y0) - L(x0, y0));
-        const float bot = L(x0, y0 + 1) + tx * (L(x0 + 1, y0 + 1) - L(x0, y0 + 1));
-        v[y * kTile + x] = top + ty * (bot - top);
-      }
+      for (int x = 0; x < kTile; ++x) v[y * kTile + x] = latticeNoise(x, y, period, L);
   }
 };
 

@@ -117,6 +117,25 @@ static void addTriPlanar(std::vector<Tri>& out, const Vec3f& a, const Vec3f& b, 
   out.push_back(t);
 }
 
+// A tree crown round c: an octahedron subdivided once, its vertices pushed out to a radius jittered
+// (by tseed) about cr, stretched sx horizontally and sz vertically.
+static void addCrown(std::vector<Tri>& out, const Vec3f& c, float cr, float sx, float sz, std::uint32_t tseed) {
+  const Vec3f ax[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  const int faces[8][3] = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  auto vert = [&](Vec3f dir) {
+    dir.normalize();
+    const std::uint32_t key = static_cast<std::uint32_t>(std::lround(dir.x() * 1000) * 73856093 ^ std::lround(dir.y() * 1000) * 19349663 ^ std::lround(dir.z() * 1000) * 83492791);
+    const float rr = cr * (0.8f + 0.4f * hashf(tseed, key, 7));
+    return Vec3f(c.x() + dir.x() * rr * sx, c.y() + dir.y() * rr * sx, c.z() + dir.z() * rr * sz);
+  };
+  for (const auto& f : faces) {
+    const Vec3f A = ax[f[0]], Bv = ax[f[1]], C = ax[f[2]];
+    const Vec3f ab = (A + Bv) * 0.5f, bc = (Bv + C) * 0.5f, ca = (C + A) * 0.5f;
+    const Vec3f sub[4][3] = {{A, ab, ca}, {ab, Bv, bc}, {ca, bc, C}, {ab, bc, ca}};
+    for (const auto& s3 : sub) addTriPlanar(out, vert(s3[0]), vert(s3[1]), vert(s3[2]), M_LEAVES, static_cast<int>(tseed & 0xffff));
+  }
+}
+
 // Extrudes a convex side profile (x, z) across y in [-hw, hw]; caps map (x, z), the rim maps (along, y).
 static void addPrism(std::vector<Tri>& out, const std::vector<std::pair<float, float>>& prof, float hw,
                      std::uint16_t cap_material, std::uint16_t rim_material, int param,
@@ -289,45 +308,33 @@ void World::buildUrban(Rng& rng) {
     }
   };
 
+  // One street and its segment from `start` along the unit axis `dir` (length in metres, between two
+  // intersections); `ego` where the ego's loop runs along it.
+  auto addStreet = [&](double length, const Vec2d& start, const Vec2d& dir, bool ego) {
+    Street st;
+    st.length = static_cast<float>(length);
+    st.lanes = wc.lanes_per_direction;
+    st.lane_w = static_cast<float>(wc.lane_width);
+    st.parking_w = wc.parking_lanes ? 2.2f : 0.f;
+    st.crosswalk_start = st.crosswalk_end = true;
+    st.seed = static_cast<std::uint32_t>(rng.next());
+    streets.push_back(st);
+    Segment seg;
+    seg.street = static_cast<int>(streets.size()) - 1;
+    seg.start = start;
+    seg.dir = dir;
+    seg.length = st.length;
+    seg.ego = ego;
+    addStreetTiles(seg.street, seg.start, seg.dir, seg.length);
+    segments_.push_back(seg);
+  };
   // Streets: horizontal (along x) then vertical (along y), one segment between two intersections.
   for (int j = 0; j <= wc.blocks_y; ++j)
-    for (int i = 0; i < wc.blocks_x; ++i) {
-      Street st;
-      st.length = static_cast<float>(X_[i + 1] - X_[i] - 2 * hw);
-      st.lanes = wc.lanes_per_direction;
-      st.lane_w = static_cast<float>(wc.lane_width);
-      st.parking_w = wc.parking_lanes ? 2.2f : 0.f;
-      st.crosswalk_start = st.crosswalk_end = true;
-      st.seed = static_cast<std::uint32_t>(rng.next());
-      streets.push_back(st);
-      Segment seg;
-      seg.street = static_cast<int>(streets.size()) - 1;
-      seg.start = Vec2d(X_[i] + hw, Y_[j]);
-      seg.dir = Vec2d(1, 0);
-      seg.length = st.length;
-      seg.ego = i == ex && (j == ey || j == ey + 1);
-      addStreetTiles(seg.street, seg.start, seg.dir, seg.length);
-      segments_.push_back(seg);
-    }
+    for (int i = 0; i < wc.blocks_x; ++i)
+      addStreet(X_[i + 1] - X_[i] - 2 * hw, Vec2d(X_[i] + hw, Y_[j]), Vec2d(1, 0), i == ex && (j == ey || j == ey + 1));
   for (int i = 0; i <= wc.blocks_x; ++i)
-    for (int j = 0; j < wc.blocks_y; ++j) {
-      Street st;
-      st.length = static_cast<float>(Y_[j + 1] - Y_[j] - 2 * hw);
-      st.lanes = wc.lanes_per_direction;
-      st.lane_w = static_cast<float>(wc.lane_width);
-      st.parking_w = wc.parking_lanes ? 2.2f : 0.f;
-      st.crosswalk_start = st.crosswalk_end = true;
-      st.seed = static_cast<std::uint32_t>(rng.next());
-      streets.push_back(st);
-      Segment seg;
-      seg.street = static_cast<int>(streets.size()) - 1;
-      seg.start = Vec2d(X_[i], Y_[j] + hw);
-      seg.dir = Vec2d(0, 1);
-      seg.length = st.length;
-      seg.ego = j == ey && (i == ex || i == ex + 1);
-      addStreetTiles(seg.street, seg.start, seg.dir, seg.length);
-      segments_.push_back(seg);
-    }
+    for (int j = 0; j < wc.blocks_y; ++j)
+      addStreet(Y_[j + 1] - Y_[j] - 2 * hw, Vec2d(X_[i], Y_[j] + hw), Vec2d(0, 1), j == ey && (i == ex || i == ex + 1));
   // Intersections.
   for (int i = 0; i <= wc.blocks_x; ++i)
     for (int j = 0; j <= wc.blocks_y; ++j) {
@@ -537,22 +544,8 @@ void World::buildUrban(Rng& rng) {
           const float cr = static_cast<float>(rng.uniform(1.4, 2.6));
           const Vec3f c(px, py, th + cr * 0.85f);
           const std::uint32_t tseed = static_cast<std::uint32_t>(rng.next());
-          // Subdivided octahedron with jittered radius.
-          const Vec3f ax[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-          const int faces[8][3] = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
           const float sx = static_cast<float>(rng.uniform(0.85, 1.15)), sz = static_cast<float>(rng.uniform(0.8, 1.2));
-          auto vert = [&](Vec3f dir) {
-            dir.normalize();
-            const std::uint32_t key = static_cast<std::uint32_t>(std::lround(dir.x() * 1000) * 73856093 ^ std::lround(dir.y() * 1000) * 19349663 ^ std::lround(dir.z() * 1000) * 83492791);
-            const float rr = cr * (0.8f + 0.4f * hashf(tseed, key, 7));
-            return Vec3f(c.x() + dir.x() * rr * sx, c.y() + dir.y() * rr * sx, c.z() + dir.z() * rr * sz);
-          };
-          for (const auto& f : faces) {
-            const Vec3f A = ax[f[0]], Bv = ax[f[1]], C = ax[f[2]];
-            const Vec3f ab = (A + Bv) * 0.5f, bc = (Bv + C) * 0.5f, ca = (C + A) * 0.5f;
-            const Vec3f sub[4][3] = {{A, ab, ca}, {ab, Bv, bc}, {ca, bc, C}, {ab, bc, ca}};
-            for (const auto& s3 : sub) addTriPlanar(ch.tris, vert(s3[0]), vert(s3[1]), vert(s3[2]), M_LEAVES, static_cast<int>(tseed & 0xffff));
-          }
+          addCrown(ch.tris, c, cr, sx, sz, tseed);
           ch.finish();
           chunks.push_back(std::move(ch));
         }
@@ -672,21 +665,8 @@ void World::buildHighway(Rng& rng) {
         addBox(ch.tris, {px - 0.18f, py - 0.18f, 0}, {px + 0.18f, py + 0.18f, th + 0.3f}, M_BARK, 0);
         const Vec3f c(px, py, th + cr * 0.85f);
         const float sz = static_cast<float>(rng.uniform(0.9, 1.4));
-        const Vec3f ax[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-        const int faces[8][3] = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
         const std::uint32_t tseed = static_cast<std::uint32_t>(rng.next());
-        auto vert = [&](Vec3f dd) {
-          dd.normalize();
-          const std::uint32_t key = static_cast<std::uint32_t>(std::lround(dd.x() * 1000) * 73856093 ^ std::lround(dd.y() * 1000) * 19349663 ^ std::lround(dd.z() * 1000) * 83492791);
-          const float rr = cr * (0.8f + 0.4f * hashf(tseed, key, 7));
-          return Vec3f(c.x() + dd.x() * rr, c.y() + dd.y() * rr, c.z() + dd.z() * rr * sz);
-        };
-        for (const auto& f : faces) {
-          const Vec3f A = ax[f[0]], Bv = ax[f[1]], C = ax[f[2]];
-          const Vec3f ab = (A + Bv) * 0.5f, bc = (Bv + C) * 0.5f, ca = (C + A) * 0.5f;
-          const Vec3f sub[4][3] = {{A, ab, ca}, {ab, Bv, bc}, {ca, bc, C}, {ab, bc, ca}};
-          for (const auto& s3 : sub) addTriPlanar(ch.tris, vert(s3[0]), vert(s3[1]), vert(s3[2]), M_LEAVES, static_cast<int>(tseed & 0xffff));
-        }
+        addCrown(ch.tris, c, cr, 1.0f, sz, tseed);
         ch.finish();
         chunks.push_back(std::move(ch));
       }
@@ -984,6 +964,17 @@ void World::placeObjects(Rng& rng) {
     objects.push_back(std::move(o));
     tracks.push_back(tr);
   };
+  // Accepts o and counts it in `placed` where its track is free; else undoes what making it added.
+  auto place = [&](Object& o, int& placed, const auto& undo) {
+    const Track tr = footprints(o);
+    if (collides(tr, true)) {
+      undo();
+      return false;
+    }
+    accept(o, tr);
+    ++placed;
+    return true;
+  };
   const int ex = wc.blocks_x / 2, ey = wc.blocks_y / 2;
   const double parkLat = hw - 1.1;  // parking lane centre from the street centreline
   const bool highway = wc.type == "highway";
@@ -1062,14 +1053,7 @@ void World::placeObjects(Rng& rng) {
         rollback();
         continue;
       }
-      const Track tr = footprints(o);
-      if (collides(tr, true)) {
-        rollback();
-        continue;
-      }
-      accept(o, tr);
-      ++placed_sg;
-      break;
+      if (place(o, placed_sg, rollback)) break;
     }
   }
 
@@ -1098,14 +1082,7 @@ void World::placeObjects(Rng& rng) {
         o.x = xy.x(), o.y = xy.y();
         o.yaw = std::atan2(seg.dir.y(), seg.dir.x()) + (side ? M_PI : 0.0) + rng.uniform(-0.03, 0.03);
         // Keep the kerb side tight; jitter the lateral position a little.
-        const Track tr = footprints(o);
-        if (collides(tr, true)) {
-          car_styles.pop_back();
-          continue;
-        }
-        accept(o, tr);
-        ++placed_parked;
-        break;
+        if (place(o, placed_parked, [&] { car_styles.pop_back(); })) break;
       }
     }
   }
@@ -1127,15 +1104,11 @@ void World::placeObjects(Rng& rng) {
       o.kind = Object::Kind::Loop;
       o.profile = Profile(paths[route], v, 2.5, 1.5, -1, -1);
       o.s_offset = rng.uniform(0, paths[route].length());
-      const Track tr = footprints(o);
-      if (collides(tr, true)) {
+      const auto undo = [&] {
         paths.pop_back();
         car_styles.pop_back();
-        continue;
-      }
-      accept(o, tr);
-      ++placed_driving;
-      break;
+      };
+      if (place(o, placed_driving, undo)) break;
     }
   }
 
@@ -1184,14 +1157,8 @@ void World::placeObjects(Rng& rng) {
         o.wait_a = rng.uniform(2, 10), o.wait_b = rng.uniform(2, 10);
         o.phase = rng.uniform(0, 60);
       }
-      const Track tr = footprints(o);
-      if (collides(tr, true)) {
-        if (added_path) paths.pop_back();
-        continue;
-      }
+      if (!place(o, placed_peds, [&] { if (added_path) paths.pop_back(); })) continue;
       ped_styles.push_back(ps);
-      accept(o, tr);
-      ++placed_peds;
       break;
     }
   }

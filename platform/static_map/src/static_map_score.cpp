@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/datasets/labels.hpp"
@@ -182,28 +183,13 @@ int runEvalCommand(const std::vector<std::string>& args, std::ostream& out, std:
   std::string run, json_path;
   double near = 20.0;
   try {
-    for (size_t i = 0; i < args.size(); ++i) {
-      const std::string& a = args[i];
-      auto text = [&]() -> std::string {
-        if (i + 1 >= args.size()) throw std::invalid_argument(a + " needs a value");
-        return args[++i];
-      };
-      if (a == "--help" || a == "-h") {
-        out << kUsage;
-        return 0;
-      } else if (a == "--run") run = text();
-      else if (a == "--json") json_path = text();
-      else if (a == "--near") {
-        const std::string v = text();
-        size_t used = 0;
-        try {
-          near = std::stod(v, &used);
-        } catch (const std::exception&) {
-          used = 0;
-        }
-        if (used != v.size() || !(near > 0)) throw std::invalid_argument("--near expects a positive number, not '" + v + "'");
-      } else throw std::invalid_argument("unknown argument '" + a + "'");
-    }
+    const bool help = cli::forEachFlag(args, [&] { out << kUsage; }, [&](const std::string& a, size_t& i) {
+      if (a == "--run") run = cli::nextValue(args, i);
+      else if (a == "--json") json_path = cli::nextValue(args, i);
+      else if (a == "--near") near = cli::nextPositiveNumber(args, i);
+      else throw std::invalid_argument("unknown argument '" + a + "'");
+    });
+    if (help) return 0;
     if (run.empty()) throw std::invalid_argument("give --run DIR");
   } catch (const std::invalid_argument& e) {
     err << "beslam eval-static-map: " << e.what() << " (see beslam eval-static-map --help)\n";

@@ -101,21 +101,18 @@ double repeatability(const cv::Mat& a, const cv::Mat& b, const cv::Mat& warp_ab,
   return total ? static_cast<double>(good) / total : 0.0;
 }
 
-TEST(OrbExtractor, RepeatableUnderRotation) {
-  const cv::Mat a = test::texturedImage(640, 480, 9);
-  const cv::Mat warp = cv::getRotationMatrix2D(cv::Point2f(320, 240), 30.0, 1.0);
+// repeatability() between a textured image (seed) and itself rotated by angle_deg and scaled about its centre.
+double warpedRepeatability(int seed, double angle_deg, double scale) {
+  const cv::Mat a = test::texturedImage(640, 480, seed);
+  const cv::Mat warp = cv::getRotationMatrix2D(cv::Point2f(320, 240), angle_deg, scale);
   cv::Mat b;
   cv::warpAffine(a, b, warp, a.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
-  EXPECT_GT(repeatability(a, b, warp, 3.0), 0.5);
+  return repeatability(a, b, warp, 3.0);
 }
 
-TEST(OrbExtractor, RepeatableUnderScale) {
-  const cv::Mat a = test::texturedImage(640, 480, 10);
-  const cv::Mat warp = cv::getRotationMatrix2D(cv::Point2f(320, 240), 0.0, 1.3);
-  cv::Mat b;
-  cv::warpAffine(a, b, warp, a.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
-  EXPECT_GT(repeatability(a, b, warp, 3.0), 0.4);
-}
+TEST(OrbExtractor, RepeatableUnderRotation) { EXPECT_GT(warpedRepeatability(9, 30.0, 1.0), 0.5); }
+
+TEST(OrbExtractor, RepeatableUnderScale) { EXPECT_GT(warpedRepeatability(10, 0.0, 1.3), 0.4); }
 
 TEST(FeatureGrid, QueryFindsExactlyTheKeypointsInTheWindow) {
   FeatureSet f;

@@ -108,20 +108,14 @@ std::vector<std::vector<TruthBox>> readTruth(const std::string& labels, const st
   std::map<std::pair<int64_t, int64_t>, bool> moving;
   if (!motion.empty()) moving = formats::readObjectMotion(motion);
   std::vector<std::vector<TruthBox>> frames;
-  std::ifstream in(labels);
-  if (!in) throw std::runtime_error(labels + ": cannot open label file");
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
+  detector_replay::forEachLine(labels, "label file", [&](const std::string& line, int line_no) {
     const auto first = line.find_first_not_of(" \t");
-    if (first == std::string::npos || line[first] == '#') continue;
+    if (first == std::string::npos || line[first] == '#') return;
     const formats::TrackingLabel l = formats::parseTrackingRow(line, labels, line_no);
     if (l.frame < 0 || l.frame > 10'000'000)
       throw std::runtime_error(labels + ":" + std::to_string(line_no) + ": frame " + std::to_string(l.frame) + " is out of range");
     if (static_cast<size_t>(l.frame) >= frames.size()) frames.resize(static_cast<size_t>(l.frame) + 1);
-    if (l.object.isDontCare()) continue;
+    if (l.object.isDontCare()) return;
     int32_t class_id = 0;
     if (!detector_replay::kittiClass(l.object.type, class_id))
       throw std::runtime_error(labels + ":" + std::to_string(line_no) + ": unknown class '" + l.object.type + "'");
@@ -137,7 +131,7 @@ std::vector<std::vector<TruthBox>> readTruth(const std::string& labels, const st
     if (auto it = moving.find({l.frame, l.track_id}); it != moving.end())
       t.box.motion_state = it->second ? BESLAM_MOTION_DYNAMIC : BESLAM_MOTION_STATIC;
     frames[static_cast<size_t>(l.frame)].push_back(t);
-  }
+  });
   if (frames.empty()) throw std::runtime_error(labels + ": no labels");
   return frames;
 }

@@ -8,6 +8,7 @@
 
 #include "beslam/detector_oracle/oracle.hpp"
 #include "beslam/test/plugin_harness.hpp"
+#include "beslam/test/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace beslam::detector_oracle;
@@ -15,17 +16,7 @@ using beslam::test::PluginHarness;
 
 namespace {
 
-struct Dir {
-  fs::path path = fs::temp_directory_path() / ("beslam_oracle_" + std::to_string(::getpid()) + "_" + std::to_string(n++));
-  Dir() { fs::create_directories(path); }
-  ~Dir() { fs::remove_all(path); }
-  std::string write(const std::string& name, const std::string& text) const {
-    fs::create_directories((path / name).parent_path());
-    std::ofstream(path / name) << text;
-    return (path / name).string();
-  }
-  static inline int n = 0;
-};
+using Dir = beslam::test::TempDir;
 
 // 200 frames, two cars (track 1 parked at 20 m, track 2 at 40 m) and a DontCare row.
 std::string labels() {
@@ -89,7 +80,7 @@ TEST(LabelOracle, ReadsTruthWithGeometryAndMotion) {
     }
   }
   EXPECT_THROW(readTruth(file, d.write("m.txt", "0 1 2 0.0\n")), std::runtime_error);  // moving must be 0/1
-  EXPECT_THROW(readTruth((d.path / "absent.txt").string()), std::runtime_error);
+  EXPECT_THROW(readTruth((d.path() / "absent.txt").string()), std::runtime_error);
 }
 
 TEST(LabelOracle, PerfectByDefault) {
@@ -190,7 +181,7 @@ TEST(DetectorOraclePlugin, ThroughTheRegistry) {
   PluginHarness h(std::string(PLUGIN_DIR) + "/detector_oracle.so");
   Dir d;
   d.write("label_02/0004.txt", labels());
-  const auto& config = h.config("detector_oracle", {{"labels", (d.path / "label_02").string()}, {"sequence", "0004"},
+  const auto& config = h.config("detector_oracle", {{"labels", (d.path() / "label_02").string()}, {"sequence", "0004"},
                                                     {"position_noise", "0.1"}, {"seed", "3"}, {"pass_track_ids", "true"}});
   beslam::registry::DetectorInstance det(h.plugin("detector_oracle"), h.info(config), h.log);
   const auto boxes = det.detect(PluginHarness::frame(3, 0.3));
@@ -203,22 +194,22 @@ TEST(DetectorOraclePlugin, ThroughTheRegistry) {
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("past the last labelled frame"), std::string::npos) << e.what();
   }
-  auto missing = h.config("detector_oracle", {{"labels", (d.path / "label_02").string()}});
+  auto missing = h.config("detector_oracle", {{"labels", (d.path() / "label_02").string()}});
   EXPECT_THROW(beslam::registry::DetectorInstance(h.plugin("detector_oracle"), h.info(missing), h.log), std::exception);
   // Without `labels`, the file is found beside the frame's image (KITTI tracking and beslam synth layouts).
   const auto& automatic = h.config("detector_oracle", {});
   beslam::registry::DetectorInstance tracking(h.plugin("detector_oracle"), h.info(automatic), h.log);
   beslam_frame f = PluginHarness::frame(0, 0.0);
-  const std::string image = (d.path / "image_02" / "0004" / "000000.png").string();
+  const std::string image = (d.path() / "image_02" / "0004" / "000000.png").string();
   f.image_path = image.c_str();
   EXPECT_EQ(tracking.detect(f).size(), 2u);
   d.write("synth/sequences/00/label_02/00.txt", labels());
   beslam::registry::DetectorInstance synth(h.plugin("detector_oracle"), h.info(automatic), h.log);
-  const std::string synth_image = (d.path / "synth/sequences/00/image_0/000000.png").string();
+  const std::string synth_image = (d.path() / "synth/sequences/00/image_0/000000.png").string();
   f.image_path = synth_image.c_str();
   EXPECT_EQ(synth.detect(f).size(), 2u);
   beslam::registry::DetectorInstance nowhere(h.plugin("detector_oracle"), h.info(automatic), h.log);
-  const std::string lost = (d.path / "x/y/000000.png").string();
+  const std::string lost = (d.path() / "x/y/000000.png").string();
   f.image_path = lost.c_str();
   EXPECT_THROW(nowhere.detect(f), std::exception);
 }

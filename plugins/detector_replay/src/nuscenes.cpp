@@ -132,22 +132,16 @@ NuScenesFrames readNuScenesFrames(const std::string& path) {
   NuScenesFrames f;
   const bool is_json = path.size() >= 5 && path.compare(path.size() - 5, 5, ".json") == 0;
   if (!is_json) {
-    std::ifstream in(path);
-    if (!in) throw std::runtime_error(path + ": cannot open sample token file");
-    std::string line;
-    int line_no = 0;
-    while (std::getline(in, line)) {
-      ++line_no;
-      if (!line.empty() && line.back() == '\r') line.pop_back();
+    forEachLine(path, "sample token file", [&](const std::string& line, int line_no) {
       const auto a = line.find_first_not_of(" \t");
-      if (a == std::string::npos || line[a] == '#') continue;
+      if (a == std::string::npos || line[a] == '#') return;
       const auto b = line.find_last_not_of(" \t");
       const std::string token = line.substr(a, b - a + 1);
       if (token.find_first_of(" \t") != std::string::npos)
         throw std::runtime_error(path + ":" + std::to_string(line_no) + ": expected one sample token, got '" + token + "'");
       f.tokens.push_back(token);
       f.T_global_ego.emplace_back();
-    }
+    });
   } else {
     json j = loadJson(path, "sample token file");
     if (j.is_object() && j.contains("frames")) j = j["frames"];

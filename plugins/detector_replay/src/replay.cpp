@@ -78,14 +78,8 @@ void checkGeometry(const beslam_box3d& b, const std::string& path, int line_no) 
 // Runs `parse` for every data line of `path`; applies the policy to its exceptions.
 template <class F>
 void forEachRow(const std::string& path, Policy policy, Report& report, F&& parse) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open detections file");
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (!dataLine(line)) continue;
+  forEachLine(path, "detections file", [&](const std::string& line, int line_no) {
+    if (!dataLine(line)) return;
     ++report.rows;
     try {
       parse(line, line_no);
@@ -94,7 +88,7 @@ void forEachRow(const std::string& path, Policy policy, Report& report, F&& pars
       ++report.skipped;
       report.problem(e.what());
     }
-  }
+  });
 }
 
 void keep(const beslam_box3d& box, int64_t frame, const Filter& filter, DetectionTable& table, Report& report) {
@@ -265,6 +259,19 @@ void readKittiObjectFile(const std::string& path, int64_t frame, const Filter& f
     if (!kittiClass(o.type, class_id)) failAt(path, line_no, "unknown class '" + o.type + "'");
     keep(boxFromLabel(o, class_id, transform, path, line_no), frame, filter, table, report);
   });
+}
+
+void forEachLine(const std::string& path, const std::string& what,
+                 const std::function<void(const std::string& line, int line_no)>& each) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open " + what);
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    each(line, line_no);
+  }
 }
 
 }  // namespace beslam::detector_replay

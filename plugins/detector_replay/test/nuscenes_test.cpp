@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "beslam/detector_replay/nuscenes.hpp"
+#include "beslam/test/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace beslam::detector_replay;
@@ -15,16 +16,7 @@ using json = nlohmann::json;
 
 namespace {
 
-struct Dir {
-  fs::path path = fs::temp_directory_path() / ("beslam_nusc_" + std::to_string(::getpid()) + "_" + std::to_string(n++));
-  Dir() { fs::create_directories(path); }
-  ~Dir() { fs::remove_all(path); }
-  std::string write(const std::string& name, const std::string& text) const {
-    std::ofstream(path / name) << text;
-    return (path / name).string();
-  }
-  static inline int n = 0;
-};
+using Dir = beslam::test::TempDir;
 
 // The nuScenes CAM_FRONT extrinsic (ego x forward, y left, z up -> camera x right, y down, z forward).
 const std::vector<double> kCamFront = {1.70079, 0.01594, 1.51095, 0.4998, -0.5030, 0.4997, -0.4969};
@@ -126,7 +118,7 @@ TEST(NuScenesFramesFile, TextAndJsonForms) {
       EXPECT_NE(std::string(e.what()).find(cause), std::string::npos) << name << ": " << e.what();
     }
   }
-  EXPECT_THROW(readNuScenesFrames((d.path / "absent.txt").string()), std::runtime_error);
+  EXPECT_THROW(readNuScenesFrames((d.path() / "absent.txt").string()), std::runtime_error);
 }
 
 TEST(NuScenesResults, ReadsFramesThroughTheTokenMap) {

@@ -8,6 +8,7 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/test/plugin_harness.hpp"
+#include "beslam/test/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using beslam::test::PluginHarness;
@@ -16,17 +17,7 @@ namespace {
 
 const std::string kLib = std::string(PLUGIN_DIR) + "/detector_replay.so";
 
-struct Dir {
-  fs::path path = fs::temp_directory_path() / ("beslam_replay_plugin_" + std::to_string(::getpid()) + "_" + std::to_string(n++));
-  Dir() { fs::create_directories(path); }
-  ~Dir() { fs::remove_all(path); }
-  std::string write(const std::string& name, const std::string& text) const {
-    fs::create_directories((path / name).parent_path());
-    std::ofstream(path / name) << text;
-    return (path / name).string();
-  }
-  static inline int n = 0;
-};
+using Dir = beslam::test::TempDir;
 
 std::vector<beslam_box3d> detect(beslam::registry::DetectorInstance& d, int64_t frame) {
   return d.detect(PluginHarness::frame(frame, 0.1 * static_cast<double>(frame)));
@@ -48,7 +39,7 @@ TEST(DetectorReplayPlugin, Ab3dmotFolderLayout) {
   Dir d;
   d.write("det/Car/0003.txt", "0,2,1,1,50,50,5.0,1.5,1.6,4.0,1.0,1.6,10.0,0.0,0.0\n2,2,1,1,50,50,-3.0,1.5,1.6,4.0,1.0,1.6,12.0,0.0,0.0\n");
   d.write("det/Pedestrian/0003.txt", "2,1,1,1,50,50,2.0,1.7,0.6,0.8,-2.0,1.6,8.0,0.0,0.0\n");
-  const auto& config = h.config("detector_replay", {{"format", "ab3dmot"}, {"path", (d.path / "det").string()},
+  const auto& config = h.config("detector_replay", {{"format", "ab3dmot"}, {"path", (d.path() / "det").string()},
                                                     {"sequence", "0003"}, {"min_score", "0.5"}});
   beslam::registry::DetectorInstance det(h.plugin("detector_replay"), h.info(config), h.log);
   EXPECT_EQ(detect(det, 0).size(), 1u);
@@ -61,7 +52,7 @@ TEST(DetectorReplayPlugin, Ab3dmotFolderLayout) {
   EXPECT_NE(e.find("frame 3"), std::string::npos) << e;
   EXPECT_NE(e.find("past the last frame (2)"), std::string::npos) << e;
 
-  const auto& empty = h.config("detector_replay", {{"format", "ab3dmot"}, {"path", (d.path / "det").string()},
+  const auto& empty = h.config("detector_replay", {{"format", "ab3dmot"}, {"path", (d.path() / "det").string()},
                                                    {"sequence", "0003"}, {"on_missing_frame", "empty"}, {"classes", "Car"}});
   beslam::registry::DetectorInstance lenient(h.plugin("detector_replay"), h.info(empty), h.log);
   EXPECT_TRUE(detect(lenient, 3).empty());
@@ -92,26 +83,26 @@ TEST(DetectorReplayPlugin, ConfigurationErrors) {
   auto create = [&](const std::map<std::string, std::string>& s) {
     return errorOf([&] { beslam::registry::DetectorInstance x(h.plugin("detector_replay"), h.info(h.config("detector_replay", s)), h.log); });
   };
-  EXPECT_NE(create({{"format", "ab3dmot"}, {"path", (d.path / "det").string()}}).find("sequence"), std::string::npos);
-  EXPECT_NE(create({{"format", "ab3dmot"}, {"path", (d.path / "det").string()}, {"sequence", "0007"}}).find("no detection file"),
+  EXPECT_NE(create({{"format", "ab3dmot"}, {"path", (d.path() / "det").string()}}).find("sequence"), std::string::npos);
+  EXPECT_NE(create({{"format", "ab3dmot"}, {"path", (d.path() / "det").string()}, {"sequence", "0007"}}).find("no detection file"),
             std::string::npos);
-  EXPECT_NE(create({{"format", "ab3dmot"}, {"path", (d.path / "det").string()}, {"sequence", "0000"}, {"classes", "Car,Bus"}})
+  EXPECT_NE(create({{"format", "ab3dmot"}, {"path", (d.path() / "det").string()}, {"sequence", "0000"}, {"classes", "Car,Bus"}})
                 .find("unknown class 'Bus'"),
             std::string::npos);
-  EXPECT_NE(create({{"format", "nuscenes"}, {"path", (d.path / "r.json").string()}}).find("sample_tokens"), std::string::npos);
-  EXPECT_NE(create({{"format", "kitti_tracking"}, {"path", (d.path / "absent.txt").string()}}).find("absent.txt"), std::string::npos);
+  EXPECT_NE(create({{"format", "nuscenes"}, {"path", (d.path() / "r.json").string()}}).find("sample_tokens"), std::string::npos);
+  EXPECT_NE(create({{"format", "kitti_tracking"}, {"path", (d.path() / "absent.txt").string()}}).find("absent.txt"), std::string::npos);
 }
 
 TEST(DetectorReplayPlugin, KittiTrackingAndObjectFolders) {
   PluginHarness h(kLib);
   Dir d;
   d.write("label_02/0001.txt", "0 0 Car 0 0 0.1 1 1 9 9 1.5 1.6 4.0 1 1.6 10 0\n1 0 Car 0 0 0.1 1 1 9 9 1.5 1.6 4.0 1 1.6 11 0\n");
-  const auto& tracking = h.config("detector_replay", {{"format", "kitti_tracking"}, {"path", (d.path / "label_02").string()},
+  const auto& tracking = h.config("detector_replay", {{"format", "kitti_tracking"}, {"path", (d.path() / "label_02").string()},
                                                       {"sequence", "0001"}});
   beslam::registry::DetectorInstance t(h.plugin("detector_replay"), h.info(tracking), h.log);
   EXPECT_NEAR(detect(t, 1)[0].center_cam[2], 11.0, 1e-12);
   d.write("label_2/000000.txt", "Car 0.00 0 1.74 741.18 168.83 792.25 208.43 1.70 1.63 4.08 7.24 1.55 33.20 1.95\n");
-  const auto& object = h.config("detector_replay", {{"format", "kitti_object"}, {"path", (d.path / "label_2").string()}});
+  const auto& object = h.config("detector_replay", {{"format", "kitti_object"}, {"path", (d.path() / "label_2").string()}});
   beslam::registry::DetectorInstance o(h.plugin("detector_replay"), h.info(object), h.log);
   EXPECT_EQ(detect(o, 0).size(), 1u);
   EXPECT_NE(errorOf([&] { detect(o, 1); }).find("000001.txt"), std::string::npos);

@@ -7,30 +7,14 @@
 #include <gtest/gtest.h>
 
 #include "beslam/detector_replay/replay.hpp"
+#include "beslam/test/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace beslam::detector_replay;
 
 namespace {
 
-class TempDir {
- public:
-  TempDir() : path_(fs::temp_directory_path() / ("beslam_replay_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++))) {
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  std::string write(const std::string& name, const std::string& text) const {
-    const fs::path p = path_ / name;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p) << text;
-    return p.string();
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  static inline int counter_ = 0;
-  fs::path path_;
-};
+using beslam::test::TempDir;
 
 const std::string kRow0 = "0,2,298.3125,165.1800,458.2292,293.4391,8.2981,1.9605,1.8137,4.7549,-4.5720,1.8435,13.5308,-2.1125,-1.7867";
 const std::string kRow1 = "1,1,700,150,740,260,-0.4501,1.70,0.60,0.80,2.0,1.60,9.0,0.5,0.3";

@@ -91,6 +91,13 @@ std::vector<std::map<int, Decision>> run(Sim& sim, BevTracker& tracker, int n, b
   return out;
 }
 
+// How many different track ids the object's decisions carry (1: it kept its track throughout).
+size_t trackCount(const std::map<int, Decision>& d) {
+  std::set<int32_t> ids;
+  for (const auto& [k, dec] : d) ids.insert(dec.track_id);
+  return ids.size();
+}
+
 int countState(const std::map<int, Decision>& d, int32_t state, int from = 0, int to = 1 << 30) {
   int n = 0;
   for (const auto& [k, dec] : d)
@@ -117,9 +124,7 @@ TEST(BevTracker, ParkedCarsAreStaticAndNeverDynamic) {
     EXPECT_EQ(countState(d[i], BESLAM_MOTION_DYNAMIC), 0) << "parked car " << i;
     // Static once the window has some history, for as long as the car is ahead of the camera.
     EXPECT_GE(countState(d[i], BESLAM_MOTION_STATIC), static_cast<int>(d[i].size()) - 10) << "parked car " << i;
-    std::set<int32_t> ids;
-    for (const auto& [k, dec] : d[i]) ids.insert(dec.track_id);
-    EXPECT_EQ(ids.size(), 1u) << "parked car " << i << " changed track";
+    EXPECT_EQ(trackCount(d[i]), 1u) << "parked car " << i << " changed track";
   }
 }
 
@@ -191,9 +196,7 @@ TEST(BevTracker, KeepsTracksThroughShortOcclusion) {
   BevTracker tracker;
   const auto d = run(sim, tracker, 30);
   for (size_t i = 0; i < 2; ++i) {
-    std::set<int32_t> ids;
-    for (const auto& [k, dec] : d[i]) ids.insert(dec.track_id);
-    EXPECT_EQ(ids.size(), 1u) << "object " << i << " lost its track through the occlusion";
+    EXPECT_EQ(trackCount(d[i]), 1u) << "object " << i << " lost its track through the occlusion";
   }
   EXPECT_EQ(d[0].at(16).motion_state, BESLAM_MOTION_STATIC);
   EXPECT_EQ(d[1].at(17).motion_state, BESLAM_MOTION_DYNAMIC);
@@ -218,9 +221,7 @@ TEST(BevTracker, CrossingCarsKeepTheirIdentities) {
   BevTracker tracker;
   const auto d = run(sim, tracker, 30);
   for (size_t i = 0; i < 2; ++i) {
-    std::set<int32_t> ids;
-    for (const auto& [k, dec] : d[i]) ids.insert(dec.track_id);
-    EXPECT_EQ(ids.size(), 1u) << "car " << i << " switched identity while crossing";
+    EXPECT_EQ(trackCount(d[i]), 1u) << "car " << i << " switched identity while crossing";
     EXPECT_EQ(countState(d[i], BESLAM_MOTION_STATIC), 0);
   }
   EXPECT_NE(d[0].begin()->second.track_id, d[1].begin()->second.track_id);
@@ -391,9 +392,7 @@ TEST(BevTracker, WithoutPoseEverythingIsUnknownButTracked) {
   const auto d = run(sim, tracker, 20, false);
   for (size_t i = 0; i < 2; ++i) {
     EXPECT_EQ(countState(d[i], BESLAM_MOTION_UNKNOWN), static_cast<int>(d[i].size()));
-    std::set<int32_t> ids;
-    for (const auto& [k, dec] : d[i]) ids.insert(dec.track_id);
-    EXPECT_EQ(ids.size(), 1u);
+    EXPECT_EQ(trackCount(d[i]), 1u);
   }
 }
 
@@ -466,9 +465,7 @@ TEST(BevTracker, IouAssociationTracksToo) {
   BevTracker tracker(p);
   const auto d = run(sim, tracker, 30);
   for (size_t i = 0; i < d.size(); ++i) {
-    std::set<int32_t> ids;
-    for (const auto& [k, dec] : d[i]) ids.insert(dec.track_id);
-    EXPECT_EQ(ids.size(), 1u) << i;
+    EXPECT_EQ(trackCount(d[i]), 1u) << i;
   }
   EXPECT_EQ(d[0].at(15).motion_state, BESLAM_MOTION_STATIC);
   EXPECT_EQ(d[2].at(15).motion_state, BESLAM_MOTION_DYNAMIC);

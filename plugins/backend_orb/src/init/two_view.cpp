@@ -184,14 +184,22 @@ void TwoViewInitializer::findFundamental(std::vector<bool>& inliers, double& sco
   bestOverSets(n1, n2, fit, inliers, score, F21);
 }
 
-double TwoViewInitializer::checkHomography(const Eigen::Matrix3d& H21, const Eigen::Matrix3d& H12,
-                                           std::vector<bool>& inliers) const {
-  const double th = 5.991, inv_s2 = 1.0 / (options_.sigma * options_.sigma);
+template <class Check>
+double TwoViewInitializer::scoreMatches(std::vector<bool>& inliers, Check check) const {
   inliers.assign(matches_.size(), false);
   double score = 0;
   for (size_t i = 0; i < matches_.size(); ++i) {
     const Eigen::Vector3d x1((*kps1_)[matches_[i].i1].pt.x, (*kps1_)[matches_[i].i1].pt.y, 1);
     const Eigen::Vector3d x2((*kps2_)[matches_[i].i2].pt.x, (*kps2_)[matches_[i].i2].pt.y, 1);
+    inliers[i] = check(x1, x2, score);
+  }
+  return score;
+}
+
+double TwoViewInitializer::checkHomography(const Eigen::Matrix3d& H21, const Eigen::Matrix3d& H12,
+                                           std::vector<bool>& inliers) const {
+  const double th = 5.991, inv_s2 = 1.0 / (options_.sigma * options_.sigma);
+  return scoreMatches(inliers, [&](const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, double& score) {
     bool in = true;
     const Eigen::Vector3d x1p = H12 * x2;  // transfer 2 -> 1
     const double e1 = (x1.head<2>() - x1p.head<2>() / x1p.z()).squaredNorm() * inv_s2;
@@ -199,18 +207,13 @@ double TwoViewInitializer::checkHomography(const Eigen::Matrix3d& H21, const Eig
     const Eigen::Vector3d x2p = H21 * x1;
     const double e2 = (x2.head<2>() - x2p.head<2>() / x2p.z()).squaredNorm() * inv_s2;
     if (e2 > th) in = false; else score += th - e2;
-    inliers[i] = in;
-  }
-  return score;
+    return in;
+  });
 }
 
 double TwoViewInitializer::checkFundamental(const Eigen::Matrix3d& F21, std::vector<bool>& inliers) const {
   const double th = 3.841, th_score = 5.991, inv_s2 = 1.0 / (options_.sigma * options_.sigma);
-  inliers.assign(matches_.size(), false);
-  double score = 0;
-  for (size_t i = 0; i < matches_.size(); ++i) {
-    const Eigen::Vector3d x1((*kps1_)[matches_[i].i1].pt.x, (*kps1_)[matches_[i].i1].pt.y, 1);
-    const Eigen::Vector3d x2((*kps2_)[matches_[i].i2].pt.x, (*kps2_)[matches_[i].i2].pt.y, 1);
+  return scoreMatches(inliers, [&](const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, double& score) {
     bool in = true;
     const Eigen::Vector3d l2 = F21 * x1;  // line in image 2
     const double d2 = l2.dot(x2);
@@ -220,9 +223,8 @@ double TwoViewInitializer::checkFundamental(const Eigen::Matrix3d& F21, std::vec
     const double d1 = l1.dot(x1);
     const double e1 = d1 * d1 / (l1.x() * l1.x() + l1.y() * l1.y()) * inv_s2;
     if (e1 > th) in = false; else score += th_score - e1;
-    inliers[i] = in;
-  }
-  return score;
+    return in;
+  });
 }
 
 int TwoViewInitializer::checkRT(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const std::vector<bool>& inliers,

@@ -56,6 +56,10 @@ class TwoViewInitializer {
                     std::vector<bool>& inliers, double& score, Eigen::Matrix3d& model) const;
   void findHomography(std::vector<bool>& inliers, double& score, Eigen::Matrix3d& H21) const;
   void findFundamental(std::vector<bool>& inliers, double& score, Eigen::Matrix3d& F21) const;
+  // Runs check(x1, x2, score) on every match (homogeneous pixels in images 1 and 2; it adds to the score
+  // and says whether the match is an inlier); returns the score.
+  template <class Check>
+  double scoreMatches(std::vector<bool>& inliers, Check check) const;
   double checkHomography(const Eigen::Matrix3d& H21, const Eigen::Matrix3d& H12, std::vector<bool>& inliers) const;
   double checkFundamental(const Eigen::Matrix3d& F21, std::vector<bool>& inliers) const;
   bool reconstructF(const std::vector<bool>& inliers, const Eigen::Matrix3d& F21, TwoViewResult& r) const;

@@ -26,6 +26,12 @@ double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
+// The map point of slot i, or null; a bad point is dropped from the slot first.
+MapPoint* goodPoint(std::vector<MapPoint*>& points, size_t i) {
+  if (points[i] && points[i]->bad) points[i] = nullptr;
+  return points[i];
+}
+
 }  // namespace
 
 Tracker::Tracker(const Camera& camera, const Options& options, const ScalePyramid& pyramid, Map& map,
@@ -473,12 +479,8 @@ bool Tracker::trackLocalMap() {
 void Tracker::updateLocalKeyFrames() {
   std::map<KeyFrame*, int, IdLess<KeyFrame>> counter;
   for (size_t i = 0; i < current_.size(); ++i) {
-    MapPoint* mp = current_.points[i];
+    MapPoint* mp = goodPoint(current_.points, i);
     if (!mp) continue;
-    if (mp->bad) {
-      current_.points[i] = nullptr;
-      continue;
-    }
     for (auto& [kf, idx] : mp->observations) ++counter[kf];
   }
   if (counter.empty()) return;
@@ -547,12 +549,8 @@ bool Tracker::isInFrustum(MapPoint* mp, float view_cos_limit) const {
 
 void Tracker::searchLocalPoints() {
   for (size_t i = 0; i < current_.size(); ++i) {
-    MapPoint* mp = current_.points[i];
+    MapPoint* mp = goodPoint(current_.points, i);
     if (!mp) continue;
-    if (mp->bad) {
-      current_.points[i] = nullptr;
-      continue;
-    }
     ++mp->visible;
     mp->last_seen_frame = current_.index;
     mp->track_in_view = false;

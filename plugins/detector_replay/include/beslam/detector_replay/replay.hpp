@@ -89,4 +89,9 @@ void readKittiTrackingFile(const std::string& path, const Filter& filter, Policy
 void readKittiObjectFile(const std::string& path, int64_t frame, const Filter& filter, Policy policy,
                          ScoreTransform transform, DetectionTable& table, Report& report);
 
+// Calls each(line, line_no) for every line of the text file `path` (numbered from 1, a trailing '\r'
+// removed); throws std::runtime_error "path: cannot open <what>" when it cannot be opened.
+void forEachLine(const std::string& path, const std::string& what,
+                 const std::function<void(const std::string& line, int line_no)>& each);
+
 }  // namespace beslam::detector_replay
