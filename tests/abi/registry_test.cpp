@@ -1,5 +1,7 @@
 // The host against good and deliberately broken plugin libraries: every refusal names the file and the
 // cause, and no exception from a plugin crosses the C ABI.
+#include "beslam/registry/registry.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +10,6 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/registry/instance.hpp"
-#include "beslam/registry/registry.hpp"
 
 using beslam::registry::Registry;
 
@@ -85,9 +86,7 @@ TEST(Registry, RefusesMissingEntryPoint) {
   expectRefusal(fixture("missing_function"), {"missing_function.so", "missing symbol beslam_plugin_list"});
 }
 
-TEST(Registry, RefusesLibraryThatIsNotAPlugin) {
-  expectRefusal(fixture("not_a_plugin"), {"not a BE-SLAM plugin"});
-}
+TEST(Registry, RefusesLibraryThatIsNotAPlugin) { expectRefusal(fixture("not_a_plugin"), {"not a BE-SLAM plugin"}); }
 
 TEST(Registry, RefusesNullFunctionInTable) {
   expectRefusal(fixture("null_function"), {"null_function.so", "function of its table is null"});
@@ -96,7 +95,12 @@ TEST(Registry, RefusesNullFunctionInTable) {
 TEST(Registry, RefusesMissingFileAndNonLibrary) {
   EXPECT_NE(refusal("/nonexistent/plugin.so").find("no such plugin library"), std::string::npos);
   const std::string text = std::string(FIXTURE_DIR) + "/../abi_text_file.so";
-  { FILE* f = std::fopen(text.c_str(), "w"); ASSERT_NE(f, nullptr); std::fputs("not an ELF file", f); std::fclose(f); }
+  {
+    FILE* f = std::fopen(text.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs("not an ELF file", f);
+    std::fclose(f);
+  }
   EXPECT_NE(refusal(text).find("abi_text_file.so"), std::string::npos);
 }
 

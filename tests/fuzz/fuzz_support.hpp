@@ -1,11 +1,12 @@
 // Helpers for the fuzz targets: a per-process scratch file for readers that take a path.
 #pragma once
 
+#include <unistd.h>
+
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 
 namespace beslam::fuzz {
 

@@ -1,9 +1,10 @@
 // nuScenes inputs detector_replay reads: the results JSON (per sample token, boxes in the global frame)
 // and the frames file (tokens with optional ego poses). A bad file is one error naming it, never a crash
 // or a JSON library exception escaping.
+#include "beslam/detector_replay/nuscenes.hpp"
+
 #include <stdexcept>
 
-#include "beslam/detector_replay/nuscenes.hpp"
 #include "fuzz_support.hpp"
 
 namespace dr = beslam::detector_replay;

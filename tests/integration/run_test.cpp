@@ -1,16 +1,15 @@
 // End-to-end runs of the `beslam` command on a tiny KITTI-layout sequence the test writes itself:
 // what a run writes, and that every bad input is one clear line and leaves earlier output intact.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
-#include <unistd.h>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -31,8 +30,8 @@ std::string slurp(const fs::path& p) {
 // Runs `beslam ARGS` with optional environment assignments ("NAME=value ") in front.
 Result beslam(const std::string& args, const fs::path& dir, const std::string& env = "") {
   const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = env + std::string(BESLAM_BINARY_DIR) + "/bin/beslam " + args + " > " + out.string() +
-                          " 2> " + err.string() + " < /dev/null";
+  const std::string cmd = env + std::string(BESLAM_BINARY_DIR) + "/bin/beslam " + args + " > " + out.string() + " 2> " +
+                          err.string() + " < /dev/null";
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
 }
@@ -54,9 +53,8 @@ int dataLines(const std::string& s) {
 class RunTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("beslam_run_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / ("beslam_run_test_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     const fs::path seq = dir_ / "data/sequences/00";
     fs::create_directories(seq / "image_0");
@@ -101,9 +99,9 @@ TEST_F(RunTest, WritesEveryOutput) {
   EXPECT_NE(r.out.find("frames 6, tracked 6, keyframes 3"), std::string::npos) << r.out;
   // Ground truth is the replayed file itself: zero error.
   EXPECT_NE(r.out.find("APE translation RMSE 0 m"), std::string::npos) << r.out;
-  for (const char* f : {"trajectory.tum", "trajectory.kitti", "trajectory_online.tum", "keyframes.tum",
-                        "pipeline.resolved.yaml", "timing.csv", "summary.json", "objects.txt", "masks/000005.png",
-                        "samples/000000.jpg", "samples/000005.jpg"})
+  for (const char* f :
+       {"trajectory.tum", "trajectory.kitti", "trajectory_online.tum", "keyframes.tum", "pipeline.resolved.yaml",
+        "timing.csv", "summary.json", "objects.txt", "masks/000005.png", "samples/000000.jpg", "samples/000005.jpg"})
     EXPECT_TRUE(fs::exists(dir_ / "out" / f)) << f;
   EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
   EXPECT_EQ(dataLines(slurp(dir_ / "out/keyframes.tum")), 3);
@@ -152,9 +150,9 @@ TEST_F(RunTest, InterruptKeepsTheFramesDone) {
     EXPECT_NE(summary.find("\"last_frame\": " + std::to_string(c.frame)), std::string::npos) << summary;
     EXPECT_NE(summary.find("\"frames\": " + std::to_string(done)), std::string::npos) << summary;
     if (done < 2) continue;  // RPE needs two poses
-    const Result e = beslam("eval --ref " + (dir_ / "gt.tum").string() + " --est " + (out / "trajectory.tum").string() +
-                                " --format tum",
-                            dir_);
+    const Result e = beslam(
+        "eval --ref " + (dir_ / "gt.tum").string() + " --est " + (out / "trajectory.tum").string() + " --format tum",
+        dir_);
     EXPECT_EQ(e.code, 0) << e.err;
     EXPECT_NE(e.out.find("pairs: " + std::to_string(done)), std::string::npos) << e.out;
   }
@@ -167,9 +165,9 @@ TEST_F(RunTest, InterruptKeepsTheFramesDone) {
 // output.octomap: the runner hands the static map its input and writes static_map.bt (here the map-point
 // route: no LiDAR, and the replay backend has no map points, so an empty but valid tree).
 TEST_F(RunTest, OctomapIsWritten) {
-  const Result r = beslam("run " + pipeline("output: {octomap: true, octomap_resolution: 0.5}\n") + " --out " +
-                              (dir_ / "out").string(),
-                          dir_);
+  const Result r = beslam(
+      "run " + pipeline("output: {octomap: true, octomap_resolution: 0.5}\n") + " --out " + (dir_ / "out").string(),
+      dir_);
   ASSERT_EQ(r.code, 0) << r.err;
   const std::string bt = slurp(dir_ / "out/static_map.bt");
   EXPECT_EQ(bt.rfind("# Octomap OcTree binary file", 0), 0u);
@@ -179,8 +177,8 @@ TEST_F(RunTest, OctomapIsWritten) {
 }
 
 TEST_F(RunTest, BadDebugSignalSettingIsAUsageError) {
-  const Result r = beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_,
-                          "BESLAM_DEBUG_SIGNAL_AT=soon ");
+  const Result r =
+      beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_, "BESLAM_DEBUG_SIGNAL_AT=soon ");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("BESLAM_DEBUG_SIGNAL_AT"), std::string::npos) << r.err;
 }
@@ -282,7 +280,8 @@ TEST_F(RunTest, MotionCheckerGetsNoPoseUntilTheWorldIsMetric) {
       EXPECT_NE(summary.find("\"metric_from_frame\": 0"), std::string::npos) << summary;
       EXPECT_NE(r.out.find("map in metres from frame 0"), std::string::npos) << r.out;
       EXPECT_TRUE(objects.find(" static\n") != std::string::npos || objects.find(" dynamic\n") != std::string::npos)
-          << "a checker with metric poses decides some boxes:\n" << objects;
+          << "a checker with metric poses decides some boxes:\n"
+          << objects;
     } else {
       EXPECT_NE(summary.find("\"metric\": false"), std::string::npos) << summary;
       EXPECT_NE(r.out.find("map scale: not metric"), std::string::npos) << r.out;
@@ -304,7 +303,8 @@ TEST(Demo, CallsParkedCarsStaticAndNoMovingCarStatic) {
                           dir);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("map in metres from frame"), std::string::npos) << r.out;
-  const Result m = beslam("eval-motion --run " + (dir / "out").string() + " --json " + (dir / "motion.json").string(), dir);
+  const Result m =
+      beslam("eval-motion --run " + (dir / "out").string() + " --json " + (dir / "motion.json").string(), dir);
   ASSERT_EQ(m.code, 0) << m.err;
   const std::string json = slurp(dir / "motion.json");
   auto number = [&](const std::string& key) {

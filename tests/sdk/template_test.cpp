@@ -3,15 +3,14 @@
 // headers, the replay detector on the SDK's formats library too), then have the host list the plugins
 // and run them.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
-#include <unistd.h>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "beslam/common/error.hpp"
 #include "beslam/registry/instance.hpp"
@@ -41,16 +40,18 @@ class TemplateBuild : public ::testing::Test {
     fs::create_directories(root_);
     const fs::path prefix = root_ / "prefix";
     ASSERT_EQ(shell("cmake --install " + std::string(BESLAM_BINARY_DIR) + " --prefix " + prefix.string(),
-                    root_ / "install.log"), 0)
+                    root_ / "install.log"),
+              0)
         << slurp(root_ / "install.log");
     ASSERT_TRUE(fs::exists(prefix / "include/beslam/sdk/sdk.hpp"));
     // Configure and build the template from the INSTALLED copy, as a plugin author would.
     const fs::path src = prefix / "share/beslam/plugin-template";
     ASSERT_TRUE(fs::exists(src / "CMakeLists.txt"));
     ASSERT_EQ(shell("cmake -S " + src.string() + " -B " + (root_ / "build").string() +
-                        " -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=" + prefix.string() +
-                        " && cmake --build " + (root_ / "build").string(),
-                    root_ / "build.log"), 0)
+                        " -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=" + prefix.string() + " && cmake --build " +
+                        (root_ / "build").string(),
+                    root_ / "build.log"),
+              0)
         << slurp(root_ / "build.log");
     plugin_dir_ = root_ / "build" / "plugins";
     built_ = fs::exists(plugin_dir_ / "mask_rect.so") && fs::exists(plugin_dir_ / "label_replay.so");
@@ -134,8 +135,8 @@ TEST_F(TemplateBuild, TheOutOfTreeReplayPluginReadsLabelsThroughTheSdkFormats) {
   const fs::path labels = root_ / "labels";
   fs::create_directories(labels);
   std::ofstream(labels / "000000.txt") << "Car 0.00 0 -1.57 100 120 200 180 1.50 1.60 3.90 2.00 1.70 12.00 0.10 0.9\n"
-                                        << "DontCare -1 -1 -10 0 0 10 10 -1 -1 -1 -1000 -1000 -1000 -10\n"
-                                        << "Pedestrian 0.00 0 0.2 10 10 20 40 1.80 0.60 0.80 -3.00 1.60 8.00 0.00 0.2\n";
+                                       << "DontCare -1 -1 -10 0 0 10 10 -1 -1 -1 -1000 -1000 -1000 -10\n"
+                                       << "Pedestrian 0.00 0 0.2 10 10 20 40 1.80 0.60 0.80 -3.00 1.60 8.00 0.00 0.2\n";
   std::ofstream(labels / "000002.txt") << "Car 0.00 0 -1.57 100 120 200 180 1.50 1.60 3.90 2.00 1.70\n";
 
   beslam::registry::HostLog log;
@@ -164,13 +165,14 @@ TEST_F(TemplateBuild, TheOutOfTreeReplayPluginReadsLabelsThroughTheSdkFormats) {
 
   frame.index = 1;
   EXPECT_TRUE(detector.detect(frame).empty());  // no label file: no objects
-  frame.index = 2;                               // a 13-field row: the error names the file and the line
+  frame.index = 2;                              // a 13-field row: the error names the file and the line
   try {
     detector.detect(frame);
     FAIL() << "a malformed label row was accepted";
   } catch (const beslam::Error& e) {
     EXPECT_NE(std::string(e.what()).find("000002.txt:1: object label row has 13 fields, expected 15 or 16"),
-              std::string::npos) << e.what();
+              std::string::npos)
+        << e.what();
   }
 }
 
@@ -181,16 +183,15 @@ TEST_F(TemplateBuild, BuiltInReplayPluginsBuildFromTheInstalledSdkAlone) {
   ASSERT_TRUE(built_);
   const fs::path project = root_ / "replays";
   fs::create_directories(project);
-  std::ofstream(project / "CMakeLists.txt")
-      << "cmake_minimum_required(VERSION 3.19)\n"
-      << "project(builtin_replays CXX)\n"
-      << "find_package(beslam_sdk REQUIRED)\n"
-      << "if(TARGET beslam_registry OR TARGET beslam_datasets)\n"
-      << "  message(FATAL_ERROR \"a host library is visible\")\n"
-      << "endif()\n"
-      << "foreach(p detector_replay detector_oracle backend_pose_replay)\n"
-      << "  add_subdirectory(" << BESLAM_SOURCE_DIR << "/plugins/${p} ${p})\n"
-      << "endforeach()\n";
+  std::ofstream(project / "CMakeLists.txt") << "cmake_minimum_required(VERSION 3.19)\n"
+                                            << "project(builtin_replays CXX)\n"
+                                            << "find_package(beslam_sdk REQUIRED)\n"
+                                            << "if(TARGET beslam_registry OR TARGET beslam_datasets)\n"
+                                            << "  message(FATAL_ERROR \"a host library is visible\")\n"
+                                            << "endif()\n"
+                                            << "foreach(p detector_replay detector_oracle backend_pose_replay)\n"
+                                            << "  add_subdirectory(" << BESLAM_SOURCE_DIR << "/plugins/${p} ${p})\n"
+                                            << "endforeach()\n";
   ASSERT_EQ(shell("cmake -S " + project.string() + " -B " + (project / "build").string() +
                       " -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=" + (root_ / "prefix").string() +
                       " && cmake --build " + (project / "build").string() + " -j2",
@@ -199,9 +200,11 @@ TEST_F(TemplateBuild, BuiltInReplayPluginsBuildFromTheInstalledSdkAlone) {
       << slurp(root_ / "replays.log");
   const fs::path plugins = project / "build" / "plugins";
   const fs::path out = root_ / "replays_listed.txt";
-  ASSERT_EQ(shell(std::string(BESLAM_BINARY_DIR) + "/bin/beslam plugins --json --plugin-path " + plugins.string(), out), 0)
+  ASSERT_EQ(shell(std::string(BESLAM_BINARY_DIR) + "/bin/beslam plugins --json --plugin-path " + plugins.string(), out),
+            0)
       << slurp(out);
   const std::string text = slurp(out);
   for (const char* id : {"detector_replay", "detector_oracle", "backend_pose_replay"})
-    EXPECT_NE(text.find(plugins.string() + "/" + id + ".so"), std::string::npos) << id << " not built out of tree:\n" << text;
+    EXPECT_NE(text.find(plugins.string() + "/" + id + ".so"), std::string::npos) << id << " not built out of tree:\n"
+                                                                                 << text;
 }

@@ -40,8 +40,8 @@ typedef int32_t beslam_status;
 #define BESLAM_ERROR_INVALID_CONFIG 2   /* a configuration value the plugin cannot use */
 #define BESLAM_ERROR_RUNTIME 3          /* the call failed on its input (missing file, NaN, ...) */
 #define BESLAM_ERROR_OUT_OF_MEMORY 4
-#define BESLAM_ERROR_UNSUPPORTED 5      /* the plugin does not offer this call */
-#define BESLAM_ERROR_INTERNAL 6         /* a bug: an unexpected exception inside the plugin */
+#define BESLAM_ERROR_UNSUPPORTED 5 /* the plugin does not offer this call */
+#define BESLAM_ERROR_INTERNAL 6    /* a bug: an unexpected exception inside the plugin */
 
 /* ---- Plugin kinds (int32) ---- */
 #define BESLAM_KIND_DETECTOR 1
@@ -70,7 +70,7 @@ typedef struct beslam_host {
 #define BESLAM_CONFIG_INT 2
 #define BESLAM_CONFIG_DOUBLE 3
 #define BESLAM_CONFIG_STRING 4
-#define BESLAM_CONFIG_PATH 5        /* a string the host resolves against the pipeline file's folder */
+#define BESLAM_CONFIG_PATH 5 /* a string the host resolves against the pipeline file's folder */
 #define BESLAM_CONFIG_DOUBLE_LIST 6
 
 /* One key a plugin accepts. The host validates pipeline YAML against these before create(). */
@@ -81,8 +81,8 @@ typedef struct beslam_config_field {
   const char* default_value; /* YAML text of the default ("20", "true", "[0.5, 1.0]"); NULL if required */
   double min_value;          /* numbers (and each list element): inclusive range; ignored if min > max */
   double max_value;
-  const char* choices;       /* strings: "a|b|c" to restrict the value, or NULL */
-  const char* doc;           /* one line for `beslam plugins` */
+  const char* choices; /* strings: "a|b|c" to restrict the value, or NULL */
+  const char* doc;     /* one line for `beslam plugins` */
 } beslam_config_field;
 
 /* One resolved configuration value, handed to create(). Every schema key is present (defaults filled). */
@@ -90,9 +90,9 @@ typedef struct beslam_config_value {
   const char* key;
   int32_t type;
   int32_t reserved;
-  double number;          /* BOOL (0/1), INT, DOUBLE */
-  const char* text;       /* STRING, PATH (absolute after resolution) */
-  const double* list;     /* DOUBLE_LIST */
+  double number;      /* BOOL (0/1), INT, DOUBLE */
+  const char* text;   /* STRING, PATH (absolute after resolution) */
+  const double* list; /* DOUBLE_LIST */
   uint64_t list_size;
 } beslam_config_value;
 
@@ -101,12 +101,12 @@ struct beslam_create_info; /* data.h: camera, extrinsics, configuration */
 /* ---- The plugin descriptor: one per plugin; a library may hold several ---- */
 typedef struct beslam_plugin_descriptor {
   uint32_t struct_size;
-  uint32_t abi_version;      /* BESLAM_ABI_VERSION the plugin was built against */
-  const char* id;            /* stable, unique, [a-z0-9_]+: "backend_orb" */
-  const char* name;          /* display name */
-  const char* description;   /* one line */
-  int32_t kind;              /* BESLAM_KIND_* */
-  uint32_t version_major;    /* the plugin's own version */
+  uint32_t abi_version;    /* BESLAM_ABI_VERSION the plugin was built against */
+  const char* id;          /* stable, unique, [a-z0-9_]+: "backend_orb" */
+  const char* name;        /* display name */
+  const char* description; /* one line */
+  int32_t kind;            /* BESLAM_KIND_* */
+  uint32_t version_major;  /* the plugin's own version */
   uint32_t version_minor;
   uint32_t version_patch;
   const beslam_config_field* config_fields;
@@ -115,7 +115,7 @@ typedef struct beslam_plugin_descriptor {
   /* Make an instance. On failure return non-OK and log the reason through info->host. */
   beslam_status (*create)(const struct beslam_create_info* info, void** out_instance);
   void (*destroy)(void* instance);
-  const void* functions;     /* the kind's table (beslam_detector_v1 ...); starts with uint32_t struct_size */
+  const void* functions; /* the kind's table (beslam_detector_v1 ...); starts with uint32_t struct_size */
 } beslam_plugin_descriptor;
 
 /* Exported entry points (names are part of the ABI). */

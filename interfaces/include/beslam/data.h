@@ -38,11 +38,11 @@ extern "C" {
 #define BESLAM_PIXEL_LABEL16 4 /* 1 x uint16, a label mask (see BESLAM_LABEL_*) */
 
 typedef struct beslam_image_view {
-  const uint8_t* data;   /* NULL: no image */
+  const uint8_t* data; /* NULL: no image */
   int32_t width;
   int32_t height;
-  int32_t stride_bytes;  /* bytes from one row to the next, >= width * pixel size */
-  int32_t format;        /* BESLAM_PIXEL_* */
+  int32_t stride_bytes; /* bytes from one row to the next, >= width * pixel size */
+  int32_t format;       /* BESLAM_PIXEL_* */
 } beslam_image_view;
 
 /* A label mask the host owns and a mask generator fills (BESLAM_PIXEL_LABEL16). */
@@ -61,7 +61,7 @@ typedef struct beslam_mask_buffer {
 
 /* ---- LiDAR ---- */
 typedef struct beslam_point_cloud_view {
-  const float* data;     /* x y z intensity, in the LiDAR frame; NULL: no scan */
+  const float* data; /* x y z intensity, in the LiDAR frame; NULL: no scan */
   uint64_t count;
   uint32_t stride_bytes; /* bytes from one point to the next, >= 16 */
   uint32_t reserved;
@@ -102,18 +102,18 @@ typedef struct beslam_camera {
 
 /* Arrays of boxes carry their element size: index with (const char*)boxes + i * element_size. */
 typedef struct beslam_box3d {
-  int32_t class_id;        /* BESLAM_CLASS_* */
-  int32_t track_id;        /* -1 until a tracker assigns one */
-  int32_t motion_state;    /* BESLAM_MOTION_* */
-  uint32_t flags;          /* BESLAM_BOX_* */
-  double center_cam[3];    /* geometric centre of the box in the camera frame (not KITTI's bottom centre) */
-  double size[3];          /* length (along heading), width, height */
-  double yaw;              /* rotation about the camera y axis, KITTI's rotation_y convention */
-  double velocity_cam[3];  /* m/s in the camera frame, if BESLAM_BOX_HAS_VELOCITY */
-  double bbox2d[4];        /* x1 y1 x2 y2 in pixels, if BESLAM_BOX_HAS_BBOX2D */
-  float score;             /* detector confidence, 0..1 */
-  float truncation;        /* 0..1, KITTI */
-  int32_t occlusion;       /* 0..3, KITTI */
+  int32_t class_id;       /* BESLAM_CLASS_* */
+  int32_t track_id;       /* -1 until a tracker assigns one */
+  int32_t motion_state;   /* BESLAM_MOTION_* */
+  uint32_t flags;         /* BESLAM_BOX_* */
+  double center_cam[3];   /* geometric centre of the box in the camera frame (not KITTI's bottom centre) */
+  double size[3];         /* length (along heading), width, height */
+  double yaw;             /* rotation about the camera y axis, KITTI's rotation_y convention */
+  double velocity_cam[3]; /* m/s in the camera frame, if BESLAM_BOX_HAS_VELOCITY */
+  double bbox2d[4];       /* x1 y1 x2 y2 in pixels, if BESLAM_BOX_HAS_BBOX2D */
+  float score;            /* detector confidence, 0..1 */
+  float truncation;       /* 0..1, KITTI */
+  int32_t occlusion;      /* 0..3, KITTI */
   int32_t reserved;
 } beslam_box3d;
 
@@ -146,17 +146,17 @@ typedef struct beslam_frame {
 /* ---- Creating an instance ---- */
 typedef struct beslam_create_info {
   uint32_t struct_size;
-  uint32_t has_lidar_extrinsics;     /* 1 when T_cam_lidar is valid */
+  uint32_t has_lidar_extrinsics; /* 1 when T_cam_lidar is valid */
   const beslam_host* host;
   const beslam_config_value* config; /* every schema key, defaults filled, validated */
   uint32_t config_count;
   uint32_t reserved;
   beslam_camera camera;
-  beslam_pose T_cam_lidar;           /* LiDAR frame -> camera frame */
-  const char* output_dir;            /* the run's output folder (a plugin may write its own files there) */
+  beslam_pose T_cam_lidar; /* LiDAR frame -> camera frame */
+  const char* output_dir;  /* the run's output folder (a plugin may write its own files there) */
   /* ABI 1.1: the rig. A property of the dataset (KITTI: 1.65 m; synthetic: its manifest), which a
    * pipeline may override with dataset.camera_height; handed to every plugin. */
-  double camera_height;              /* metres from the camera centre down to the road; 0: unknown */
+  double camera_height; /* metres from the camera centre down to the road; 0: unknown */
 } beslam_create_info;
 
 /* ---- What the backend and reconstructor exchange ---- */
@@ -167,7 +167,7 @@ typedef struct beslam_keyframe {
   int64_t frame_index;
   double timestamp;
   beslam_pose T_world_cam;
-  int32_t world_scale;           /* ABI 1.1: BESLAM_WORLD_SCALE_* of T_world_cam */
+  int32_t world_scale; /* ABI 1.1: BESLAM_WORLD_SCALE_* of T_world_cam */
   int32_t reserved1;
 } beslam_keyframe;
 
@@ -183,12 +183,12 @@ typedef struct beslam_object_landmark {
   int32_t track_id;
   int32_t class_id;
   float confidence;
-  beslam_pose T_world_object;    /* object frame: x forward (heading), y left, z up, origin at the centre */
-  double scale[3];               /* length, width, height */
-  const float* shape_code;       /* latent shape vector, may be NULL */
+  beslam_pose T_world_object; /* object frame: x forward (heading), y left, z up, origin at the centre */
+  double scale[3];            /* length, width, height */
+  const float* shape_code;    /* latent shape vector, may be NULL */
   uint32_t shape_code_size;
   uint32_t reserved;
-  const float* surface_points;   /* x y z in the object frame, 3 floats each; may be NULL */
+  const float* surface_points; /* x y z in the object frame, 3 floats each; may be NULL */
   uint64_t surface_point_count;
 } beslam_object_landmark;
 

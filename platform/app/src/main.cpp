@@ -13,10 +13,9 @@
 #include <cstdlib>
 #include <functional>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "beslam/bench/bench.hpp"
 #include "beslam/common/error.hpp"
@@ -114,15 +113,24 @@ int runCommand(const std::vector<std::string>& args) {
   options.progress = true;
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
-    if (a == "--set") overrides.push_back(takeValue(args, i));
-    else if (a.rfind("--set=", 0) == 0) overrides.push_back(a.substr(6));
-    else if (a == "--out") options.output_dir = takeValue(args, i);
-    else if (a == "--plugin-path") plugin_paths.push_back(takeValue(args, i));
-    else if (a == "--quiet") options.progress = false;
-    else if (a == "--verbose") options.log_level = BESLAM_LOG_INFO;
-    else if (!a.empty() && a[0] == '-') throw UsageError("run: unknown option " + a);
-    else if (pipeline_path.empty()) pipeline_path = a;
-    else throw UsageError("run: more than one pipeline file given");
+    if (a == "--set")
+      overrides.push_back(takeValue(args, i));
+    else if (a.rfind("--set=", 0) == 0)
+      overrides.push_back(a.substr(6));
+    else if (a == "--out")
+      options.output_dir = takeValue(args, i);
+    else if (a == "--plugin-path")
+      plugin_paths.push_back(takeValue(args, i));
+    else if (a == "--quiet")
+      options.progress = false;
+    else if (a == "--verbose")
+      options.log_level = BESLAM_LOG_INFO;
+    else if (!a.empty() && a[0] == '-')
+      throw UsageError("run: unknown option " + a);
+    else if (pipeline_path.empty())
+      pipeline_path = a;
+    else
+      throw UsageError("run: more than one pipeline file given");
   }
   if (pipeline_path.empty()) throw UsageError("run: no pipeline file given");
 
@@ -143,8 +151,8 @@ int runCommand(const std::vector<std::string>& args) {
   options.after_frame = debugSignalAt();
   const beslam::pipeline::RunSummary s = beslam::pipeline::run(spec, options);
 
-  std::cout << "frames " << s.frames << ", tracked " << s.tracked << ", keyframes " << s.keyframes
-            << ", median " << s.median_frame_ms << " ms/frame\n";
+  std::cout << "frames " << s.frames << ", tracked " << s.tracked << ", keyframes " << s.keyframes << ", median "
+            << s.median_frame_ms << " ms/frame\n";
   if (!s.untracked.empty()) {
     std::cout << "untracked frames:";
     for (size_t i = 0; i < s.untracked.size() && i < 20; ++i) std::cout << ' ' << s.untracked[i];
@@ -152,8 +160,8 @@ int runCommand(const std::vector<std::string>& args) {
     std::cout << "\n";
   }
   if (s.has_ape)
-    std::cout << "APE translation RMSE " << s.ape_trans_rmse << " m (" << spec.evaluation.alignment
-              << ", scale " << s.ape_alignment_scale << "), RPE translation RMSE " << s.rpe_trans_rmse << " m\n";
+    std::cout << "APE translation RMSE " << s.ape_trans_rmse << " m (" << spec.evaluation.alignment << ", scale "
+              << s.ape_alignment_scale << "), RPE translation RMSE " << s.rpe_trans_rmse << " m\n";
   if (s.has_ape)
     std::cout << "APE (both alignments): Sim(3) " << s.ape_sim3_rmse << " m, SE(3) " << s.ape_se3_rmse << " m\n";
   if (!s.evaluation_error.empty()) std::cout << "no APE: " << s.evaluation_error << "\n";
@@ -192,9 +200,12 @@ int pluginsCommand(const std::vector<std::string>& args) {
   beslam::registry::Registry registry;
   bool json_out = false;
   for (size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--plugin-path") registry.addSearchPath(takeValue(args, i));
-    else if (args[i] == "--json") json_out = true;
-    else throw UsageError("plugins: unknown option " + args[i]);
+    if (args[i] == "--plugin-path")
+      registry.addSearchPath(takeValue(args, i));
+    else if (args[i] == "--json")
+      json_out = true;
+    else
+      throw UsageError("plugins: unknown option " + args[i]);
   }
   registry.scan();
   if (json_out) {
@@ -202,13 +213,20 @@ int pluginsCommand(const std::vector<std::string>& args) {
     j["search_paths"] = registry.searchPaths();
     j["plugins"] = nlohmann::json::array();
     for (const auto& p : registry.plugins()) {
-      nlohmann::json pj{{"id", p.id}, {"kind", beslam::registry::kindName(p.kind)}, {"version", p.version},
+      nlohmann::json pj{{"id", p.id},
+                        {"kind", beslam::registry::kindName(p.kind)},
+                        {"version", p.version},
                         {"abi", std::to_string(p.abi_version >> 16) + "." + std::to_string(p.abi_version & 0xffff)},
-                        {"name", p.name}, {"description", p.description}, {"library", p.library_path}};
+                        {"name", p.name},
+                        {"description", p.description},
+                        {"library", p.library_path}};
       pj["config"] = nlohmann::json::array();
       for (const auto& f : p.fields) {
-        nlohmann::json fj{{"key", f.key}, {"type", beslam::registry::configTypeName(f.type)}, {"required", f.required},
-                          {"default", f.default_value}, {"doc", f.doc}};
+        nlohmann::json fj{{"key", f.key},
+                          {"type", beslam::registry::configTypeName(f.type)},
+                          {"required", f.required},
+                          {"default", f.default_value},
+                          {"doc", f.doc}};
         if (f.min_value <= f.max_value) fj["range"] = {f.min_value, f.max_value};
         if (!f.choices.empty()) fj["choices"] = f.choices;
         pj["config"].push_back(fj);

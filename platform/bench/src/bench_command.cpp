@@ -1,18 +1,18 @@
 // `beslam bench`: run the cells (N at a time, each a child `beslam run`), print progress, write the tables
 // and the report; or emit a Slurm job array, run one cell, merge finished cells.
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <cmath>
-#include <fcntl.h>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <map>
-#include <spawn.h>
-#include <sstream>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "beslam/bench/bench.hpp"
 #include "beslam/common/error.hpp"
@@ -65,11 +65,18 @@ std::string clock(double seconds) {
 }
 
 json describe(const Matrix& m, const std::vector<Cell>& cells, const std::string& binary) {
-  json j = {{"name", m.name}, {"matrix", fs::absolute(m.path).lexically_normal().string()}, {"binary", binary},
-            {"seeds", m.seeds}, {"cells", json::array()}};
+  json j = {{"name", m.name},
+            {"matrix", fs::absolute(m.path).lexically_normal().string()},
+            {"binary", binary},
+            {"seeds", m.seeds},
+            {"cells", json::array()}};
   for (const auto& c : cells)
-    j["cells"].push_back({{"index", c.index}, {"pipeline", c.pipeline}, {"sequence", c.sequence}, {"seed", c.seed},
-                          {"dir", c.dir}, {"args", c.args}});
+    j["cells"].push_back({{"index", c.index},
+                          {"pipeline", c.pipeline},
+                          {"sequence", c.sequence},
+                          {"seed", c.seed},
+                          {"dir", c.dir},
+                          {"args", c.args}});
   return j;
 }
 
@@ -117,8 +124,10 @@ std::vector<std::string> runCells(const json& bench, const std::string& dir, int
   std::vector<int> todo;
   int done = 0;
   for (int i = 0; i < total; ++i) {
-    if (cellFinished((fs::path(dir) / cells[i]["dir"].get<std::string>()).string())) ++done;
-    else todo.push_back(i);
+    if (cellFinished((fs::path(dir) / cells[i]["dir"].get<std::string>()).string()))
+      ++done;
+    else
+      todo.push_back(i);
   }
   const int skipped = done;
   const bool tty = isatty(STDERR_FILENO) && &err == &std::cerr;
@@ -141,8 +150,10 @@ std::vector<std::string> runCells(const json& bench, const std::string& dir, int
     std::ostringstream line;
     line << "[" << done << "/" << total << " cells] elapsed " << clock(elapsed) << ", remaining " << remaining;
     if (!failed.empty()) line << ", " << failed.size() << " failed";
-    if (tty) err << "\r\033[K" << line.str() << (event.empty() ? "" : "  " + event) << std::flush;
-    else if (!event.empty()) err << line.str() << "  " << event << "\n";
+    if (tty)
+      err << "\r\033[K" << line.str() << (event.empty() ? "" : "  " + event) << std::flush;
+    else if (!event.empty())
+      err << line.str() << "  " << event << "\n";
   };
   size_t next = 0;
   while (next < todo.size() || !running.empty()) {
@@ -175,8 +186,8 @@ std::vector<std::string> runCells(const json& bench, const std::string& dir, int
     }
   }
   if (tty) err << "\n";
-  err << "bench: " << total - static_cast<int>(failed.size()) << " of " << total << " cells finished, "
-      << ran << " run in " << clock(since(t0)) << "\n";
+  err << "bench: " << total - static_cast<int>(failed.size()) << " of " << total << " cells finished, " << ran
+      << " run in " << clock(since(t0)) << "\n";
   return failed;
 }
 
@@ -219,7 +230,8 @@ int runBenchCommand(const std::vector<std::string>& args, std::ostream& out, std
       if (a == "--help" || a == "-h") {
         out << kUsage;
         return 0;
-      } else if (a == "--out") out_dir = value();
+      } else if (a == "--out")
+        out_dir = value();
       else if (a == "--jobs") {
         const std::string v = value();
         try {
@@ -231,7 +243,8 @@ int runBenchCommand(const std::vector<std::string>& args, std::ostream& out, std
       } else if (a == "--emit") {
         emit = value();
         if (emit != "slurm") throw Usage("--emit: only 'slurm' is supported, got '" + emit + "'");
-      } else if (a == "--merge") merge_dir = value();
+      } else if (a == "--merge")
+        merge_dir = value();
       else if (a == "--cell") {
         const std::string v = value();
         try {
@@ -241,13 +254,17 @@ int runBenchCommand(const std::vector<std::string>& args, std::ostream& out, std
         }
         if (i + 1 >= args.size()) throw Usage("--cell K DIR: the bench folder is missing");
         cell_dir = args[++i];
-      } else if (!a.empty() && a[0] == '-') throw Usage("unknown option " + a);
-      else if (matrix_path.empty()) matrix_path = a;
-      else throw Usage("more than one matrix file given");
+      } else if (!a.empty() && a[0] == '-')
+        throw Usage("unknown option " + a);
+      else if (matrix_path.empty())
+        matrix_path = a;
+      else
+        throw Usage("more than one matrix file given");
     }
 
     if (!merge_dir.empty()) {
-      if (!matrix_path.empty() || cell >= 0 || !emit.empty()) throw Usage("--merge DIR takes no matrix file, --cell or --emit");
+      if (!matrix_path.empty() || cell >= 0 || !emit.empty())
+        throw Usage("--merge DIR takes no matrix file, --cell or --emit");
       const json bench = readBench(merge_dir);
       finish(merge_dir, out);
       return 0;
@@ -318,7 +335,8 @@ int runBenchCommand(const std::vector<std::string>& args, std::ostream& out, std
     finish(out_dir, out);
     if (!failed.empty())
       throwAt(out_dir, std::to_string(failed.size()) + " of " + std::to_string(cells.size()) +
-                           " cells failed; first: " + failed.front() + "/beslam.log (rerun the same command to retry them)");
+                           " cells failed; first: " + failed.front() +
+                           "/beslam.log (rerun the same command to retry them)");
     return 0;
   } catch (const Usage& e) {
     err << "beslam bench: usage error: " << e.what() << "\n" << kUsage;

@@ -1,11 +1,11 @@
 // The matrix file: parse, validate, enumerate cells.
+#include <yaml-cpp/yaml.h>
+
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
-
-#include <nlohmann/json.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "beslam/bench/bench.hpp"
 #include "beslam/common/error.hpp"
@@ -165,7 +165,8 @@ Matrix loadMatrix(const std::string& path) {
     p.sets = r.sets(e, where);
     if (e["sequences"].IsDefined()) {
       const YAML::Node only = e["sequences"];
-      if (!only.IsSequence() || only.size() == 0) r.fail(only, where + ".sequences: expected a non-empty list of sequence labels");
+      if (!only.IsSequence() || only.size() == 0)
+        r.fail(only, where + ".sequences: expected a non-empty list of sequence labels");
       for (const auto& l : only) {
         const std::string s = r.scalar(l, where + ".sequences");
         bool known = false;

@@ -5,9 +5,8 @@
 #include <fstream>
 #include <iomanip>
 #include <map>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "beslam/bench/bench.hpp"
 #include "beslam/common/error.hpp"
@@ -75,7 +74,10 @@ RunTiming readTiming(const fs::path& csv) {
     if (std::isfinite(num(backend))) trk.push_back(num(backend));
     if (std::isfinite(num(total))) tot.push_back(num(total));
   }
-  auto med = [](const std::vector<double>& v) { const auto s = stat(v); return s ? s->median : NAN; };
+  auto med = [](const std::vector<double>& v) {
+    const auto s = stat(v);
+    return s ? s->median : NAN;
+  };
   t.semantic = med(sem);
   t.tracking = med(trk);
   t.total = med(tot);
@@ -101,7 +103,8 @@ std::string fmt(const json& s, int digits) {
   if (s.is_null()) return "-";
   std::ostringstream o;
   o << std::fixed << std::setprecision(digits) << s["median"].get<double>();
-  if (s["n"].get<int>() > 1 && s["min"] != s["max"]) o << " (" << s["min"].get<double>() << "–" << s["max"].get<double>() << ")";
+  if (s["n"].get<int>() > 1 && s["min"] != s["max"])
+    o << " (" << s["min"].get<double>() << "–" << s["max"].get<double>() << ")";
   return o.str();
 }
 
@@ -181,13 +184,21 @@ json writeTables(const std::string& out_dir) {
       for (const auto& r : runs[{s, p}]) {
         sem.push_back(r.timing.semantic), trk.push_back(r.timing.tracking), tot.push_back(r.timing.total), ++n;
       }
-    t3.push_back({{"pipeline", p}, {"runs", n}, {"semantic_ms", statJson(sem)}, {"tracking_ms", statJson(trk)},
+    t3.push_back({{"pipeline", p},
+                  {"runs", n},
+                  {"semantic_ms", statJson(sem)},
+                  {"tracking_ms", statJson(trk)},
                   {"total_ms", statJson(tot)}});
   }
 
-  json all = {{"name", bench.value("name", "")}, {"cells", bench["cells"].size()}, {"finished", finished},
-              {"pipelines", pipelines}, {"sequences", sequences},
-              {"table1", t1}, {"table3", t3}, {"objects", objects}};
+  json all = {{"name", bench.value("name", "")},
+              {"cells", bench["cells"].size()},
+              {"finished", finished},
+              {"pipelines", pipelines},
+              {"sequences", sequences},
+              {"table1", t1},
+              {"table3", t3},
+              {"objects", objects}};
 
   // Markdown
   std::ostringstream md;
@@ -195,11 +206,12 @@ json writeTables(const std::string& out_dir) {
      << " cells finished\n\nMedians over seeds (min–max). APE/RPE: translation RMSE in metres (RPE rot in degrees), "
         "from each run's summary.json; RPE under the pipeline's own alignment. No range: all runs agree.\n\n"
      << "## Table I: trajectory error\n\n"
-     << "| sequence | pipeline | runs | tracked | APE Sim(3) m | APE SE(3) m | Sim(3) scale | RPE trans m | RPE rot deg |\n"
+     << "| sequence | pipeline | runs | tracked | APE Sim(3) m | APE SE(3) m | Sim(3) scale | RPE trans m | RPE rot "
+        "deg |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& r : t1)
-    md << "| " << r["sequence"].get<std::string>() << " | " << r["pipeline"].get<std::string>() << " | "
-       << r["runs"] << "/" << r["planned"] << " | " << fmt(r["tracked"], 0) << " of " << fmt(r["frames"], 0) << " | "
+    md << "| " << r["sequence"].get<std::string>() << " | " << r["pipeline"].get<std::string>() << " | " << r["runs"]
+       << "/" << r["planned"] << " | " << fmt(r["tracked"], 0) << " of " << fmt(r["frames"], 0) << " | "
        << fmt(r["ape_sim3_rmse"], 3) << " | " << fmt(r["ape_se3_rmse"], 3) << " | " << fmt(r["sim3_scale"], 3) << " | "
        << fmt(r["rpe_trans_rmse"], 4) << " | " << fmt(r["rpe_rot_rmse"], 3) << " |\n";
   md << "\n## Table III: run time (ms per frame; per-run medians over frames, then medians over runs)\n\n"
@@ -215,8 +227,8 @@ json writeTables(const std::string& out_dir) {
   for (const auto& r : objects)
     md << "| " << r["sequence"].get<std::string>() << " | " << r["pipeline"].get<std::string>() << " | " << r["runs"]
        << " | " << fmt(r["static"], 0) << " | " << fmt(r["dynamic"], 0) << " | " << fmt(r["unknown"], 0) << " | "
-       << fmt(r["map_points_static"], 0) << " | " << fmt(r["map_points"], 0) << " | "
-       << fmt(r["metric_from_frame"], 0) << " | " << r["not_metric_runs"] << " |\n";
+       << fmt(r["map_points_static"], 0) << " | " << fmt(r["map_points"], 0) << " | " << fmt(r["metric_from_frame"], 0)
+       << " | " << r["not_metric_runs"] << " |\n";
 
   // CSV: one column per median / min / max, full precision.
   auto csv = [&](const json& rows, const std::vector<std::string>& keys, const std::vector<std::string>& stats) {
@@ -227,8 +239,10 @@ json writeTables(const std::string& out_dir) {
     for (const auto& r : rows) {
       for (size_t i = 0; i < keys.size(); ++i) {
         o << (i ? "," : "");
-        if (r[keys[i]].is_string()) o << r[keys[i]].get<std::string>();
-        else o << r[keys[i]].dump();
+        if (r[keys[i]].is_string())
+          o << r[keys[i]].get<std::string>();
+        else
+          o << r[keys[i]].dump();
       }
       for (const auto& k : stats)
         o << "," << csvNum(r[k], "median") << "," << csvNum(r[k], "min") << "," << csvNum(r[k], "max");
@@ -237,9 +251,9 @@ json writeTables(const std::string& out_dir) {
     return o.str();
   };
   const fs::path out(out_dir);
-  writeFileAtomic((out / "table1.csv").string(),
-                  csv(t1, {"sequence", "pipeline", "runs"},
-                      {"tracked", "frames", "ape_sim3_rmse", "ape_se3_rmse", "sim3_scale", "rpe_trans_rmse", "rpe_rot_rmse"}));
+  writeFileAtomic((out / "table1.csv").string(), csv(t1, {"sequence", "pipeline", "runs"},
+                                                     {"tracked", "frames", "ape_sim3_rmse", "ape_se3_rmse",
+                                                      "sim3_scale", "rpe_trans_rmse", "rpe_rot_rmse"}));
   writeFileAtomic((out / "table3.csv").string(),
                   csv(t3, {"pipeline", "runs"}, {"semantic_ms", "tracking_ms", "total_ms"}));
   writeFileAtomic((out / "objects.csv").string(),

@@ -1,25 +1,25 @@
 // beslam bench: matrix validation (one error naming the file and the problem), the statistics, and one
 // tiny real bench (2 pipelines x 1 short synthetic sequence x 2 seeds): tables equal to the runs' own
 // summary.json, resume skips finished cells, the emitted Slurm script's tasks run locally + --merge.
+#include "beslam/bench/bench.hpp"
+
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
-#include <iostream>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
-#include <sys/wait.h>
-
+#include <iomanip>
+#include <iostream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
-#include "beslam/bench/bench.hpp"
 #include "beslam/common/error.hpp"
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 using beslam::bench::loadMatrix;
+using nlohmann::json;
 
 namespace {
 
@@ -58,7 +58,8 @@ fs::path tempDir(const std::string& name) {
 
 std::string goodMatrix(const std::string& extra_pipeline = "") {
   return "name: t\nseeds: [1, 2]\nsequences:\n  - {label: ds, sequence: dynamic_street}\npipelines:\n"
-         "  - {label: plain, file: " + kAblation + "synth_no_semantics.yaml}\n" + extra_pipeline;
+         "  - {label: plain, file: " +
+         kAblation + "synth_no_semantics.yaml}\n" + extra_pipeline;
 }
 
 // The error of loadMatrix on `text`, which must name the file (and line) and contain `problem`.
@@ -119,7 +120,8 @@ TEST(BenchMatrix, BadFilesGiveOneErrorNamingFileAndProblem) {
   expectError(goodMatrix("  - {label: 'a/b', file: " + kAblation + "synth_beslam.yaml}\n"), "not a folder-safe name");
   expectError(goodMatrix("  - {label: x, file: " + kAblation + "synth_beslam.yaml, sequences: [nope]}\n"),
               "no sequence is labelled 'nope'");
-  expectError(goodMatrix("  - {label: x, file: " + kAblation + "synth_beslam.yaml, set: [novalue]}\n"), "not key=value");
+  expectError(goodMatrix("  - {label: x, file: " + kAblation + "synth_beslam.yaml, set: [novalue]}\n"),
+              "not key=value");
   // Problems inside a cell's pipeline (here an unknown plugin setting) are found before anything runs.
   expectError(goodMatrix("  - {label: x, file: " + kAblation + "synth_beslam.yaml, set: [backend.no_such_key=1]}\n"),
               "pipeline 'x' on sequence 'ds'");
@@ -204,11 +206,16 @@ TEST(BenchCommand, TinyBenchTablesResumeSlurmAndMerge) {
   const fs::path cache = fs::path(BESLAM_BINARY_DIR) / "test-bench-synth-cache";
   write(dir / "m.yaml",
         "name: tiny\nseeds: [1, 2]\nsequences:\n"
-        "  - label: ds\n    sequence: dynamic_street\n    root: " + cache.string() + "\n"
-        "    set: [\"dataset.synth_set=lidar.enabled=false,camera.colour=false,frames=60\"]\n"
-        "pipelines:\n"
-        "  - {label: plain, file: " + kAblation + "synth_no_semantics.yaml}\n"
-        "  - {label: beslam, file: " + kAblation + "synth_beslam.yaml}\n");
+        "  - label: ds\n    sequence: dynamic_street\n    root: " +
+            cache.string() +
+            "\n"
+            "    set: [\"dataset.synth_set=lidar.enabled=false,camera.colour=false,frames=60\"]\n"
+            "pipelines:\n"
+            "  - {label: plain, file: " +
+            kAblation +
+            "synth_no_semantics.yaml}\n"
+            "  - {label: beslam, file: " +
+            kAblation + "synth_beslam.yaml}\n");
   const fs::path out = dir / "out";
   Result r = shell(kBeslam + " bench " + (dir / "m.yaml").string() + " --out " + out.string() + " --jobs 2", dir);
   ASSERT_EQ(r.code, 0) << r.err << r.out;
@@ -216,9 +223,9 @@ TEST(BenchCommand, TinyBenchTablesResumeSlurmAndMerge) {
   EXPECT_NE(r.err.find("[4/4 cells]"), std::string::npos) << r.err;
   EXPECT_NE(r.out.find("## Table I"), std::string::npos);
   expectTablesMatchSummaries(out, 4);
-  for (const char* f : {"tables.md", "table1.csv", "table3.csv", "objects.csv", "report/index.html",
-                        "report/lib/three.min.js", "report/lib/OrbitControls.js", "report/lib/chart.min.js",
-                        "report/data/run_3.js"})
+  for (const char* f :
+       {"tables.md", "table1.csv", "table3.csv", "objects.csv", "report/index.html", "report/lib/three.min.js",
+        "report/lib/OrbitControls.js", "report/lib/chart.min.js", "report/data/run_3.js"})
     EXPECT_TRUE(fs::exists(out / f)) << f;
 
   // Resume: nothing runs again.
@@ -268,14 +275,18 @@ TEST(BenchCommand, InterruptedCellIsRunAgain) {
   const fs::path cache = fs::path(BESLAM_BINARY_DIR) / "test-bench-synth-cache";
   write(dir / "m.yaml",
         "name: interrupted\nseeds: [1]\nsequences:\n"
-        "  - label: ds\n    sequence: dynamic_street\n    root: " + cache.string() + "\n"
-        "    set: [\"dataset.synth_set=lidar.enabled=false,camera.colour=false,frames=60\"]\n"
-        "pipelines:\n  - {label: plain, file: " + kAblation + "synth_no_semantics.yaml}\n");
+        "  - label: ds\n    sequence: dynamic_street\n    root: " +
+            cache.string() +
+            "\n"
+            "    set: [\"dataset.synth_set=lidar.enabled=false,camera.colour=false,frames=60\"]\n"
+            "pipelines:\n  - {label: plain, file: " +
+            kAblation + "synth_no_semantics.yaml}\n");
   const std::string bench = kBeslam + " bench " + (dir / "m.yaml").string() + " --out " + (dir / "out").string();
   Result r = shell("BESLAM_DEBUG_SIGNAL_AT=3:SIGINT " + bench, dir);
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_NE(r.err.find("FAILED runs/plain/ds/seed1 (exit 130"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("beslam: error: " + (dir / "out").string() + ": 1 of 1 cells failed"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("beslam: error: " + (dir / "out").string() + ": 1 of 1 cells failed"), std::string::npos)
+      << r.err;
   const json s = json::parse(slurp(dir / "out/runs/plain/ds/seed1/summary.json"));
   EXPECT_TRUE(s["interrupted"].get<bool>());
   EXPECT_EQ(json::parse(slurp(dir / "out/tables.json"))["finished"], 0);

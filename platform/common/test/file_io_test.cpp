@@ -1,10 +1,11 @@
+#include "beslam/common/file_io.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <stdexcept>
 
 #include "beslam/common/error.hpp"
-#include "beslam/common/file_io.hpp"
 
 namespace fs = std::filesystem;
 
@@ -23,10 +24,11 @@ TEST(FileIo, FailedWriteKeepsOldContentAndLeavesNoTemporary) {
   fs::create_directories(dir);
   const std::string path = (dir / "a.txt").string();
   beslam::writeFileAtomic(path, "good");
-  EXPECT_THROW(beslam::writeFileAtomic(path, [](std::ostream& out) {
-                 out << "half";
-                 throw std::runtime_error("writer failed");
-               }),
+  EXPECT_THROW(beslam::writeFileAtomic(path,
+                                       [](std::ostream& out) {
+                                         out << "half";
+                                         throw std::runtime_error("writer failed");
+                                       }),
                std::runtime_error);
   EXPECT_EQ(beslam::readFile(path), "good");
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);

@@ -1,8 +1,8 @@
 #include "beslam/common/interrupt.hpp"
 
-#include <csignal>
-
 #include <gtest/gtest.h>
+
+#include <csignal>
 
 #include "beslam/common/error.hpp"
 

@@ -1,7 +1,8 @@
+#include "beslam/common/yaml_set.hpp"
+
 #include <gtest/gtest.h>
 
 #include "beslam/common/error.hpp"
-#include "beslam/common/yaml_set.hpp"
 
 TEST(YamlSet, SetsNestedValuesAndCreatesMaps) {
   YAML::Node root = YAML::Load("dataset: {root: a}\n");

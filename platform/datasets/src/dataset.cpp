@@ -1,9 +1,10 @@
 // openDataset() and the shared machinery of the layout readers.
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "beslam/common/error.hpp"
 #include "beslam/datasets/image_io.hpp"
@@ -63,7 +64,8 @@ double kittiCameraHeight(const std::string& sequence_dir) {
   } catch (const YAML::Exception& e) {
     throw Error(manifest + ": cannot read config.camera.mount_height (" + e.what() + ")");
   }
-  if (!(height > 0 && height < 100)) throw Error(manifest + ": config.camera.mount_height is missing or not a positive number of metres");
+  if (!(height > 0 && height < 100))
+    throw Error(manifest + ": config.camera.mount_height is missing or not a positive number of metres");
   return height;
 }
 

@@ -75,7 +75,8 @@ std::unique_ptr<Dataset> openKittiTracking(const DatasetOptions& options) {
   c.load_color = options.load_color;
   c.load_lidar = options.load_lidar;
   c.description = "KITTI tracking " + options.sequence + " (" + std::to_string(c.frames.size()) + " frames, " +
-                  (image_less ? std::string("no images") : folder_of(cam)) + rangeText(options, c.frames, images.size()) + (has_lidar ? ", velodyne" : "") +
+                  (image_less ? std::string("no images") : folder_of(cam)) +
+                  rangeText(options, c.frames, images.size()) + (has_lidar ? ", velodyne" : "") +
                   (has_labels ? ", labels" : "") + (options.ego_poses.empty() ? "" : ", poses " + options.ego_poses) +
                   ")";
   return std::make_unique<LoadedDataset>(std::move(c));

@@ -1,14 +1,13 @@
 #include "beslam/eval/eval.hpp"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <numeric>
 #include <sstream>
-
-#include <Eigen/SVD>
-#include <nlohmann/json.hpp>
 
 #include "beslam/common/error.hpp"
 #include "beslam/formats/align.hpp"

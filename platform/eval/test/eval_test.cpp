@@ -1,10 +1,11 @@
+#include "beslam/eval/eval.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "beslam/common/error.hpp"
-#include "beslam/eval/eval.hpp"
 #include "test_support.hpp"
 
 using beslam::Error;
@@ -53,7 +54,7 @@ void expectEvoRmse(const EvalResult& r, double ape_trans, double ape_rot, double
 }
 
 // Declares `var`, the shared evo data folder, or skips the test where it is absent.
-#define REQUIRE_EVO_DATA(var)                           \
+#define REQUIRE_EVO_DATA(var)                               \
   const std::string var = beslam::eval::test::evoDataDir(); \
   if (var.empty()) GTEST_SKIP() << "shared evo data (" << BESLAM_SHARED_DATA << "/evo) not found"
 

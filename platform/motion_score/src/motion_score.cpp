@@ -3,10 +3,9 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
@@ -44,7 +43,9 @@ std::map<int64_t, std::vector<Detection>> readObjects(const std::string& path) {
   return out;
 }
 
-double bevDistance(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return std::hypot(a.x() - b.x(), a.z() - b.z()); }
+double bevDistance(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::hypot(a.x() - b.x(), a.z() - b.z());
+}
 
 }  // namespace
 
@@ -89,8 +90,10 @@ Counts score(const std::string& objects_path, const std::string& labels_path, co
       ++c.matched;
       if (m->second) {
         ++c.moving;
-        if (d.state == "dynamic") ++c.tp;
-        else ++c.fn, ++(d.state == "static" ? c.moving_static : c.moving_unknown);
+        if (d.state == "dynamic")
+          ++c.tp;
+        else
+          ++c.fn, ++(d.state == "static" ? c.moving_static : c.moving_unknown);
       } else {
         ++c.standing;
         if (d.state == "dynamic") ++c.fp, ++c.standing_dynamic;
@@ -122,19 +125,30 @@ int runCommand(const std::vector<std::string>& args, std::ostream& out, std::ost
   std::string objects, labels, motion, run, json_path;
   Options options;
   try {
-    const bool help = cli::forEachFlag(args, [&] { out << kUsage; }, [&](const std::string& a, size_t& i) {
-      auto text = [&] { return cli::nextValue(args, i); };
-      auto number = [&] { return cli::nextPositiveNumber(args, i); };
-      if (a == "--objects") objects = text();
-      else if (a == "--labels") labels = text();
-      else if (a == "--motion") motion = text();
-      else if (a == "--run") run = text();
-      else if (a == "--json") json_path = text();
-      else if (a == "--max-range") options.max_range = number();
-      else if (a == "--static-range") options.static_range = number();
-      else if (a == "--match") options.match_distance = number();
-      else throw std::invalid_argument("unknown argument '" + a + "'");
-    });
+    const bool help = cli::forEachFlag(
+        args, [&] { out << kUsage; },
+        [&](const std::string& a, size_t& i) {
+          auto text = [&] { return cli::nextValue(args, i); };
+          auto number = [&] { return cli::nextPositiveNumber(args, i); };
+          if (a == "--objects")
+            objects = text();
+          else if (a == "--labels")
+            labels = text();
+          else if (a == "--motion")
+            motion = text();
+          else if (a == "--run")
+            run = text();
+          else if (a == "--json")
+            json_path = text();
+          else if (a == "--max-range")
+            options.max_range = number();
+          else if (a == "--static-range")
+            options.static_range = number();
+          else if (a == "--match")
+            options.match_distance = number();
+          else
+            throw std::invalid_argument("unknown argument '" + a + "'");
+        });
     if (help) return 0;
     if (run.empty() && (objects.empty() || labels.empty() || motion.empty()))
       throw std::invalid_argument("give --run DIR, or --objects, --labels and --motion");
@@ -176,13 +190,24 @@ int runCommand(const std::vector<std::string>& args, std::ostream& out, std::ost
       << " % (" << c.standing_near_static << " of " << c.standing_near << ")\n";
     out << s.str();
     if (!json_path.empty()) {
-      nlohmann::json j = {{"objects", objects}, {"labels", labels}, {"motion", motion},
-                          {"detections", c.detections}, {"matched", c.matched},
-                          {"f1_dynamic", c.f1()}, {"tp", c.tp}, {"fp", c.fp}, {"fn", c.fn},
-                          {"moving", c.moving}, {"moving_static", c.moving_static}, {"moving_unknown", c.moving_unknown},
-                          {"standing", c.standing}, {"standing_dynamic", c.standing_dynamic},
-                          {"standing_unknown", c.standing_unknown}, {"standing_near", c.standing_near},
-                          {"standing_near_static", c.standing_near_static}, {"static_range_m", options.static_range}};
+      nlohmann::json j = {{"objects", objects},
+                          {"labels", labels},
+                          {"motion", motion},
+                          {"detections", c.detections},
+                          {"matched", c.matched},
+                          {"f1_dynamic", c.f1()},
+                          {"tp", c.tp},
+                          {"fp", c.fp},
+                          {"fn", c.fn},
+                          {"moving", c.moving},
+                          {"moving_static", c.moving_static},
+                          {"moving_unknown", c.moving_unknown},
+                          {"standing", c.standing},
+                          {"standing_dynamic", c.standing_dynamic},
+                          {"standing_unknown", c.standing_unknown},
+                          {"standing_near", c.standing_near},
+                          {"standing_near_static", c.standing_near_static},
+                          {"static_range_m", options.static_range}};
       writeFileAtomic(json_path, j.dump(2) + "\n");
     }
     return 0;

@@ -1,14 +1,14 @@
 // The motion-state scorer on a hand-made sequence: two frames, one parked car, one moving car.
+#include "beslam/motion_score/motion_score.hpp"
+
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
-#include <unistd.h>
-
 #include "beslam/common/error.hpp"
-#include "beslam/motion_score/motion_score.hpp"
 
 namespace fs = std::filesystem;
 using beslam::motion_score::Counts;
@@ -29,7 +29,8 @@ class MotionEvalTest : public ::testing::Test {
   void SetUp() override {
     dir_ = fs::temp_directory_path() / ("beslam_motion_score_" + std::to_string(::getpid()));
     fs::create_directories(dir_);
-    write("labels.txt", row(0, 1, 3, 10) + "\n" + row(0, 2, -3, 40) + "\n" + row(1, 1, 3, 9) + "\n" + row(1, 2, -3, 39) + "\n");
+    write("labels.txt",
+          row(0, 1, 3, 10) + "\n" + row(0, 2, -3, 40) + "\n" + row(1, 1, 3, 9) + "\n" + row(1, 2, -3, 39) + "\n");
     write("motion.txt", "# frame track moving speed\n0 1 0 0\n0 2 1 8\n1 1 0 0\n1 2 1 8\n");
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -95,8 +96,8 @@ TEST_F(MotionEvalTest, CommandReportsAndRejectsBadUsage) {
   write("objects.txt", row(0, 7, 3, 10) + " 0.9 static\n");
   std::ostringstream out, err;
   EXPECT_EQ(beslam::motion_score::runCommand({"--objects", path("objects.txt"), "--labels", path("labels.txt"),
-                                             "--motion", path("motion.txt"), "--json", path("m.json")},
-                                            out, err),
+                                              "--motion", path("motion.txt"), "--json", path("m.json")},
+                                             out, err),
             0)
       << err.str();
   EXPECT_NE(out.str().find("standing within 30"), std::string::npos) << out.str();

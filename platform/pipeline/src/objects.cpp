@@ -1,9 +1,8 @@
 #include "beslam/pipeline/objects.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Geometry>
 
 #include "beslam/datasets/labels.hpp"
 #include "beslam/sdk/views.hpp"

@@ -133,8 +133,10 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
     for (const auto& p : final_poses) in_final.push_back(p.frame_index);
     std::sort(in_final.begin(), in_final.end());
     for (int64_t index : record.frame_indices)
-      if (std::binary_search(in_final.begin(), in_final.end(), index)) ++summary.tracked;
-      else summary.untracked.push_back(index);
+      if (std::binary_search(in_final.begin(), in_final.end(), index))
+        ++summary.tracked;
+      else
+        summary.untracked.push_back(index);
   }
   writeTrajectory(out_dir, "trajectory", final_poses, true);
   writeTrajectory(out_dir, "trajectory_online", online_poses, false);

@@ -4,10 +4,9 @@
 #pragma once
 
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "beslam/datasets/dataset.hpp"
 #include "beslam/pipeline/runner.hpp"
@@ -26,8 +25,8 @@ struct TimingRow {
 struct RunRecord {
   std::vector<TimingRow> timings;
   std::vector<double> frame_ms;
-  std::vector<int64_t> frame_indices;      // frames that went through the backend, in order
-  std::vector<std::string> object_rows;    // objects.txt
+  std::vector<int64_t> frame_indices;    // frames that went through the backend, in order
+  std::vector<std::string> object_rows;  // objects.txt
   std::map<std::string, double> counter_sums;
 };
 

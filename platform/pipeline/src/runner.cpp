@@ -1,13 +1,13 @@
 #include "beslam/pipeline/runner.hpp"
 
+#include <unistd.h>
+
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
-#include <sstream>
-#include <unistd.h>
-
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
@@ -32,7 +32,9 @@ using Clock = std::chrono::steady_clock;
 class StageTimer {
  public:
   StageTimer(detail::TimingRow& row, std::string name) : row_(row), name_(std::move(name)), t0_(Clock::now()) {}
-  ~StageTimer() { row_.stages.emplace_back(std::move(name_), std::chrono::duration<double, std::milli>(Clock::now() - t0_).count()); }
+  ~StageTimer() {
+    row_.stages.emplace_back(std::move(name_), std::chrono::duration<double, std::milli>(Clock::now() - t0_).count());
+  }
   StageTimer(const StageTimer&) = delete;
   StageTimer& operator=(const StageTimer&) = delete;
 
@@ -49,7 +51,8 @@ void checkBoxes(const std::vector<beslam_box3d>& boxes, const registry::Plugin& 
     const beslam_box3d& b = boxes[i];
     const char* bad = nullptr;
     for (double v : b.center_cam) bad = std::isfinite(v) ? bad : "a non-finite centre";
-    for (double v : b.size) bad = bad ? bad : (std::isfinite(v) && v > 0 ? nullptr : "a non-finite or non-positive size");
+    for (double v : b.size)
+      bad = bad ? bad : (std::isfinite(v) && v > 0 ? nullptr : "a non-finite or non-positive size");
     if (!bad && !std::isfinite(b.yaw)) bad = "a non-finite yaw";
     if (!bad && !std::isfinite(b.score)) bad = "a non-finite score";
     if (!bad && (b.flags & BESLAM_BOX_HAS_VELOCITY))
@@ -97,8 +100,7 @@ struct FrameState {
 // member functions load .. write, called in that order; data only flows forward through FrameState.
 class Run {
  public:
-  Run(const PipelineSpec& spec, const RunOptions& options)
-      : spec_(spec), options_(options), log_(options.log_level) {
+  Run(const PipelineSpec& spec, const RunOptions& options) : spec_(spec), options_(options), log_(options.log_level) {
     out_dir_ = !options.output_dir.empty() ? options.output_dir : spec.output.dir;
     if (out_dir_.empty()) throwAt(spec.path, "no output folder: set output.dir or pass --out DIR");
     openDataset();
@@ -213,7 +215,8 @@ class Run {
     auto make = [&](const char* name, auto& instance) {
       const SlotSpec& slot = spec_.slots.at(name);
       if (slot.plugin)
-        instance = std::make_unique<typename std::decay_t<decltype(instance)>::element_type>(*slot.plugin, infoFor(slot), log_);
+        instance = std::make_unique<typename std::decay_t<decltype(instance)>::element_type>(*slot.plugin,
+                                                                                             infoFor(slot), log_);
     };
     if (!spec_.slots.at("backend").plugin) throwAt(spec_.path, "backend: no plugin resolved");
     make("detector", detector_);
@@ -342,8 +345,8 @@ class Run {
       static_map_->addBoxes(f.frame.index, f.boxes);
       const auto T_cam_lidar = dataset_->T_cam_lidar();
       if (f.tracked.result.is_keyframe && T_cam_lidar && !f.frame.lidar_xyzi.empty())
-        static_map_->addScan(f.frame.index, f.frame.lidar_xyzi.data(), f.frame.lidar_xyzi.size() / 4,
-                             4 * sizeof(float), *T_cam_lidar, f.boxes);
+        static_map_->addScan(f.frame.index, f.frame.lidar_xyzi.data(), f.frame.lidar_xyzi.size() / 4, 4 * sizeof(float),
+                             *T_cam_lidar, f.boxes);
     }
   }
 

@@ -1,7 +1,6 @@
 #include "sample_frames.hpp"
 
 #include <cmath>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -13,10 +12,10 @@ namespace beslam::pipeline::detail {
 
 namespace {
 
-const cv::Scalar kMoving(40, 40, 230);     // BGR red
-const cv::Scalar kParked(60, 200, 60);     // green
-const cv::Scalar kBackground(0, 215, 255); // yellow
-const cv::Scalar kUnknown(200, 200, 200);  // grey
+const cv::Scalar kMoving(40, 40, 230);      // BGR red
+const cv::Scalar kParked(60, 200, 60);      // green
+const cv::Scalar kBackground(0, 215, 255);  // yellow
+const cv::Scalar kUnknown(200, 200, 200);   // grey
 
 cv::Scalar labelColour(uint16_t label) {
   if (label == BESLAM_LABEL_DYNAMIC) return kMoving;
@@ -37,8 +36,10 @@ std::set<size_t> samplePositions(size_t frames, int count) {
 cv::Mat drawSampleFrame(const cv::Mat& image, const cv::Mat& labels, const std::vector<beslam_keypoint>& keypoints,
                         const std::vector<beslam_box3d>& boxes, const beslam_camera& camera) {
   cv::Mat drawn;
-  if (image.channels() == 1) cv::cvtColor(image, drawn, cv::COLOR_GRAY2BGR);
-  else drawn = image.clone();
+  if (image.channels() == 1)
+    cv::cvtColor(image, drawn, cv::COLOR_GRAY2BGR);
+  else
+    drawn = image.clone();
   if (!labels.empty() && labels.size() == drawn.size()) {  // tint labelled pixels
     cv::Mat tint = drawn.clone();
     tint.setTo(kMoving, labels == BESLAM_LABEL_DYNAMIC);
@@ -65,9 +66,8 @@ cv::Mat drawSampleFrame(const cv::Mat& image, const cv::Mat& labels, const std::
   }
   // Legend.
   int x = 6;
-  for (const auto& [name, colour] : {std::pair<const char*, cv::Scalar>{"moving", kMoving},
-                                     {"parked", kParked},
-                                     {"background", kBackground}}) {
+  for (const auto& [name, colour] :
+       {std::pair<const char*, cv::Scalar>{"moving", kMoving}, {"parked", kParked}, {"background", kBackground}}) {
     cv::circle(drawn, cv::Point(x + 4, 12), 4, colour, cv::FILLED, cv::LINE_AA);
     cv::putText(drawn, name, cv::Point(x + 12, 16), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(255, 255, 255), 1,
                 cv::LINE_AA);

@@ -4,11 +4,10 @@
 // the background; a ring marks a feature matched to a map point. Written as samples/NNNNNN.jpg.
 #pragma once
 
+#include <opencv2/core.hpp>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "beslam/data.h"
 #include "beslam/kinds/backend.h"

@@ -100,8 +100,8 @@ std::string resolvePath(const std::string& text, const std::string& base_dir) {
 
 std::vector<ConfigField> datasetFields() {
   return {
-      {"type", BESLAM_CONFIG_STRING, true, "", 1, 0,
-       "kitti_odometry|kitti_tracking|kitti_raw|kitti_object|tum|synth", "dataset layout (synth: rendered, cached)"},
+      {"type", BESLAM_CONFIG_STRING, true, "", 1, 0, "kitti_odometry|kitti_tracking|kitti_raw|kitti_object|tum|synth",
+       "dataset layout (synth: rendered, cached)"},
       {"root", BESLAM_CONFIG_PATH, true, "", 1, 0, "", "dataset folder (relative to the pipeline file)"},
       {"sequence", BESLAM_CONFIG_STRING, false, "\"\"", 1, 0, "", "sequence name: 06, 0007, ..."},
       {"camera", BESLAM_CONFIG_STRING, false, "auto", 1, 0, "auto|image_0|image_2", "which camera folder"},
@@ -178,8 +178,10 @@ void substitutePlaceholders(YAML::Node node, const YAML::Node& dataset, const st
     const bool in_dataset = name.rfind(prefix, 0) == 0 && dataset.IsMap();
     const YAML::Node value = in_dataset ? dataset[name.substr(prefix.size())] : YAML::Node();
     if (!value.IsDefined() || !value.IsScalar())
-      fail(file, node, where, "unknown placeholder ${" + name + "} (known: ${dataset.root}, ${dataset.sequence}, "
-                              "any other scalar of dataset)");
+      fail(file, node, where,
+           "unknown placeholder ${" + name +
+               "} (known: ${dataset.root}, ${dataset.sequence}, "
+               "any other scalar of dataset)");
     out += text.substr(pos, open - pos) + value.Scalar();
     pos = close + 1;
   }
@@ -285,8 +287,8 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
 
   substitutePlaceholders(doc, doc["dataset"], path, "");
 
-  static const std::vector<std::string> top = {"name",    "description", "dataset",    "plugin_paths",
-                                               "output",  "evaluation",  "detector",   "motion_checker",
+  static const std::vector<std::string> top = {"name",           "description",   "dataset",  "plugin_paths",
+                                               "output",         "evaluation",    "detector", "motion_checker",
                                                "mask_generator", "reconstructor", "backend"};
   for (const auto& kv : doc) {
     const std::string key = kv.first.as<std::string>();
@@ -323,8 +325,7 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
   spec.output.octomap = value(output, "octomap").number != 0;
   spec.output.octomap_resolution = value(output, "octomap_resolution").number;
 
-  if (!doc["evaluation"].IsDefined() || doc["evaluation"].IsNull())
-    doc["evaluation"] = YAML::Node(YAML::NodeType::Map);
+  if (!doc["evaluation"].IsDefined() || doc["evaluation"].IsNull()) doc["evaluation"] = YAML::Node(YAML::NodeType::Map);
   const PluginConfig evaluation = validateSettings(doc["evaluation"], evaluationFields(), "evaluation", path, "");
   spec.evaluation.enabled = value(evaluation, "enabled").number != 0;
   spec.evaluation.alignment = value(evaluation, "alignment").text;

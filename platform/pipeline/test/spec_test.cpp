@@ -1,11 +1,12 @@
 // Pipeline files: every mistake a user can make is one error naming the file, the line and the key.
+#include "beslam/pipeline/spec.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 
 #include "beslam/common/error.hpp"
-#include "beslam/pipeline/spec.hpp"
 
 namespace fs = std::filesystem;
 using beslam::pipeline::loadPipeline;
@@ -15,8 +16,9 @@ namespace {
 class PipelineSpecTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("beslam_spec_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-                                        "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() /
+           ("beslam_spec_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -107,7 +109,8 @@ TEST_F(PipelineSpecTest, WrongTypesAndRanges) {
 
 TEST_F(PipelineSpecTest, MissingSectionsAndSlots) {
   expectError("backend: {plugin: a}\n", {"pipeline.yaml: dataset: required section is missing"});
-  expectError("dataset:\n  type: tum\nbackend: {plugin: a}\n", {"pipeline.yaml:2: dataset.root: required setting is missing"});
+  expectError("dataset:\n  type: tum\nbackend: {plugin: a}\n",
+              {"pipeline.yaml:2: dataset.root: required setting is missing"});
   expectError("dataset: {type: tum, root: x}\n", {"a pipeline needs a backend"});
   expectError("dataset: {type: tum, root: x}\nbackend: backend_orb\n",
               {"pipeline.yaml:2: backend: expected a map with a 'plugin' key"});
@@ -162,7 +165,8 @@ TEST_F(PipelineSpecTest, PluginSettingsValidatedAgainstSchema) {
 }
 
 TEST_F(PipelineSpecTest, DatasetPlaceholdersFollowOverrides) {
-  const std::string text = std::string(kGood) + "detector: {plugin: d, path: \"${dataset.root}/det/${dataset.sequence}.txt\"}\n";
+  const std::string text =
+      std::string(kGood) + "detector: {plugin: d, path: \"${dataset.root}/det/${dataset.sequence}.txt\"}\n";
   const auto spec = loadPipeline(write(text), {"dataset.sequence=0007", "dataset.root=/data/tracking"});
   EXPECT_EQ(spec.slots.at("detector").settings["path"].as<std::string>(), "/data/tracking/det/0007.txt");
   EXPECT_EQ(spec.dataset.root, "/data/tracking");

@@ -46,7 +46,8 @@ Instance::Instance(const Plugin& plugin, const beslam_create_info& info, HostLog
   void* handle = nullptr;
   const beslam_status status = plugin.descriptor.create(&info, &handle);
   check(status, "create");
-  if (handle == nullptr) throw Error("plugin " + plugin.id + " (" + plugin.library_path + "): create returned no instance");
+  if (handle == nullptr)
+    throw Error("plugin " + plugin.id + " (" + plugin.library_path + "): create returned no instance");
   handle_ = handle;
 }
 
@@ -57,8 +58,8 @@ Instance::~Instance() {
 void Instance::check(beslam_status status, const char* call) const {
   if (status == BESLAM_OK) return;
   std::string message = log_.takeLastError(plugin_.id);
-  throw Error("plugin " + plugin_.id + " (" + plugin_.library_path + "): " + call + " failed (" +
-              statusName(status) + ")" + (message.empty() ? "" : ": " + message));
+  throw Error("plugin " + plugin_.id + " (" + plugin_.library_path + "): " + call + " failed (" + statusName(status) +
+              ")" + (message.empty() ? "" : ": " + message));
 }
 
 template <class Table>
@@ -88,8 +89,7 @@ void MotionCheckerInstance::classify(const beslam_frame& frame, const std::optio
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 4; ++c) pose.m[r * 4 + c] = T_world_cam->matrix()(r, c);
   beslam_box_array array{boxes.data(), static_cast<uint32_t>(boxes.size()), sizeof(beslam_box3d)};
-  check(table<beslam_motion_checker_v1>().classify(handle_, &frame, T_world_cam ? &pose : nullptr, &array),
-        "classify");
+  check(table<beslam_motion_checker_v1>().classify(handle_, &frame, T_world_cam ? &pose : nullptr, &array), "classify");
 }
 
 void MaskGeneratorInstance::generate(const beslam_frame& frame, const std::vector<beslam_box3d>& boxes,
@@ -107,13 +107,12 @@ Landmarks ReconstructorInstance::reconstruct(const beslam_keyframe& keyframe, co
   const char* base = reinterpret_cast<const char*>(out.landmarks);
   for (uint32_t i = 0; i < out.count; ++i) {
     beslam_object_landmark l{};
-    std::memcpy(&l, base + static_cast<size_t>(i) * out.element_size,
-                std::min<size_t>(out.element_size, sizeof(l)));
+    std::memcpy(&l, base + static_cast<size_t>(i) * out.element_size, std::min<size_t>(out.element_size, sizeof(l)));
     copy.shape_codes.emplace_back(l.shape_code ? std::vector<float>(l.shape_code, l.shape_code + l.shape_code_size)
                                                : std::vector<float>());
-    copy.surface_points.emplace_back(l.surface_points ? std::vector<float>(l.surface_points,
-                                                                           l.surface_points + 3 * l.surface_point_count)
-                                                      : std::vector<float>());
+    copy.surface_points.emplace_back(
+        l.surface_points ? std::vector<float>(l.surface_points, l.surface_points + 3 * l.surface_point_count)
+                         : std::vector<float>());
     copy.landmarks.push_back(l);
   }
   for (size_t i = 0; i < copy.landmarks.size(); ++i) {  // repoint at the owned copies

@@ -1,15 +1,14 @@
 #include "beslam/registry/registry.hpp"
 
 #include <algorithm>
+#include <boost/dll/library_info.hpp>
+#include <boost/dll/runtime_symbol_info.hpp>
+#include <boost/dll/shared_library.hpp>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <map>
 #include <sstream>
-
-#include <boost/dll/library_info.hpp>
-#include <boost/dll/runtime_symbol_info.hpp>
-#include <boost/dll/shared_library.hpp>
 
 #include "beslam/common/error.hpp"
 
@@ -19,12 +18,18 @@ namespace beslam::registry {
 
 const char* kindName(int32_t kind) {
   switch (kind) {
-    case BESLAM_KIND_DETECTOR: return "detector";
-    case BESLAM_KIND_MOTION_CHECKER: return "motion_checker";
-    case BESLAM_KIND_MASK_GENERATOR: return "mask_generator";
-    case BESLAM_KIND_RECONSTRUCTOR: return "reconstructor";
-    case BESLAM_KIND_BACKEND: return "backend";
-    default: return "unknown";
+    case BESLAM_KIND_DETECTOR:
+      return "detector";
+    case BESLAM_KIND_MOTION_CHECKER:
+      return "motion_checker";
+    case BESLAM_KIND_MASK_GENERATOR:
+      return "mask_generator";
+    case BESLAM_KIND_RECONSTRUCTOR:
+      return "reconstructor";
+    case BESLAM_KIND_BACKEND:
+      return "backend";
+    default:
+      return "unknown";
   }
 }
 
@@ -36,26 +41,41 @@ int32_t kindFromName(const std::string& name) {
 
 const char* configTypeName(int32_t type) {
   switch (type) {
-    case BESLAM_CONFIG_BOOL: return "bool";
-    case BESLAM_CONFIG_INT: return "int";
-    case BESLAM_CONFIG_DOUBLE: return "double";
-    case BESLAM_CONFIG_STRING: return "string";
-    case BESLAM_CONFIG_PATH: return "path";
-    case BESLAM_CONFIG_DOUBLE_LIST: return "list of double";
-    default: return "unknown";
+    case BESLAM_CONFIG_BOOL:
+      return "bool";
+    case BESLAM_CONFIG_INT:
+      return "int";
+    case BESLAM_CONFIG_DOUBLE:
+      return "double";
+    case BESLAM_CONFIG_STRING:
+      return "string";
+    case BESLAM_CONFIG_PATH:
+      return "path";
+    case BESLAM_CONFIG_DOUBLE_LIST:
+      return "list of double";
+    default:
+      return "unknown";
   }
 }
 
 const char* statusName(beslam_status status) {
   switch (status) {
-    case BESLAM_OK: return "ok";
-    case BESLAM_ERROR_INVALID_ARGUMENT: return "invalid argument";
-    case BESLAM_ERROR_INVALID_CONFIG: return "invalid configuration";
-    case BESLAM_ERROR_RUNTIME: return "runtime error";
-    case BESLAM_ERROR_OUT_OF_MEMORY: return "out of memory";
-    case BESLAM_ERROR_UNSUPPORTED: return "unsupported";
-    case BESLAM_ERROR_INTERNAL: return "internal error";
-    default: return "unknown status";
+    case BESLAM_OK:
+      return "ok";
+    case BESLAM_ERROR_INVALID_ARGUMENT:
+      return "invalid argument";
+    case BESLAM_ERROR_INVALID_CONFIG:
+      return "invalid configuration";
+    case BESLAM_ERROR_RUNTIME:
+      return "runtime error";
+    case BESLAM_ERROR_OUT_OF_MEMORY:
+      return "out of memory";
+    case BESLAM_ERROR_UNSUPPORTED:
+      return "unsupported";
+    case BESLAM_ERROR_INTERNAL:
+      return "internal error";
+    default:
+      return "unknown status";
   }
 }
 
@@ -67,12 +87,18 @@ constexpr uint32_t kMinFieldSize = offsetof(beslam_config_field, doc) + sizeof(c
 
 uint32_t minTableSize(int32_t kind) {
   switch (kind) {
-    case BESLAM_KIND_DETECTOR: return sizeof(beslam_detector_v1);
-    case BESLAM_KIND_MOTION_CHECKER: return sizeof(beslam_motion_checker_v1);
-    case BESLAM_KIND_MASK_GENERATOR: return sizeof(beslam_mask_generator_v1);
-    case BESLAM_KIND_RECONSTRUCTOR: return sizeof(beslam_reconstructor_v1);
-    case BESLAM_KIND_BACKEND: return sizeof(beslam_backend_v1);
-    default: return 0;
+    case BESLAM_KIND_DETECTOR:
+      return sizeof(beslam_detector_v1);
+    case BESLAM_KIND_MOTION_CHECKER:
+      return sizeof(beslam_motion_checker_v1);
+    case BESLAM_KIND_MASK_GENERATOR:
+      return sizeof(beslam_mask_generator_v1);
+    case BESLAM_KIND_RECONSTRUCTOR:
+      return sizeof(beslam_reconstructor_v1);
+    case BESLAM_KIND_BACKEND:
+      return sizeof(beslam_backend_v1);
+    default:
+      return 0;
   }
 }
 
@@ -86,15 +112,20 @@ bool allSet(const void* table, Fns Table::*... fns) {
 // Every function pointer of a kind's table must be set (ABI 1.0 has no optional calls).
 bool tableComplete(int32_t kind, const void* table) {
   switch (kind) {
-    case BESLAM_KIND_DETECTOR: return allSet<beslam_detector_v1>(table, &beslam_detector_v1::detect);
-    case BESLAM_KIND_MOTION_CHECKER: return allSet<beslam_motion_checker_v1>(table, &beslam_motion_checker_v1::classify);
-    case BESLAM_KIND_MASK_GENERATOR: return allSet<beslam_mask_generator_v1>(table, &beslam_mask_generator_v1::generate);
-    case BESLAM_KIND_RECONSTRUCTOR: return allSet<beslam_reconstructor_v1>(table, &beslam_reconstructor_v1::reconstruct);
+    case BESLAM_KIND_DETECTOR:
+      return allSet<beslam_detector_v1>(table, &beslam_detector_v1::detect);
+    case BESLAM_KIND_MOTION_CHECKER:
+      return allSet<beslam_motion_checker_v1>(table, &beslam_motion_checker_v1::classify);
+    case BESLAM_KIND_MASK_GENERATOR:
+      return allSet<beslam_mask_generator_v1>(table, &beslam_mask_generator_v1::generate);
+    case BESLAM_KIND_RECONSTRUCTOR:
+      return allSet<beslam_reconstructor_v1>(table, &beslam_reconstructor_v1::reconstruct);
     case BESLAM_KIND_BACKEND:
       return allSet<beslam_backend_v1>(table, &beslam_backend_v1::predict_pose, &beslam_backend_v1::track,
                                        &beslam_backend_v1::add_landmarks, &beslam_backend_v1::finish,
                                        &beslam_backend_v1::trajectory, &beslam_backend_v1::map_points);
-    default: return false;
+    default:
+      return false;
   }
 }
 
@@ -179,10 +210,10 @@ void Registry::Impl::load(const std::string& path) {
   try {
     boost::dll::library_info info(path);
     const auto symbols = info.symbols();
-    const bool has_version =
-        std::find(symbols.begin(), symbols.end(), BESLAM_ABI_VERSION_SYMBOL) != symbols.end();
+    const bool has_version = std::find(symbols.begin(), symbols.end(), BESLAM_ABI_VERSION_SYMBOL) != symbols.end();
     const bool has_list = std::find(symbols.begin(), symbols.end(), BESLAM_PLUGIN_LIST_SYMBOL) != symbols.end();
-    if (!has_version && !has_list) throwAt(path, "not a BE-SLAM plugin (no beslam_plugin_list or beslam_plugin_abi_version symbol)");
+    if (!has_version && !has_list)
+      throwAt(path, "not a BE-SLAM plugin (no beslam_plugin_list or beslam_plugin_abi_version symbol)");
     if (!has_version) throwAt(path, "missing symbol " BESLAM_ABI_VERSION_SYMBOL);
     if (!has_list) throwAt(path, "missing symbol " BESLAM_PLUGIN_LIST_SYMBOL);
   } catch (const Error&) {
@@ -207,8 +238,8 @@ void Registry::Impl::load(const std::string& path) {
 
   const beslam_plugin_descriptor* const* list = nullptr;
   uint32_t count = 0;
-  const beslam_status status =
-      lib.get<beslam_status(const beslam_plugin_descriptor* const**, uint32_t*)>(BESLAM_PLUGIN_LIST_SYMBOL)(&list, &count);
+  const beslam_status status = lib.get<beslam_status(const beslam_plugin_descriptor* const**, uint32_t*)>(
+      BESLAM_PLUGIN_LIST_SYMBOL)(&list, &count);
   if (status != BESLAM_OK) throwAt(path, std::string("beslam_plugin_list failed: ") + statusName(status));
   if (count > 0 && list == nullptr) throwAt(path, "beslam_plugin_list returned a null list");
 
@@ -242,8 +273,8 @@ void Registry::Impl::load(const std::string& path) {
     p.name = str(c.name);
     p.description = str(c.description);
     p.kind = c.kind;
-    p.version = std::to_string(c.version_major) + "." + std::to_string(c.version_minor) + "." +
-                std::to_string(c.version_patch);
+    p.version =
+        std::to_string(c.version_major) + "." + std::to_string(c.version_minor) + "." + std::to_string(c.version_patch);
     p.abi_version = c.abi_version;
     p.library_path = path;
     p.functions = c.functions;
@@ -253,14 +284,16 @@ void Registry::Impl::load(const std::string& path) {
       beslam_config_field raw{};
       std::memcpy(&raw, base + static_cast<size_t>(f) * c.config_field_size,
                   std::min<size_t>(c.config_field_size, sizeof(raw)));
-      if (!validId(raw.key)) throwAt(path, "plugin " + id + ": configuration key '" + str(raw.key) + "' is not [a-z0-9_]+");
+      if (!validId(raw.key))
+        throwAt(path, "plugin " + id + ": configuration key '" + str(raw.key) + "' is not [a-z0-9_]+");
       if (std::string(raw.key) == "plugin") throwAt(path, "plugin " + id + ": configuration key 'plugin' is reserved");
       if (raw.type < BESLAM_CONFIG_BOOL || raw.type > BESLAM_CONFIG_DOUBLE_LIST)
-        throwAt(path, "plugin " + id + ": configuration key '" + raw.key + "' has unknown type " + std::to_string(raw.type));
+        throwAt(path,
+                "plugin " + id + ": configuration key '" + raw.key + "' has unknown type " + std::to_string(raw.type));
       if (!raw.required && raw.default_value == nullptr)
         throwAt(path, "plugin " + id + ": configuration key '" + raw.key + "' is optional but has no default");
-      ConfigField field{raw.key, raw.type, raw.required != 0, str(raw.default_value), raw.min_value,
-                        raw.max_value, str(raw.choices), str(raw.doc)};
+      ConfigField field{raw.key,       raw.type,      raw.required != 0, str(raw.default_value),
+                        raw.min_value, raw.max_value, str(raw.choices),  str(raw.doc)};
       p.fields.push_back(std::move(field));
     }
     for (const Plugin& other : plugins)

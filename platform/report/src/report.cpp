@@ -2,6 +2,7 @@
 // detections, the map; written as data/run_K.js beside index.html and the copied libraries.
 #include "beslam/report/report.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -9,10 +10,8 @@
 #include <fstream>
 #include <iostream>
 #include <map>
-#include <sstream>
-
-#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
@@ -27,8 +26,8 @@ extern const char* const kPageTemplate;  // assets/report.html, embedded at buil
 
 namespace {
 
-constexpr size_t kMaxSeries = 2000;       // points a time series keeps (evenly spaced)
-constexpr size_t kMaxSamples = 12;        // sample frames a run shows
+constexpr size_t kMaxSeries = 2000;  // points a time series keeps (evenly spaced)
+constexpr size_t kMaxSamples = 12;   // sample frames a run shows
 
 double r3(double x) { return std::round(x * 1000.0) / 1000.0; }
 double r2(double x) { return std::round(x * 100.0) / 100.0; }
@@ -52,7 +51,8 @@ long nearest(const std::vector<double>& stamps, double t) {
   long best = -1;
   double bd = 1e-3;
   for (auto j : {it - stamps.begin() - 1, it - stamps.begin()})
-    if (j >= 0 && j < static_cast<long>(stamps.size()) && std::abs(stamps[j] - t) <= bd) bd = std::abs(stamps[j] - t), best = j;
+    if (j >= 0 && j < static_cast<long>(stamps.size()) && std::abs(stamps[j] - t) <= bd)
+      bd = std::abs(stamps[j] - t), best = j;
   return best;
 }
 
@@ -79,7 +79,8 @@ json readMap(const fs::path& ply, size_t max_points) {
       std::string type, name;
       ls >> type >> name;
       props.push_back(name);
-    } else if (w == "end_header") break;
+    } else if (w == "end_header")
+      break;
   }
   if (!ascii) throwAt(ply.string(), "only ASCII PLY is read (the runner writes ASCII)");
   auto idx = [&](const char* n) {
@@ -95,7 +96,8 @@ json readMap(const fs::path& ply, size_t max_points) {
     if (k % stride) continue;
     std::istringstream ls(line);
     for (auto& x : v) ls >> x;
-    if (!ls) throwAt(ply.string(), "vertex " + std::to_string(k) + ": expected " + std::to_string(props.size()) + " numbers");
+    if (!ls)
+      throwAt(ply.string(), "vertex " + std::to_string(k) + ": expected " + std::to_string(props.size()) + " numbers");
     pos.push_back(r2(v[ix])), pos.push_back(r2(v[iy])), pos.push_back(r2(v[iz]));
     if (ir >= 0 && ig >= 0 && ib >= 0) col.push_back(int(v[ir])), col.push_back(int(v[ig])), col.push_back(int(v[ib]));
   }
@@ -181,8 +183,9 @@ json runData(const fs::path& run, const std::string& label, size_t max_points, c
     const json& ev = summary["evaluation"];
     for (const char* k : {"ape", "rpe"})
       if (ev.contains(k) && ev[k].contains("trans")) d["summary"]["eval_" + std::string(k) + "_trans"] = ev[k]["trans"];
-    if (ev.contains("alignment")) d["summary"]["alignment"] = {{"type", ev["alignment"].value("type", "")},
-                                                               {"scale", ev["alignment"].value("scale", 1.0)}};
+    if (ev.contains("alignment"))
+      d["summary"]["alignment"] = {{"type", ev["alignment"].value("type", "")},
+                                   {"scale", ev["alignment"].value("scale", 1.0)}};
   }
 
   // Estimated trajectory (the map's frame).
@@ -239,8 +242,10 @@ json runData(const fs::path& run, const std::string& label, size_t max_points, c
     raw.push_back(p.p);
     ref.push_back(gt[g].p);
   }
-  json top = {{"est", json::array()}, {"gt", json::array()}, {"frame", json::array()}, {"ape", json::array()},
-              {"scale_aligned", json::array()}, {"scale_raw", json::array()}, {"scale_frame", json::array()}};
+  json top = {{"est", json::array()},           {"gt", json::array()},
+              {"frame", json::array()},         {"ape", json::array()},
+              {"scale_aligned", json::array()}, {"scale_raw", json::array()},
+              {"scale_frame", json::array()}};
   for (size_t k : thin(al.size())) {
     top["frame"].push_back(frame[k]);
     top["est"].push_back({r3(al[k].x()), r3(al[k].z())});
@@ -260,7 +265,8 @@ json runData(const fs::path& run, const std::string& label, size_t max_points, c
     sa.push_back(da / dg), sr.push_back(dr / dg), sf.push_back(frame[i]);
   }
   for (size_t k : thin(sf.size()))
-    top["scale_frame"].push_back(sf[k]), top["scale_aligned"].push_back(r3(sa[k])), top["scale_raw"].push_back(r3(sr[k]));
+    top["scale_frame"].push_back(sf[k]), top["scale_aligned"].push_back(r3(sa[k])),
+        top["scale_raw"].push_back(r3(sr[k]));
   top["window"] = W;
   top["note"] = gt_note;
   d["series"] = top;
@@ -324,7 +330,8 @@ json runData(const fs::path& run, const std::string& label, size_t max_points, c
   json view;
   view["map"] = readMap(run / "map_points.ply", max_points);
   json path = json::array();
-  for (size_t k : thin(est.size())) path.push_back(r2(est[k].p.x())), path.push_back(r2(est[k].p.y())), path.push_back(r2(est[k].p.z()));
+  for (size_t k : thin(est.size()))
+    path.push_back(r2(est[k].p.x())), path.push_back(r2(est[k].p.y())), path.push_back(r2(est[k].p.z()));
   view["trajectory"] = path;
   json kfs = json::array();
   if (fs::exists(run / "keyframes.tum")) {
@@ -394,7 +401,8 @@ void writePage(const fs::path& out, const std::string& title, const json& tables
   json index = {{"title", title}, {"tables", tables}, {"runs", json::array()}};
   for (size_t k = 0; k < runs.size(); ++k) {
     const std::string file = "data/run_" + std::to_string(k) + ".js";
-    writeFileAtomic((out / file).string(), "BESLAM_REPORT.addRun(" + std::to_string(k) + ", " + scriptJson(runs[k]) + ");\n");
+    writeFileAtomic((out / file).string(),
+                    "BESLAM_REPORT.addRun(" + std::to_string(k) + ", " + scriptJson(runs[k]) + ");\n");
     index["runs"].push_back({{"label", runs[k]["label"]}, {"file", file}});
   }
   std::string page = kPageTemplate;
@@ -437,8 +445,9 @@ void writeBenchReport(const std::string& bench_dir) {
     } catch (const json::exception&) {
       continue;  // a summary being written or broken: not a run to show
     }
-    runs.push_back(runData(run, c["pipeline"].get<std::string>() + " / " + c["sequence"].get<std::string>() + " / seed " +
-                                    std::to_string(c["seed"].get<long>()) + (interrupted ? " (interrupted)" : ""),
+    runs.push_back(runData(run,
+                           c["pipeline"].get<std::string>() + " / " + c["sequence"].get<std::string>() + " / seed " +
+                               std::to_string(c["seed"].get<long>()) + (interrupted ? " (interrupted)" : ""),
                            50000, out / "samples" / k, "samples/" + k));
   }
   writePage(out, "BE-SLAM bench " + bench.value("name", std::string()), tables, runs);

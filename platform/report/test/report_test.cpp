@@ -1,22 +1,22 @@
 // beslam report: the figures of a hand-made run (known APE, scale, boxes) in the page's data, errors that
 // name the file, and the page as a person sees it: headless Chromium loads a real run's report with no
 // JavaScript error, and its screenshot shows the plots' colours and a drawn 3D canvas.
+#include "beslam/report/report.hpp"
+
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <regex>
-#include <sstream>
-#include <sys/wait.h>
-
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <regex>
+#include <sstream>
 
 #include "beslam/common/error.hpp"
-#include "beslam/report/report.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -59,23 +59,31 @@ fs::path makeRun(const fs::path& dir) {
     est << 0.1 * i << " " << (2 + e) / 2 << " 0 " << i / 2.0 << " 0 0 0 1\n";
     if (i % 10 == 0) kf << 0.1 * i << " " << (2 + e) / 2 << " 0 " << i / 2.0 << " 0 0 0 1\n";
   }
-  json s = {{"frames", 50}, {"tracked", 50}, {"dataset", "test"}, {"dataset_path", seq.string()},
+  json s = {{"frames", 50},
+            {"tracked", 50},
+            {"dataset", "test"},
+            {"dataset_path", seq.string()},
             {"ape", {{"sim3_rmse", 0.2}, {"se3_rmse", 5.0}, {"sim3_scale", 2.0}}},
             {"detections", {{"static", 1}, {"dynamic", 1}, {"unknown", 0}}},
             {"world", {{"metric", true}, {"metric_from_frame", 3}}},
             {"map_points", {{"total", 3}, {"on_static_objects", 1}}},
-            {"evaluation", {{"alignment", {{"type", "sim3"}, {"scale", 2.0}, {"rotation", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}},
-                                           {"translation", {-2, 0, 0}}}}}}};
+            {"evaluation",
+             {{"alignment",
+               {{"type", "sim3"},
+                {"scale", 2.0},
+                {"rotation", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}},
+                {"translation", {-2, 0, 0}}}}}}};
   std::ofstream(run / "summary.json") << s.dump(1);
-  std::ofstream(run / "timing.csv") << "frame,load_ms,detector_ms,backend_ms,total_ms\n0,1.0,,10.0,11.0\n1,3.0,2.0,20.0,25.0\n"
-                                       "2,2.0,4.0,30.0,36.0\n";
-  std::ofstream(run / "objects.txt")
-      << "10 7 Car 0 0 0 1 2 3 4 1.5 1.8 4.0 0 1.5 10 0 0.9 static\n"
-         "12 8 Car 0 0 0 1 2 3 4 1.5 1.8 4.0 3 1.5 20 0 0.9 dynamic\n";
-  std::ofstream(run / "map_points.ply") << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                                           "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
-                                           "property int observations\nend_header\n1 0 5 10 20 30 2\n2 -1 6 40 50 60 3\n"
-                                           "0 0 7 70 80 90 2\n";
+  std::ofstream(run / "timing.csv")
+      << "frame,load_ms,detector_ms,backend_ms,total_ms\n0,1.0,,10.0,11.0\n1,3.0,2.0,20.0,25.0\n"
+         "2,2.0,4.0,30.0,36.0\n";
+  std::ofstream(run / "objects.txt") << "10 7 Car 0 0 0 1 2 3 4 1.5 1.8 4.0 0 1.5 10 0 0.9 static\n"
+                                        "12 8 Car 0 0 0 1 2 3 4 1.5 1.8 4.0 3 1.5 20 0 0.9 dynamic\n";
+  std::ofstream(run / "map_points.ply")
+      << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+         "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+         "property int observations\nend_header\n1 0 5 10 20 30 2\n2 -1 6 40 50 60 3\n"
+         "0 0 7 70 80 90 2\n";
   cv::imwrite((run / "samples" / "000010.png").string(), cv::Mat(20, 40, CV_8UC3, cv::Scalar(0, 0, 255)));
   cv::imwrite((run / "samples" / "000020.jpg").string(), cv::Mat(20, 40, CV_8UC3, cv::Scalar(0, 255, 0)));
   std::ofstream(run / "samples" / "notes.txt") << "not a frame\n";
@@ -97,7 +105,8 @@ TEST(Report, HandMadeRunFigures) {
   const fs::path run = makeRun(dir);
   beslam::report::writeRunReport(run.string(), "");
   const fs::path rep = run / "report";
-  for (const char* f : {"index.html", "lib/three.min.js", "lib/OrbitControls.js", "lib/chart.min.js", "samples/0/000010.png"})
+  for (const char* f :
+       {"index.html", "lib/three.min.js", "lib/OrbitControls.js", "lib/chart.min.js", "samples/0/000010.png"})
     EXPECT_TRUE(fs::exists(rep / f)) << f;
   const std::string page = slurp(rep / "index.html");
   EXPECT_EQ(page.find("/*BESLAM_INDEX*/null"), std::string::npos);
@@ -200,8 +209,8 @@ TEST(ReportBrowser, ChromiumDrawsPlotsAndThe3DView) {
     run = dir / "run";
     const fs::path cache = fs::path(BESLAM_BINARY_DIR) / "test-bench-synth-cache";
     const std::string cmd = std::string(BESLAM_BINARY_DIR) + "/bin/beslam run " + BESLAM_SOURCE_DIR +
-                            "/configs/ablation/synth_beslam.yaml --quiet --out " + run.string() + " --set dataset.root=" +
-                            cache.string() +
+                            "/configs/ablation/synth_beslam.yaml --quiet --out " + run.string() +
+                            " --set dataset.root=" + cache.string() +
                             " --set dataset.sequence=dynamic_street"
                             " --set dataset.synth_set=lidar.enabled=false,camera.colour=false,frames=60 > " +
                             (dir / "run.log").string() + " 2>&1";
@@ -258,7 +267,9 @@ TEST(ReportBrowser, ChromiumDrawsPlotsAndThe3DView) {
   EXPECT_GT(near(region("c_scale"), 77, 124, 255), 50) << "no scale line";
   EXPECT_GT(near(region("c_timing"), 77, 124, 255), 200) << "no timing bars";
   EXPECT_GT(near(region("c_counts"), 59, 178, 115) + near(region("c_counts"), 230, 57, 70) +
-                near(region("c_counts"), 141, 153, 174), 50) << "no detection bars";
+                near(region("c_counts"), 141, 153, 174),
+            50)
+      << "no detection bars";
   // The 3D view: mostly the dark background, with map points and the orange trajectory drawn on it.
   const cv::Mat view = region("c_3d");
   const int background = near(view, 20, 22, 27);

@@ -1,12 +1,12 @@
 // SynthConfig: YAML reading with strict validation, writing, and the built-in presets.
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <map>
 #include <set>
 #include <sstream>
-
-#include <yaml-cpp/yaml.h>
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
@@ -122,14 +122,16 @@ class Reader : public Binder {
     if (!get(key, n)) return;
     long long x = 0;
     if (!n.IsScalar() || !parseInt(n.Scalar(), x)) fail(key, "expected an integer, got " + describe(n));
-    if (x < lo || x > hi) fail(key, n.Scalar() + " is out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    if (x < lo || x > hi)
+      fail(key, n.Scalar() + " is out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
     v = static_cast<int>(x);
   }
   void u64(const std::string& key, std::uint64_t& v) override {
     YAML::Node n;
     if (!get(key, n)) return;
     long long x = 0;
-    if (!n.IsScalar() || !parseInt(n.Scalar(), x) || x < 0) fail(key, "expected a non-negative integer, got " + describe(n));
+    if (!n.IsScalar() || !parseInt(n.Scalar(), x) || x < 0)
+      fail(key, "expected a non-negative integer, got " + describe(n));
     v = static_cast<std::uint64_t>(x);
   }
   void d(const std::string& key, double& v, double lo, double hi) override {
@@ -148,9 +150,12 @@ class Reader : public Binder {
     YAML::Node n;
     if (!get(key, n)) return;
     const std::string s = n.IsScalar() ? n.Scalar() : "";
-    if (s == "true" || s == "True" || s == "yes" || s == "on") v = true;
-    else if (s == "false" || s == "False" || s == "no" || s == "off") v = false;
-    else fail(key, "expected true or false, got " + describe(n));
+    if (s == "true" || s == "True" || s == "yes" || s == "on")
+      v = true;
+    else if (s == "false" || s == "False" || s == "no" || s == "off")
+      v = false;
+    else
+      fail(key, "expected true or false, got " + describe(n));
   }
   void s(const std::string& key, std::string& v, const std::vector<std::string>& allowed) override {
     YAML::Node n;
@@ -170,7 +175,9 @@ class Reader : public Binder {
 
   void checkUnknown(const YAML::Node& node, const std::string& prefix) {
     if (!node.IsDefined() || node.IsNull()) return;
-    if (!node.IsMap()) throwAt(source_, (prefix.empty() ? std::string("top level") : "key '" + prefix + "'") + ": expected a map, got " + describe(node));
+    if (!node.IsMap())
+      throwAt(source_, (prefix.empty() ? std::string("top level") : "key '" + prefix + "'") + ": expected a map, got " +
+                           describe(node));
     for (const auto& kv : node) {
       const std::string name = kv.first.as<std::string>();
       const std::string full = prefix.empty() ? name : prefix + "." + name;
@@ -190,7 +197,9 @@ class Reader : public Binder {
     known.insert(key);
     return findKey(root_, key, n);
   }
-  [[noreturn]] void fail(const std::string& key, const std::string& cause) { throwAt(source_, "key '" + key + "': " + cause); }
+  [[noreturn]] void fail(const std::string& key, const std::string& cause) {
+    throwAt(source_, "key '" + key + "': " + cause);
+  }
   static bool parseInt(const std::string& s, long long& out) {
     if (s.empty()) return false;
     std::size_t pos = 0;
@@ -273,7 +282,8 @@ SynthConfig synthConfigFromYaml(const YAML::Node& root, const std::string& sourc
   const double r = c.world.corner_radius;
   const double half = c.world.lanes_per_direction * c.world.lane_width + (c.world.parking_lanes ? 2.2 : 0.0);
   if (r < half + 2.0)
-    throwAt(source, "key 'world.corner_radius': must be at least the road half width + 2 m (" + std::to_string(half + 2.0) + ")");
+    throwAt(source, "key 'world.corner_radius': must be at least the road half width + 2 m (" +
+                        std::to_string(half + 2.0) + ")");
   if (2 * r > std::min(c.world.block_x, c.world.block_y) - 10.0)
     throwAt(source, "key 'world.corner_radius': too large for the block size");
   return c;
@@ -314,10 +324,14 @@ SynthConfig presetConfig(const std::string& name) {
 
 const char* behaviourName(Behaviour b) {
   switch (b) {
-    case Behaviour::Parked: return "parked";
-    case Behaviour::Driving: return "driving";
-    case Behaviour::StopAndGo: return "stop_and_go";
-    case Behaviour::Pedestrian: return "pedestrian";
+    case Behaviour::Parked:
+      return "parked";
+    case Behaviour::Driving:
+      return "driving";
+    case Behaviour::StopAndGo:
+      return "stop_and_go";
+    case Behaviour::Pedestrian:
+      return "pedestrian";
   }
   return "?";
 }

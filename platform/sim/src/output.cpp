@@ -1,4 +1,7 @@
 // Writing a sequence (KITTI layouts), previews, the cached default sequence, and `beslam synth`.
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
@@ -7,13 +10,10 @@
 #include <iomanip>
 #include <iostream>
 #include <mutex>
-#include <sstream>
-#include <thread>
-#include <unistd.h>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <yaml-cpp/yaml.h>
+#include <sstream>
+#include <thread>
 
 #include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
@@ -48,16 +48,17 @@ std::string row34(const Eigen::Matrix<double, 3, 4>& M) {
 void writePng(const std::string& path, const cv::Mat& img) {
   std::vector<uchar> buf;
   // Fast settings: zlib level 1 with run-length matching (about 20 % faster and smaller than the default).
-  if (!cv::imencode(".png", img, buf, {cv::IMWRITE_PNG_COMPRESSION, 1, cv::IMWRITE_PNG_STRATEGY, cv::IMWRITE_PNG_STRATEGY_RLE}))
+  if (!cv::imencode(".png", img, buf,
+                    {cv::IMWRITE_PNG_COMPRESSION, 1, cv::IMWRITE_PNG_STRATEGY, cv::IMWRITE_PNG_STRATEGY_RLE}))
     throwAt(path, "PNG encoding failed");
   writeFileAtomic(path, std::string(buf.begin(), buf.end()));
 }
 
 std::string labelRow(int frame, const ObjectLabel& L) {
   char buf[512];
-  std::snprintf(buf, sizeof buf, "%d %d %s %.6f %d %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n", frame,
-                L.track_id, L.type.c_str(), L.truncated, L.occluded, L.alpha, L.x1, L.y1, L.x2, L.y2, L.h, L.w, L.l,
-                L.location.x(), L.location.y(), L.location.z(), L.ry);
+  std::snprintf(buf, sizeof buf, "%d %d %s %.6f %d %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n",
+                frame, L.track_id, L.type.c_str(), L.truncated, L.occluded, L.alpha, L.x1, L.y1, L.x2, L.y2, L.h, L.w,
+                L.l, L.location.x(), L.location.y(), L.location.z(), L.ry);
   return buf;
 }
 
@@ -107,7 +108,8 @@ SequenceSummary generateSequence(const SynthConfig& config, const std::string& o
           cv::Mat d16(fr.depth.size(), CV_16UC1);
           for (int y = 0; y < d16.rows; ++y)
             for (int x = 0; x < d16.cols; ++x)
-              d16.at<std::uint16_t>(y, x) = static_cast<std::uint16_t>(std::min(65535.0, std::round(fr.depth.at<float>(y, x) * 256.0)));
+              d16.at<std::uint16_t>(y, x) =
+                  static_cast<std::uint16_t>(std::min(65535.0, std::round(fr.depth.at<float>(y, x) * 256.0)));
           writePng(seqDir + "/depth/" + frameName(i, ".png"), d16);
         }
         if (config.lidar.enabled)
@@ -161,11 +163,12 @@ SequenceSummary generateSequence(const SynthConfig& config, const std::string& o
   // Objects: motion flags, poses, meshes.
   std::ostringstream motion, opose, oinfo;
   motion << "# frame track_id moving speed_m_s\n";
-  opose << "# frame track_id T_world_obj (3x4 row-major; KITTI world = cam0 at frame 0; object frame x fwd, y down, z left)\n";
+  opose << "# frame track_id T_world_obj (3x4 row-major; KITTI world = cam0 at frame 0; object frame x fwd, y down, z "
+           "left)\n";
   oinfo << "# track_id type shape behaviour length width height\n";
   for (const auto& o : synth.objects())
-    oinfo << o.track_id << " " << o.type << " " << o.shape << " " << behaviourName(o.behaviour) << " " << o.length << " " << o.width
-          << " " << o.height << "\n";
+    oinfo << o.track_id << " " << o.type << " " << o.shape << " " << behaviourName(o.behaviour) << " " << o.length
+          << " " << o.width << " " << o.height << "\n";
   for (int i = 0; i < n; ++i)
     for (const auto& o : synth.objects()) {
       const ObjectState st = synth.objectState(o.track_id, i);
@@ -236,7 +239,8 @@ void writePreview(const SynthConfig& config, int frame, const std::string& dir) 
   c.lidar.enabled = true;
   c.camera.colour = c.camera.grey = true;
   const Synthesizer synth(c);
-  if (frame < 0 || frame >= synth.frameCount()) throw Error("--frame " + std::to_string(frame) + ": outside the sequence");
+  if (frame < 0 || frame >= synth.frameCount())
+    throw Error("--frame " + std::to_string(frame) + ": outside the sequence");
   const FrameRender fr = synth.render(frame);
   makeDirectories(dir);
   std::vector<uchar> buf;
@@ -248,17 +252,21 @@ void writePreview(const SynthConfig& config, int frame, const std::string& dir) 
   for (int y = 1; y < mask.rows; ++y)
     for (int x = 1; x < mask.cols; ++x) {
       const float d = fr.depth.at<float>(y, x), dl = fr.depth.at<float>(y, x - 1), du = fr.depth.at<float>(y - 1, x);
-      if (std::abs(d - dl) > 0.05f * std::max(d, dl) || std::abs(d - du) > 0.05f * std::max(d, du)) mask.at<cv::Vec3b>(y, x) = cv::Vec3b(110, 110, 110);
+      if (std::abs(d - dl) > 0.05f * std::max(d, dl) || std::abs(d - du) > 0.05f * std::max(d, du))
+        mask.at<cv::Vec3b>(y, x) = cv::Vec3b(110, 110, 110);
     }
   for (int y = 0; y < mask.rows; ++y)
     for (int x = 0; x < mask.cols; ++x) {
       const int id = fr.instance.at<std::uint16_t>(y, x);
       if (!id) continue;
       const std::uint32_t h = detail::hash32(static_cast<std::uint32_t>(id) * 2654435761U);
-      mask.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(80 + (h & 127)), static_cast<uchar>(80 + ((h >> 8) & 175)), static_cast<uchar>(80 + ((h >> 16) & 175)));
+      mask.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(static_cast<uchar>(80 + (h & 127)), static_cast<uchar>(80 + ((h >> 8) & 175)),
+                    static_cast<uchar>(80 + ((h >> 16) & 175)));
     }
   for (const auto& L : fr.labels)
-    cv::rectangle(mask, cv::Point(static_cast<int>(L.x1), static_cast<int>(L.y1)), cv::Point(static_cast<int>(L.x2), static_cast<int>(L.y2)),
+    cv::rectangle(mask, cv::Point(static_cast<int>(L.x1), static_cast<int>(L.y1)),
+                  cv::Point(static_cast<int>(L.x2), static_cast<int>(L.y2)),
                   L.occluded == 0 ? cv::Scalar(0, 255, 0) : cv::Scalar(0, 200, 255), 1);
   buf.clear();
   cv::imencode(".png", mask, buf, {cv::IMWRITE_PNG_COMPRESSION, 9});
@@ -272,7 +280,8 @@ void writePreview(const SynthConfig& config, int frame, const std::string& dir) 
     const int px = static_cast<int>(S / 2 - y / res), py = static_cast<int>(S / 2 - x / res);
     if (px < 0 || py < 0 || px >= S || py >= S) continue;
     const double hgt = std::clamp((z + 1.73) / 4.0, 0.0, 1.0);
-    bev.at<cv::Vec3b>(py, px) = cv::Vec3b(static_cast<uchar>(255 * (1 - hgt)), static_cast<uchar>(120 + 135 * hgt), static_cast<uchar>(255 * hgt));
+    bev.at<cv::Vec3b>(py, px) = cv::Vec3b(static_cast<uchar>(255 * (1 - hgt)), static_cast<uchar>(120 + 135 * hgt),
+                                          static_cast<uchar>(255 * hgt));
   }
   cv::circle(bev, cv::Point(S / 2, S / 2), 3, cv::Scalar(255, 255, 255), -1);
   // Ground-truth boxes of labelled objects, projected into the LiDAR frame.
@@ -346,22 +355,29 @@ int runSynthCommand(const std::vector<std::string>& args, std::ostream& out, std
   int previewFrame = 0;
   std::vector<std::string> sets;
   try {
-    const bool help = cli::forEachFlag(args, [&] { printUsage(out); }, [&](const std::string& a, std::size_t& i) {
-      if (a == "--config") configPath = cli::nextValue(args, i);
-      else if (a == "--out") outDir = cli::nextValue(args, i);
-      else if (a == "--set") sets.push_back(cli::nextValue(args, i));
-      else if (a == "--preview") previewDir = cli::nextValue(args, i);
-      else if (a == "--frame") {
-        const std::string v = cli::nextValue(args, i);
-        try {
-          std::size_t pos = 0;
-          previewFrame = std::stoi(v, &pos);
-          if (pos != v.size()) throw std::invalid_argument("");
-        } catch (...) {
-          throw std::invalid_argument("--frame expects an integer, got '" + v + "'");
-        }
-      } else throw std::invalid_argument("unknown argument '" + a + "' (see --help)");
-    });
+    const bool help = cli::forEachFlag(
+        args, [&] { printUsage(out); },
+        [&](const std::string& a, std::size_t& i) {
+          if (a == "--config")
+            configPath = cli::nextValue(args, i);
+          else if (a == "--out")
+            outDir = cli::nextValue(args, i);
+          else if (a == "--set")
+            sets.push_back(cli::nextValue(args, i));
+          else if (a == "--preview")
+            previewDir = cli::nextValue(args, i);
+          else if (a == "--frame") {
+            const std::string v = cli::nextValue(args, i);
+            try {
+              std::size_t pos = 0;
+              previewFrame = std::stoi(v, &pos);
+              if (pos != v.size()) throw std::invalid_argument("");
+            } catch (...) {
+              throw std::invalid_argument("--frame expects an integer, got '" + v + "'");
+            }
+          } else
+            throw std::invalid_argument("unknown argument '" + a + "' (see --help)");
+        });
     if (help) return 0;
   } catch (const std::invalid_argument& e) {
     err << "beslam synth: " << e.what() << "\n";
@@ -392,9 +408,10 @@ int runSynthCommand(const std::vector<std::string>& args, std::ostream& out, std
     if (!outDir.empty()) {
       const bool tty = &err == &std::cerr && ::isatty(STDERR_FILENO);
       const SequenceSummary s = generateSequence(config, outDir, tty ? &err : nullptr);
-      out << "beslam synth: " << s.frames << " frames in " << outDir << "/sequences/" << config.sequence << " (parked " << s.parked
-          << ", driving " << s.driving << ", stop-and-go " << s.stop_and_go << ", pedestrians " << s.pedestrians << "; "
-          << std::fixed << std::setprecision(1) << s.distance_m << " m driven, " << std::setprecision(2) << s.laps << " laps)\n";
+      out << "beslam synth: " << s.frames << " frames in " << outDir << "/sequences/" << config.sequence << " (parked "
+          << s.parked << ", driving " << s.driving << ", stop-and-go " << s.stop_and_go << ", pedestrians "
+          << s.pedestrians << "; " << std::fixed << std::setprecision(1) << s.distance_m << " m driven, "
+          << std::setprecision(2) << s.laps << " laps)\n";
     }
   } catch (const std::exception& e) {
     err << e.what() << "\n";

@@ -49,7 +49,9 @@ Path::Path(const std::vector<Vec2d>& control_in, bool closed) : closed_(closed) 
     const Vec2d &p0 = P(base), &p1 = P(base + 1), &p2 = P(base + 2), &p3 = P(base + 3);
     for (int k = 0; k < per || (seg == segments - 1 && k == per); ++k) {
       const double t = static_cast<double>(k) / per, u = 1 - t;
-      const Vec2d p = (u * u * u * p0 + (3 * t * t * t - 6 * t * t + 4) * p1 + (-3 * t * t * t + 3 * t * t + 3 * t + 1) * p2 + t * t * t * p3) / 6.0;
+      const Vec2d p = (u * u * u * p0 + (3 * t * t * t - 6 * t * t + 4) * p1 +
+                       (-3 * t * t * t + 3 * t * t + 3 * t + 1) * p2 + t * t * t * p3) /
+                      6.0;
       const Vec2d d1 = (-u * u * p0 + (3 * t * t - 4 * t) * p1 + (-3 * t * t + 2 * t + 1) * p2 + t * t * p3) / 2.0;
       const Vec2d d2 = u * p0 + (3 * t - 2) * p1 + (1 - 3 * t) * p2 + t * p3;
       if (!s_.empty()) s += (p - prev).norm();
@@ -149,8 +151,10 @@ double Profile::sAt(double t) const {
 double Profile::speedAt(double t) const {
   if (t_.empty()) return 0;
   const double T = t_.back();
-  if (closed_) t -= std::floor(t / T) * T;
-  else if (t < 0 || t >= T) return 0;
+  if (closed_)
+    t -= std::floor(t / T) * T;
+  else if (t < 0 || t >= T)
+    return 0;
   auto it = std::upper_bound(t_.begin(), t_.end(), t);
   std::size_t i = it == t_.begin() ? 0 : static_cast<std::size_t>(it - t_.begin()) - 1;
   if (i + 1 >= t_.size()) i = t_.size() - 2;

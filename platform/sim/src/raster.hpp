@@ -25,12 +25,13 @@ struct RasterTarget {
 // Clips the triangle to the view frustum and calls span(y, x0, x1, A, B, C) for every covered row,
 // where 1/z = A x + B y + C. Returns false when the triangle is invisible or degenerate.
 template <class Span>
-bool rasterizeTriangle(const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& c, const RasterTarget& t,
-                       Span&& span) {
+bool rasterizeTriangle(const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& c,
+                       const RasterTarget& t, Span&& span) {
   const Eigen::Vector3f n = (b - a).cross(c - a);
   const float d = n.dot(a);
   if (std::abs(d) < 1e-7f * n.norm() || n.squaredNorm() == 0.f) return false;
-  const float A = n.x() / (t.fx * d), B = n.y() / (t.fy * d), C = (n.z() - n.x() * t.cx / t.fx - n.y() * t.cy / t.fy) / d;
+  const float A = n.x() / (t.fx * d), B = n.y() / (t.fy * d),
+              C = (n.z() - n.x() * t.cx / t.fx - n.y() * t.cy / t.fy) / d;
   // Clip polygon in view space against near and the four side planes (1 px guard band).
   float poly[2][12][3];
   int count = 3;

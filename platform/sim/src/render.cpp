@@ -17,8 +17,8 @@ namespace {
 
 struct ViewTri {
   Vec3f a, b, c;
-  Vec3f n;            // unit normal facing the viewer
-  Vec4f U, V;         // texture coordinates as affine functions of the view-frame point
+  Vec3f n;     // unit normal facing the viewer
+  Vec4f U, V;  // texture coordinates as affine functions of the view-frame point
   std::uint16_t material;
   std::int32_t param;
   std::uint16_t instance;
@@ -36,8 +36,19 @@ Sphere chunkSphere(const Chunk& ch) { return {(ch.bmin + ch.bmax) * 0.5f, (ch.bm
 // above): their back faces can be skipped. Cars, crowns, signs and ribbons are drawn two-sided.
 inline bool closedMaterial(std::uint16_t m) {
   switch (m) {
-    case M_FACADE: case M_ROOF: case M_ROAD: case M_ASPHALT: case M_PAVEMENT: case M_KERB: case M_POLE:
-    case M_BARK: case M_FENCE: case M_GRASS: case M_PED_SHIRT: case M_PED_TROUSERS: case M_PED_SKIN:
+    case M_FACADE:
+    case M_ROOF:
+    case M_ROAD:
+    case M_ASPHALT:
+    case M_PAVEMENT:
+    case M_KERB:
+    case M_POLE:
+    case M_BARK:
+    case M_FENCE:
+    case M_GRASS:
+    case M_PED_SHIRT:
+    case M_PED_TROUSERS:
+    case M_PED_SKIN:
       return true;
     default:
       return false;
@@ -96,9 +107,7 @@ int frustumPlanes(float W, float H, float fx, float fy, float cx, float cy, floa
   return 5;
 }
 
-inline std::uint8_t toByte(float x) {
-  return static_cast<std::uint8_t>(std::min(255.f, std::max(0.f, x)) + 0.5f);
-}
+inline std::uint8_t toByte(float x) { return static_cast<std::uint8_t>(std::min(255.f, std::max(0.f, x)) + 0.5f); }
 
 // 2^18 unit-variance noise samples, shared and built once (deterministic).
 const std::vector<float>& noiseTable() {
@@ -188,7 +197,8 @@ ObjectState Synthesizer::objectState(int track_id, int frame) const {
   return st;
 }
 
-void Synthesizer::objectMesh(int track_id, std::vector<Eigen::Vector3f>& vertices, std::vector<std::array<int, 3>>& faces) const {
+void Synthesizer::objectMesh(int track_id, std::vector<Eigen::Vector3f>& vertices,
+                             std::vector<std::array<int, 3>>& faces) const {
   vertices.clear();
   faces.clear();
   for (const auto& o : world_->objects) {
@@ -212,7 +222,8 @@ SequenceSummary Synthesizer::summary() const {
   SequenceSummary s;
   const World& w = *world_;
   s.frames = w.config.frames;
-  s.parked = w.count_parked, s.driving = w.count_driving, s.stop_and_go = w.count_stop_and_go, s.pedestrians = w.count_pedestrians;
+  s.parked = w.count_parked, s.driving = w.count_driving, s.stop_and_go = w.count_stop_and_go,
+  s.pedestrians = w.count_pedestrians;
   s.loop_length_m = w.loop_length;
   s.distance_m = w.ego_profile.sAt(w.frameTime(w.config.frames - 1));
   s.laps = s.distance_m / w.loop_length;
@@ -240,7 +251,8 @@ void Synthesizer::render(int frame, FrameRender& out) const {
   const Eigen::Matrix3f Rcs = T_cam_sim.linear().cast<float>();
   const Vec3f tcs = T_cam_sim.translation().cast<float>();
   const double sunAz = static_cast<double>(mixSeed(cfg.seed, 5) % 6283) / 1000.0;
-  const Vec3f sun_sim = Vec3f(static_cast<float>(std::cos(sunAz) * 0.55), static_cast<float>(std::sin(sunAz) * 0.55), 0.83f).normalized();
+  const Vec3f sun_sim =
+      Vec3f(static_cast<float>(std::cos(sunAz) * 0.55), static_cast<float>(std::sin(sunAz) * 0.55), 0.83f).normalized();
 
   // Objects' poses at this time.
   struct ObjView {
@@ -287,7 +299,8 @@ void Synthesizer::render(int frame, FrameRender& out) const {
     appendTris(objs[i].tris, R, tt, static_cast<std::uint16_t>(objs[i].o->info.track_id), sun_cam, vt);
     objRange[i].second = vt.size();
   }
-  for (std::size_t i = 0; i < vt.size(); ++i) drawTriangle(vt[i].a, vt[i].b, vt[i].c, static_cast<std::int32_t>(i), cam);
+  for (std::size_t i = 0; i < vt.size(); ++i)
+    drawTriangle(vt[i].a, vt[i].b, vt[i].c, static_cast<std::int32_t>(i), cam);
 
   // Shade.
   const Eigen::Matrix3f Rsc = Rcs.transpose();
@@ -337,7 +350,8 @@ void Synthesizer::render(int frame, FrameRender& out) const {
   const double ph = static_cast<double>(mixSeed(cfg.seed, 6) % 1000) / 159.0;
   const float gain = static_cast<float>(
       1.0 + cfg.image.exposure_variation * (0.6 * std::sin(0.21 * frame + ph) + 0.4 * std::sin(0.77 * frame + 2 * ph)) +
-      0.3 * cfg.image.exposure_variation * (hashf(static_cast<std::uint32_t>(cfg.seed), static_cast<std::uint32_t>(frame), 77) - 0.5f));
+      0.3 * cfg.image.exposure_variation *
+          (hashf(static_cast<std::uint32_t>(cfg.seed), static_cast<std::uint32_t>(frame), 77) - 0.5f));
   // Separable blur (horizontal into tmp, vertical fused with gain, noise and quantisation).
   int radius = 0;
   float kern[8] = {1, 0, 0, 0, 0, 0, 0, 0};
@@ -366,18 +380,24 @@ void Synthesizer::render(int frame, FrameRender& out) const {
     for (int x = 0; x < W; ++x)
       for (int ch = 0; ch < 3; ++ch) {
         float acc = kern[0] * src[3 * x + ch];
-        for (int i = 1; i <= radius; ++i) acc += kern[i] * (src[3 * std::max(0, x - i) + ch] + src[3 * std::min(W - 1, x + i) + ch]);
+        for (int i = 1; i <= radius; ++i)
+          acc += kern[i] * (src[3 * std::max(0, x - i) + ch] + src[3 * std::min(W - 1, x + i) + ch]);
         dst[3 * x + ch] = acc;
       }
   }
   const float sigma = static_cast<float>(cfg.image.noise_sigma);
-  const std::uint32_t fseed = hash3(static_cast<std::uint32_t>(cfg.seed), static_cast<std::uint32_t>(cfg.seed >> 32), static_cast<std::uint32_t>(frame));
+  const std::uint32_t fseed = hash3(static_cast<std::uint32_t>(cfg.seed), static_cast<std::uint32_t>(cfg.seed >> 32),
+                                    static_cast<std::uint32_t>(frame));
   const std::vector<float>& table = noiseTable();
   const std::size_t mask = table.size() - 1;
-  if (cfg.camera.colour) out.colour.create(H, W, CV_8UC3);
-  else out.colour.release();
-  if (cfg.camera.grey) out.grey.create(H, W, CV_8UC1);
-  else out.grey.release();
+  if (cfg.camera.colour)
+    out.colour.create(H, W, CV_8UC3);
+  else
+    out.colour.release();
+  if (cfg.camera.grey)
+    out.grey.create(H, W, CV_8UC1);
+  else
+    out.grey.release();
   const float scale = 255.f * gain;
   for (int y = 0; y < H; ++y) {
     const float* rows[15];
@@ -460,14 +480,16 @@ void Synthesizer::render(int frame, FrameRender& out) const {
         behind = true;
         continue;
       }
-      const double u = cfg.camera.fx * pc.x() / pc.z() + cfg.camera.cx, v = cfg.camera.fy * pc.y() / pc.z() + cfg.camera.cy;
+      const double u = cfg.camera.fx * pc.x() / pc.z() + cfg.camera.cx,
+                   v = cfg.camera.fy * pc.y() / pc.z() + cfg.camera.cy;
       u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
     }
     if (behind) {
       L.truncated = 1.0;
     } else {
       const double area = std::max(1e-9, (u1 - u0) * (v1 - v0));
-      const double cu0 = std::max(u0, 0.0), cu1 = std::min(u1, W - 1.0), cv0 = std::max(v0, 0.0), cv1 = std::min(v1, H - 1.0);
+      const double cu0 = std::max(u0, 0.0), cu1 = std::min(u1, W - 1.0), cv0 = std::max(v0, 0.0),
+                   cv1 = std::min(v1, H - 1.0);
       const double inside = std::max(0.0, cu1 - cu0) * std::max(0.0, cv1 - cv0);
       L.truncated = std::clamp(1.0 - inside / area, 0.0, 1.0);
     }
@@ -532,16 +554,21 @@ void Synthesizer::render(int frame, FrameRender& out) const {
     std::vector<float> te(beams), ce(beams), se(beams);
     for (int bm = 0; bm < beams; ++bm) {
       const double e = beams == 1 ? up : up + (down - up) * bm / (beams - 1);
-      te[bm] = static_cast<float>(std::tan(e)), ce[bm] = static_cast<float>(std::cos(e)), se[bm] = static_cast<float>(std::sin(e));
+      te[bm] = static_cast<float>(std::tan(e)), ce[bm] = static_cast<float>(std::cos(e)),
+      se[bm] = static_cast<float>(std::sin(e));
     }
-    struct Col { float ca, sa, sx, inv_cos_a; int face; };
+    struct Col {
+      float ca, sa, sx, inv_cos_a;
+      int face;
+    };
     std::vector<Col> colInfo(cols);
     for (int col = 0; col < cols; ++col) {
       const double alpha = 2 * M_PI * col / cols;  // 0 forward, counter-clockwise (left)
       const int kk = static_cast<int>(std::floor((alpha + M_PI / 4) / (M_PI / 2)));
       const double a = alpha - kk * M_PI / 2;
       colInfo[col] = {static_cast<float>(std::cos(alpha)), static_cast<float>(std::sin(alpha)),
-                      static_cast<float>(-f * std::tan(a) + face[kk % 4].cx), static_cast<float>(1.0 / std::cos(a)), kk % 4};
+                      static_cast<float>(-f * std::tan(a) + face[kk % 4].cx), static_cast<float>(1.0 / std::cos(a)),
+                      kk % 4};
     }
     out.lidar.reserve(static_cast<std::size_t>(beams) * cols * 4);
     const float noise = static_cast<float>(cfg.lidar.range_noise);
@@ -576,7 +603,8 @@ void Synthesizer::render(int frame, FrameRender& out) const {
               if (dup || nseen >= 16) continue;
               seen[nseen++] = id;
               float dist;
-              if (rayTriangle(origin, dirL, lt[static_cast<std::size_t>(id)], dist) && dist < best) best = dist, bestId = id;
+              if (rayTriangle(origin, dirL, lt[static_cast<std::size_t>(id)], dist) && dist < best)
+                best = dist, bestId = id;
             }
         }
         to += 1;

@@ -1,9 +1,9 @@
 // Procedural materials: asphalt with markings, paving, kerbs, facades (brick, plaster, panels; windows,
 // doors, shops), foliage, bark, signs, car paint and glass, tyres, clothes, grass, walls, sky.
+#include "shade.hpp"
+
 #include <algorithm>
 #include <cmath>
-
-#include "shade.hpp"
 
 namespace beslam::sim::detail {
 namespace {
@@ -39,7 +39,8 @@ struct Tile {
     float total = 0, amp = 1.0f;
     for (int period = 4; period <= 128; period *= 2) {
       std::vector<float> lattice(static_cast<std::size_t>(period) * period);
-      for (int i = 0; i < period * period; ++i) lattice[i] = hashf(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(period), 12345u);
+      for (int i = 0; i < period * period; ++i)
+        lattice[i] = hashf(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(period), 12345u);
       auto L = [&](int a, int b) { return lattice[(b % period) * period + (a % period)]; };
       for (int y = 0; y < kTile; ++y)
         for (int x = 0; x < kTile; ++x) acc[y * kTile + x] += amp * latticeNoise(x, y, period, L);
@@ -64,7 +65,9 @@ struct CellTile {
   float v[kTile * kTile];
   CellTile() {
     const int period = 64;
-    auto L = [&](int a, int b) { return hashf(static_cast<std::uint32_t>(a % period), static_cast<std::uint32_t>(b % period), 999u); };
+    auto L = [&](int a, int b) {
+      return hashf(static_cast<std::uint32_t>(a % period), static_cast<std::uint32_t>(b % period), 999u);
+    };
     for (int y = 0; y < kTile; ++y)
       for (int x = 0; x < kTile; ++x) v[y * kTile + x] = latticeNoise(x, y, period, L);
   }
@@ -83,7 +86,8 @@ inline float wrappedBilinear(const float* table, float x, float y) {
   const float tx = x - static_cast<float>(ix), ty = y - static_cast<float>(iy);
   const int xi = ix & (kTile - 1), yi = iy & (kTile - 1);
   const int x1 = (xi + 1) & (kTile - 1), y1 = (yi + 1) & (kTile - 1);
-  const float a = table[yi * kTile + xi], b = table[yi * kTile + x1], c = table[y1 * kTile + xi], d = table[y1 * kTile + x1];
+  const float a = table[yi * kTile + xi], b = table[yi * kTile + x1], c = table[y1 * kTile + xi],
+              d = table[y1 * kTile + x1];
   const float top = a + tx * (b - a), bot = c + tx * (d - c);
   return top + ty * (bot - top);
 }
@@ -113,8 +117,10 @@ inline float speckle(float u, float v, float cell, float fp, std::uint32_t seed)
   if (w <= 0.f) return 0.f;
   const float x = u / cell, y = v / cell;
   const float fx = ffloor(x), fy = ffloor(y);
-  const std::uint32_t h = hash3(static_cast<std::uint32_t>(static_cast<int>(fx)), static_cast<std::uint32_t>(static_cast<int>(fy)), seed);
-  const float px = 0.45f + 0.1f * static_cast<float>(h & 255) / 255.f, py = 0.45f + 0.1f * static_cast<float>((h >> 8) & 255) / 255.f;
+  const std::uint32_t h =
+      hash3(static_cast<std::uint32_t>(static_cast<int>(fx)), static_cast<std::uint32_t>(static_cast<int>(fy)), seed);
+  const float px = 0.45f + 0.1f * static_cast<float>(h & 255) / 255.f,
+              py = 0.45f + 0.1f * static_cast<float>((h >> 8) & 255) / 255.f;
   const float r = 0.2f + 0.22f * static_cast<float>((h >> 16) & 127) / 127.f;
   const float val = static_cast<float>(h >> 24) / 127.5f - 1.f;
   const float dx = std::abs(x - fx - px), dy = std::abs(y - fy - py);
@@ -138,8 +144,8 @@ inline float box(float x, float lo, float hi) { return (x >= lo && x <= hi) ? 1.
 Vec3f road(const World& w, const Street& st, float u, float v, float fp) {
   const float sf = static_cast<float>(st.seed % 997) * 0.37f;
   const float patches = N(u / 40.f + 0.3f, v / 40.f + static_cast<float>(st.seed % 97) * 0.01f);
-  float c = 0.30f + 0.16f * detail(u, v, 0.012f, 4, fp, sf) + 0.12f * (patches - 0.5f) + 0.24f * speckle(u, v, 0.03f, fp, st.seed) +
-            0.2f * speckle(u + 0.5f, v, 0.09f, fp, st.seed + 1);
+  float c = 0.30f + 0.16f * detail(u, v, 0.012f, 4, fp, sf) + 0.12f * (patches - 0.5f) +
+            0.24f * speckle(u, v, 0.03f, fp, st.seed) + 0.2f * speckle(u + 0.5f, v, 0.09f, fp, st.seed + 1);
   // Tyre wear along the lanes and the odd dark stain.
   const float stain = N(u / 9.f + sf, v / 9.f);
   if (stain > 0.68f) c *= 1.f - 1.2f * (stain - 0.68f);
@@ -172,17 +178,21 @@ Vec3f road(const World& w, const Street& st, float u, float v, float fp) {
       const bool nearStart = st.crosswalk_start && u > 0.8f && u < 4.6f;
       const bool nearEnd = st.crosswalk_end && u > st.length - 4.6f && u < st.length - 0.8f;
       if ((nearStart || nearEnd) && fract((v + 20.f) / 1.0f) < 0.5f) mark = 1;
-      if (a < drive && ((v > 0 && u > 5.2f && u < 5.6f) || (v < 0 && u > st.length - 5.6f && u < st.length - 5.2f))) mark = 1;
+      if (a < drive && ((v > 0 && u > 5.2f && u < 5.6f) || (v < 0 && u > st.length - 5.6f && u < st.length - 5.2f)))
+        mark = 1;
     }
     // Manholes in some lanes.
     const float cell = ffloor(u / 17.f);
     const float hsh = hashf(st.seed, static_cast<std::uint32_t>(static_cast<int>(cell) + 1000), 3);
     if (hsh < 0.45f) {
-      const float cu = cell * 17.f + 3.f + 11.f * hashf(st.seed, static_cast<std::uint32_t>(static_cast<int>(cell) + 1000), 4);
-      const float cv = (hsh < 0.22f ? 1.f : -1.f) * (0.5f + (lw - 1.0f) * hashf(st.seed, static_cast<std::uint32_t>(static_cast<int>(cell)), 5));
+      const float cu =
+          cell * 17.f + 3.f + 11.f * hashf(st.seed, static_cast<std::uint32_t>(static_cast<int>(cell) + 1000), 4);
+      const float cv = (hsh < 0.22f ? 1.f : -1.f) *
+                       (0.5f + (lw - 1.0f) * hashf(st.seed, static_cast<std::uint32_t>(static_cast<int>(cell)), 5));
       const float r = std::hypot(u - cu, v - cv);
       if (r < 0.32f) {
-        c = 0.22f + (r > 0.27f ? 0.12f : 0.f) + ((fract((u - cu) / 0.08f) < 0.5f) != (fract((v - cv) / 0.08f) < 0.5f) ? 0.07f : 0.f) * fade(0.08f, fp);
+        c = 0.22f + (r > 0.27f ? 0.12f : 0.f) +
+            ((fract((u - cu) / 0.08f) < 0.5f) != (fract((v - cv) / 0.08f) < 0.5f) ? 0.07f : 0.f) * fade(0.08f, fp);
       }
     }
   }
@@ -195,8 +205,8 @@ Vec3f road(const World& w, const Street& st, float u, float v, float fp) {
 }
 
 Vec3f asphalt(float u, float v, float fp) {
-  return grey(0.30f + 0.16f * detail(u, v, 0.012f, 4, fp, 3.3f) + 0.10f * (N(u / 50.f, v / 50.f) - 0.5f) + 0.24f * speckle(u, v, 0.03f, fp, 5) +
-              0.2f * speckle(u, v, 0.09f, fp, 6));
+  return grey(0.30f + 0.16f * detail(u, v, 0.012f, 4, fp, 3.3f) + 0.10f * (N(u / 50.f, v / 50.f) - 0.5f) +
+              0.24f * speckle(u, v, 0.03f, fp, 5) + 0.2f * speckle(u, v, 0.09f, fp, 6));
 }
 
 Vec3f pavement(float u, float v, float fp) {
@@ -204,11 +214,14 @@ Vec3f pavement(float u, float v, float fp) {
   const float row = ffloor(v / s);
   const float uu = u + (static_cast<int>(row) & 1) * 0.25f;
   const float col = ffloor(uu / s);
-  const float h = hashf(static_cast<std::uint32_t>(static_cast<int>(col)), static_cast<std::uint32_t>(static_cast<int>(row)), 11);
+  const float h =
+      hashf(static_cast<std::uint32_t>(static_cast<int>(col)), static_cast<std::uint32_t>(static_cast<int>(row)), 11);
   const float tint = fade(s * 0.5f, fp);
-  float c = 0.55f + 0.45f * (h - 0.5f) * tint + 0.14f * detail(u, v, 0.01f, 3, fp, 1.7f) + 0.2f * speckle(u, v, 0.025f, fp, 7) + 0.15f * speckle(u, v, 0.08f, fp, 8);
+  float c = 0.55f + 0.45f * (h - 0.5f) * tint + 0.14f * detail(u, v, 0.01f, 3, fp, 1.7f) +
+            0.2f * speckle(u, v, 0.025f, fp, 7) + 0.15f * speckle(u, v, 0.08f, fp, 8);
   const float fu = fract(uu / s), fv = fract(v / s);
-  const float joint = std::max(lineCov(std::min(fu, 1.f - fu) * s, 0.012f, fp), lineCov(std::min(fv, 1.f - fv) * s, 0.012f, fp));
+  const float joint =
+      std::max(lineCov(std::min(fu, 1.f - fu) * s, 0.012f, fp), lineCov(std::min(fv, 1.f - fv) * s, 0.012f, fp));
   c -= 0.3f * joint;
   c += 0.10f * (N(u / 30.f, v / 30.f) - 0.5f);
   return Vec3f(c * 1.02f, c, c * 0.96f);
@@ -227,36 +240,44 @@ Vec3f facade(const Facade& f, float u, float v, float fp) {
   auto base = [&]() -> Vec3f {
     if (v < 0.45f) return f.trim_colour * (0.85f + 0.3f * N(u / 2.f, v / 2.f) + 0.4f * detail(u, v, 0.01f, 3, fp, 3.f));
     const float stain = N(u / 25.f + static_cast<float>(sd % 113) * 0.01f, v / 25.f);
-    Vec3f c = f.colour * (0.85f + 0.3f * (stain - 0.5f) + 0.3f * speckle(u, v, 0.07f, fp, sd + 3) + 0.25f * speckle(u, v, 0.2f, fp, sd + 4) +
-                          0.2f * speckle(u, v, 0.55f, fp, sd + 5));
+    Vec3f c = f.colour * (0.85f + 0.3f * (stain - 0.5f) + 0.3f * speckle(u, v, 0.07f, fp, sd + 3) +
+                          0.25f * speckle(u, v, 0.2f, fp, sd + 4) + 0.2f * speckle(u, v, 0.55f, fp, sd + 5));
     if (f.base == 0) {  // brick
       const float row = ffloor(v / f.brick_h);
       const float off = (static_cast<int>(row) & 1) * f.brick_w * 0.5f;
       const float col = ffloor((u + off) / f.brick_w);
       const float fu = fract((u + off) / f.brick_w), fv = fract(v / f.brick_h);
-      const float tint = 0.62f + 0.75f * hashf(sd, static_cast<std::uint32_t>(static_cast<int>(row)), static_cast<std::uint32_t>(static_cast<int>(col)));
+      const float tint = 0.62f + 0.75f * hashf(sd, static_cast<std::uint32_t>(static_cast<int>(row)),
+                                               static_cast<std::uint32_t>(static_cast<int>(col)));
       const float bw = fade(f.brick_h * 0.8f, fp);
       const Vec3f brick = c * (1.0f + (tint - 0.97f) * bw) * (1.f + 0.25f * detail(u, v, 0.008f, 2, fp, 2.f));
-      const float mortar = std::max(lineCov(std::min(fu, 1.f - fu) * f.brick_w, 0.01f, fp), lineCov(std::min(fv, 1.f - fv) * f.brick_h, 0.01f, fp));
+      const float mortar = std::max(lineCov(std::min(fu, 1.f - fu) * f.brick_w, 0.01f, fp),
+                                    lineCov(std::min(fv, 1.f - fv) * f.brick_h, 0.01f, fp));
       return mix(brick, Vec3f(0.72f, 0.70f, 0.66f), mortar);
     }
     if (f.base == 1)  // plaster
-      return c * (1.0f + 0.45f * detail(u, v, 0.015f, 4, fp, static_cast<float>(sd % 101)) + 0.25f * speckle(u, v, 0.08f, fp, sd));
+      return c * (1.0f + 0.45f * detail(u, v, 0.015f, 4, fp, static_cast<float>(sd % 101)) +
+                  0.25f * speckle(u, v, 0.08f, fp, sd));
     // concrete panels
     const float pc = ffloor(u / f.panel_w), pr = ffloor(v / f.floor_h);
-    c = c * (0.85f + 0.3f * hashf(sd, static_cast<std::uint32_t>(static_cast<int>(pc)), static_cast<std::uint32_t>(static_cast<int>(pr)))) *
+    c = c *
+        (0.85f + 0.3f * hashf(sd, static_cast<std::uint32_t>(static_cast<int>(pc)),
+                              static_cast<std::uint32_t>(static_cast<int>(pr)))) *
         (1.0f + 0.35f * detail(u, v, 0.015f, 4, fp, static_cast<float>(sd % 89)));
     const float pu = fract(u / f.panel_w), pv = fract(v / f.floor_h);
-    return c * (1.0f - 0.5f * std::max(lineCov(std::min(pu, 1.f - pu) * f.panel_w, 0.03f, fp), lineCov(std::min(pv, 1.f - pv) * f.floor_h, 0.03f, fp)));
+    return c * (1.0f - 0.5f * std::max(lineCov(std::min(pu, 1.f - pu) * f.panel_w, 0.03f, fp),
+                                       lineCov(std::min(pv, 1.f - pv) * f.floor_h, 0.03f, fp)));
   };
   const float style = hashf(static_cast<std::uint32_t>(f.building), 41, 42);
   // Posters, stickers and patches of repair near street level.
   if (v > 0.5f && v < 2.6f) {
     const float cu = ffloor(u / 1.7f), cv = ffloor(v / 1.05f);
-    const std::uint32_t hp = hash3(sd, static_cast<std::uint32_t>(static_cast<int>(cu)), static_cast<std::uint32_t>(static_cast<int>(cv)) + 77u);
+    const std::uint32_t hp = hash3(sd, static_cast<std::uint32_t>(static_cast<int>(cu)),
+                                   static_cast<std::uint32_t>(static_cast<int>(cv)) + 77u);
     if ((hp & 255) < 70) {
       const float pu = u / 1.7f - cu, pv = v / 1.05f - cv;
-      const float w0 = 0.15f + 0.2f * static_cast<float>((hp >> 8) & 15) / 15.f, h0 = 0.12f + 0.25f * static_cast<float>((hp >> 12) & 15) / 15.f;
+      const float w0 = 0.15f + 0.2f * static_cast<float>((hp >> 8) & 15) / 15.f,
+                  h0 = 0.12f + 0.25f * static_cast<float>((hp >> 12) & 15) / 15.f;
       if (pu > w0 && pu < 1.f - w0 * 0.5f && pv > h0 && pv < 1.f - h0 * 0.5f) {
         const Vec3f pc(hashf(hp, 1, 2), hashf(hp, 2, 3), hashf(hp, 3, 4));
         return mix(pc, grey(0.9f), 0.3f) * (0.8f + 0.4f * (fract(pv * 9.f) < 0.5f ? 1.f : 0.f) * fade(0.06f, fp));
@@ -270,7 +291,8 @@ Vec3f facade(const Facade& f, float u, float v, float fp) {
     const float e = u < 0.5f ? u : f.length - u;
     if (e < width) {
       const float fv = fract(v / 0.32f);
-      Vec3f q = f.trim_colour * 1.35f * (0.9f + 0.2f * hashf(sd, static_cast<std::uint32_t>(static_cast<int>(row)), 43));
+      Vec3f q =
+          f.trim_colour * 1.35f * (0.9f + 0.2f * hashf(sd, static_cast<std::uint32_t>(static_cast<int>(row)), 43));
       q *= 1.f - 0.4f * std::max(lineCov(std::min(fv, 1.f - fv) * 0.32f, 0.012f, fp), lineCov(width - e, 0.012f, fp));
       return q;
     }
@@ -283,7 +305,9 @@ Vec3f facade(const Facade& f, float u, float v, float fp) {
     Vec3f g(refl * 0.9f, refl, refl * 1.12f);
     if (h < 0.33f) {  // curtains from the sides
       const float open = 0.15f + 0.3f * hashf(sd, key, 22);
-      if (lu < ww * open || lu > ww * (1 - open)) g = Vec3f(0.75f, 0.72f, 0.65f) * (0.8f + 0.3f * hashf(sd, key, 23)) * (0.9f + 0.1f * std::sin(lu * 40.f) * fade(0.04f, fp));
+      if (lu < ww * open || lu > ww * (1 - open))
+        g = Vec3f(0.75f, 0.72f, 0.65f) * (0.8f + 0.3f * hashf(sd, key, 23)) *
+            (0.9f + 0.1f * std::sin(lu * 40.f) * fade(0.04f, fp));
     } else if (h < 0.5f) {  // blinds
       const float down = wh * (0.2f + 0.7f * hashf(sd, key, 24));
       if (lv > wh - down) g = grey(0.6f + 0.15f * (fract(lv / 0.05f) < 0.5f ? 1.f : 0.f) * fade(0.025f, fp));
@@ -293,7 +317,8 @@ Vec3f facade(const Facade& f, float u, float v, float fp) {
     const float cols = ww > 1.2f ? 2.f : 1.f;
     const float rows = (style > 0.45f) ? 3.f : (h > 0.6f ? 2.f : 1.f);
     const float pu = fract(lu / ww * cols), pv = fract(lv / wh * rows);
-    const float bar = std::max(lineCov(std::min(pu, 1.f - pu) * ww / cols, 0.05f, fp), lineCov(std::min(pv, 1.f - pv) * wh / rows, 0.04f, fp));
+    const float bar = std::max(lineCov(std::min(pu, 1.f - pu) * ww / cols, 0.05f, fp),
+                               lineCov(std::min(pv, 1.f - pv) * wh / rows, 0.04f, fp));
     return mix(g, f.frame_colour, bar);
   };
   const float frame = 0.07f;
@@ -310,12 +335,16 @@ Vec3f facade(const Facade& f, float u, float v, float fp) {
       const float top = f.ground_h - 0.7f;
       if (v > top && v < top + 0.5f) {  // sign band with lettering
         const float shopHue = hashf(sd, 31, 1);
-        Vec3f band = shopHue < 0.33f ? Vec3f(0.1f, 0.15f, 0.5f) : (shopHue < 0.66f ? Vec3f(0.55f, 0.08f, 0.06f) : Vec3f(0.1f, 0.35f, 0.15f));
+        Vec3f band = shopHue < 0.33f ? Vec3f(0.1f, 0.15f, 0.5f)
+                                     : (shopHue < 0.66f ? Vec3f(0.55f, 0.08f, 0.06f) : Vec3f(0.1f, 0.35f, 0.15f));
         const float letter = ffloor((u - 0.8f) / 0.32f);
         const float lu = fract((u - 0.8f) / 0.32f), lv = (v - top) / 0.5f;
-        if (lv > 0.2f && lv < 0.8f && lu > 0.15f && lu < 0.8f && hashf(sd, static_cast<std::uint32_t>(static_cast<int>(letter)), 32) < 0.8f) {
+        if (lv > 0.2f && lv < 0.8f && lu > 0.15f && lu < 0.8f &&
+            hashf(sd, static_cast<std::uint32_t>(static_cast<int>(letter)), 32) < 0.8f) {
           const float cellx = ffloor(lu * 3), celly = ffloor(lv * 5);
-          if (hashf(sd, static_cast<std::uint32_t>(static_cast<int>(letter * 16 + cellx)), static_cast<std::uint32_t>(static_cast<int>(celly))) < 0.6f) band = grey(0.92f);
+          if (hashf(sd, static_cast<std::uint32_t>(static_cast<int>(letter * 16 + cellx)),
+                    static_cast<std::uint32_t>(static_cast<int>(celly))) < 0.6f)
+            band = grey(0.92f);
         }
         return band;
       }
@@ -323,7 +352,8 @@ Vec3f facade(const Facade& f, float u, float v, float fp) {
         const float bay = 2.4f;
         const float lu = fract(u / bay) * bay;
         if (lu < 0.09f) return f.frame_colour * 0.7f;
-        return glass(lu, v - 0.45f, bay, top - 0.5f, static_cast<std::uint32_t>(static_cast<int>(ffloor(u / bay))) + 500u);
+        return glass(lu, v - 0.45f, bay, top - 0.5f,
+                     static_cast<std::uint32_t>(static_cast<int>(ffloor(u / bay))) + 500u);
       }
       return base();
     }
@@ -344,17 +374,22 @@ Vec3f facade(const Facade& f, float u, float v, float fp) {
   const float lu = u - f.col_offset - ci * f.col_spacing - (f.col_spacing - f.win_w) * 0.5f;
   const float wu0 = f.col_offset + ci * f.col_spacing + (f.col_spacing - f.win_w) * 0.5f;
   if (wu0 < 0.5f || wu0 + f.win_w > f.length - 0.5f) return base();
-  if (f.door_face && v < f.ground_h && wu0 + f.win_w > f.door_u - 0.3f && wu0 < f.door_u + f.door_w + 0.3f) return base();
+  if (f.door_face && v < f.ground_h && wu0 + f.win_w > f.door_u - 0.3f && wu0 < f.door_u + f.door_w + 0.3f)
+    return base();
   const float wv = lv - sill;
   // String course between floors.
-  if (style > 0.3f && fl > 0 && lv < 0.16f) return f.trim_colour * (1.2f + 0.3f * detail(u, v, 0.01f, 3, fp, 5.f)) * (1.f - 0.35f * lineCov(lv - 0.08f, 0.015f, fp));
+  if (style > 0.3f && fl > 0 && lv < 0.16f)
+    return f.trim_colour * (1.2f + 0.3f * detail(u, v, 0.01f, 3, fp, 5.f)) *
+           (1.f - 0.35f * lineCov(lv - 0.08f, 0.015f, fp));
   // Lintel above the window, shutters beside it.
   if (lu >= -0.12f && lu <= f.win_w + 0.12f && wv > f.win_h && wv < f.win_h + 0.16f) return f.trim_colour * 1.15f;
-  if (style > 0.65f && wv >= 0 && wv <= f.win_h && ((lu < 0 && lu > -0.45f * f.win_w) || (lu > f.win_w && lu < 1.45f * f.win_w))) {
+  if (style > 0.65f && wv >= 0 && wv <= f.win_h &&
+      ((lu < 0 && lu > -0.45f * f.win_w) || (lu > f.win_w && lu < 1.45f * f.win_w))) {
     const float hue = hashf(static_cast<std::uint32_t>(f.building), 44, 45);
     const Vec3f sh = hue < 0.5f ? Vec3f(0.15f, 0.35f, 0.2f) : Vec3f(0.45f, 0.3f, 0.18f);
     const float fl2 = fract(wv / 0.06f);
-    return sh * (1.f - 0.45f * lineCov(std::min(fl2, 1.f - fl2) * 0.06f, 0.015f, fp)) * (1.f - 0.5f * lineCov(std::min(std::abs(lu), std::abs(lu - f.win_w)), 0.03f, fp));
+    return sh * (1.f - 0.45f * lineCov(std::min(fl2, 1.f - fl2) * 0.06f, 0.015f, fp)) *
+           (1.f - 0.5f * lineCov(std::min(std::abs(lu), std::abs(lu - f.win_w)), 0.03f, fp));
   }
   if (lu >= -0.1f && lu <= f.win_w + 0.1f && wv >= -0.1f && wv < 0.f) return f.trim_colour * 1.25f;  // sill
   if (lu < 0 || lu > f.win_w || wv < 0 || wv > f.win_h) return base();
@@ -385,13 +420,17 @@ Vec3f sign(const SignStyle& s, float u, float v, float fp) {
         const float d = ffloor((u + 0.14f) / 0.14f);
         const float lu = fract((u + 0.14f) / 0.14f), lv = (v + 0.1f) / 0.2f;
         const bool ring = lu < 0.25f || lu > 0.75f || lv < 0.18f || lv > 0.82f;
-        if (ring && hashf(s.seed, static_cast<std::uint32_t>(static_cast<int>(d)), static_cast<std::uint32_t>(static_cast<int>(lv * 3))) < 0.85f) return grey(0.05f);
+        if (ring && hashf(s.seed, static_cast<std::uint32_t>(static_cast<int>(d)),
+                          static_cast<std::uint32_t>(static_cast<int>(lv * 3))) < 0.85f)
+          return grey(0.05f);
       }
       return grey(0.92f);
     }
     case 1:  // blue mandatory
       if (r > 0.32f) return grey(0.5f);
-      if ((std::abs(u) < 0.05f && v > -0.2f && v < 0.12f) || (v > 0.05f && std::abs(u) < 0.2f - (v - 0.05f) * 1.3f && v < 0.2f)) return grey(0.95f);
+      if ((std::abs(u) < 0.05f && v > -0.2f && v < 0.12f) ||
+          (v > 0.05f && std::abs(u) < 0.2f - (v - 0.05f) * 1.3f && v < 0.2f))
+        return grey(0.95f);
       return Vec3f(0.12f, 0.25f, 0.65f);
     case 2: {  // warning triangle
       const float y = v + 0.2f;
@@ -403,12 +442,16 @@ Vec3f sign(const SignStyle& s, float u, float v, float fp) {
     case 3:  // parking
       if (std::abs(u) > 0.3f || std::abs(v) > 0.3f) return grey(0.5f);
       if (std::abs(u) > 0.27f || std::abs(v) > 0.27f) return grey(0.95f);
-      if ((u > -0.12f && u < -0.04f && std::abs(v) < 0.18f) || (std::hypot(u - 0.02f, v - 0.07f) < 0.11f && std::hypot(u - 0.02f, v - 0.07f) > 0.04f && u > -0.05f)) return grey(0.95f);
+      if ((u > -0.12f && u < -0.04f && std::abs(v) < 0.18f) ||
+          (std::hypot(u - 0.02f, v - 0.07f) < 0.11f && std::hypot(u - 0.02f, v - 0.07f) > 0.04f && u > -0.05f))
+        return grey(0.95f);
       return Vec3f(0.1f, 0.3f, 0.7f);
     default: {  // green direction sign with text blocks
       const float ch = ffloor(u / 0.09f), ln = ffloor(v / 0.16f);
       const float lu = fract(u / 0.09f), lv = fract(v / 0.16f);
-      if (lu > 0.15f && lu < 0.8f && lv > 0.2f && lv < 0.8f && hashf(s.seed, static_cast<std::uint32_t>(static_cast<int>(ch) + 100), static_cast<std::uint32_t>(static_cast<int>(ln) + 100)) < 0.55f)
+      if (lu > 0.15f && lu < 0.8f && lv > 0.2f && lv < 0.8f &&
+          hashf(s.seed, static_cast<std::uint32_t>(static_cast<int>(ch) + 100),
+                static_cast<std::uint32_t>(static_cast<int>(ln) + 100)) < 0.55f)
         return grey(0.95f);
       return Vec3f(0.05f, 0.4f, 0.2f);
     }
@@ -427,7 +470,9 @@ Vec3f car(const World& w, std::uint16_t m, int param, float u, float v, float fp
       const float xd = 0.5f * (s.x_wb + s.x_rr);
       if ((std::abs(u - (s.x_wb - 0.05f)) < 0.012f || std::abs(u - xd) < 0.012f) && v > 0.35f && v < s.hb) c *= 0.45f;
       if (std::abs(v - (s.hb - 0.14f)) < 0.01f) c *= 0.75f;
-      if (std::abs(v - (s.hb - 0.2f)) < 0.025f && (std::abs(u - (xd + 0.25f)) < 0.1f || std::abs(u - (s.x_rr + 0.3f)) < 0.1f)) c = grey(0.15f);
+      if (std::abs(v - (s.hb - 0.2f)) < 0.025f &&
+          (std::abs(u - (xd + 0.25f)) < 0.1f || std::abs(u - (s.x_rr + 0.3f)) < 0.1f))
+        c = grey(0.15f);
       if (v < 0.4f) c = mix(c, grey(0.18f), 0.4f * (0.4f - v) / 0.4f + 0.2f * N(u, v));
       return c;
     }
@@ -455,22 +500,29 @@ Vec3f car(const World& w, std::uint16_t m, int param, float u, float v, float fp
     case M_CAR_FRONT: {
       const float a = std::abs(v);
       const float len = s.hb - 0.18f - (s.wheel_r * 0.55f + 0.15f);
-      if (u > len - 0.22f && a > s.w / 2 - 0.45f && a < s.w / 2 - 0.08f) return grey(0.85f) + Vec3f(0, 0.02f, 0.05f) * N(u * 5, v * 5);
+      if (u > len - 0.22f && a > s.w / 2 - 0.45f && a < s.w / 2 - 0.08f)
+        return grey(0.85f) + Vec3f(0, 0.02f, 0.05f) * N(u * 5, v * 5);
       if (u > 0.04f && u < 0.16f && a < 0.26f) {
         const float ch = ffloor((v + 0.26f) / 0.065f);
-        if (a < 0.22f && u > 0.06f && u < 0.14f && fract((v + 0.26f) / 0.065f) < 0.65f && hashf(static_cast<std::uint32_t>(s.plate_seed), static_cast<std::uint32_t>(static_cast<int>(ch)), static_cast<std::uint32_t>(static_cast<int>((u - 0.06f) / 0.027f))) < 0.6f)
+        if (a < 0.22f && u > 0.06f && u < 0.14f && fract((v + 0.26f) / 0.065f) < 0.65f &&
+            hashf(static_cast<std::uint32_t>(s.plate_seed), static_cast<std::uint32_t>(static_cast<int>(ch)),
+                  static_cast<std::uint32_t>(static_cast<int>((u - 0.06f) / 0.027f))) < 0.6f)
           return grey(0.08f);
         return grey(0.9f);
       }
-      if (u > 0.2f && u < len - 0.25f && a < s.w / 2 - 0.5f) return grey(0.08f + 0.1f * (fract(u / 0.04f) < 0.5f ? 1.f : 0.f) * fade(0.02f, fp));
+      if (u > 0.2f && u < len - 0.25f && a < s.w / 2 - 0.5f)
+        return grey(0.08f + 0.1f * (fract(u / 0.04f) < 0.5f ? 1.f : 0.f) * fade(0.02f, fp));
       return paint;
     }
     case M_CAR_REAR: {
       const float a = std::abs(v);
-      if (u > 0.04f && u < 0.24f && a > s.w / 2 - 0.4f && a < s.w / 2 - 0.06f) return Vec3f(0.65f, 0.05f, 0.05f) * (0.8f + 0.3f * (fract(u / 0.05f) < 0.5f ? 1.f : 0.f));
+      if (u > 0.04f && u < 0.24f && a > s.w / 2 - 0.4f && a < s.w / 2 - 0.06f)
+        return Vec3f(0.65f, 0.05f, 0.05f) * (0.8f + 0.3f * (fract(u / 0.05f) < 0.5f ? 1.f : 0.f));
       if (u > 0.26f && u < 0.38f && a < 0.26f) {
         const float ch = ffloor((v + 0.26f) / 0.065f);
-        if (a < 0.22f && u > 0.28f && u < 0.36f && fract((v + 0.26f) / 0.065f) < 0.65f && hashf(static_cast<std::uint32_t>(s.plate_seed), static_cast<std::uint32_t>(static_cast<int>(ch) + 50), static_cast<std::uint32_t>(static_cast<int>((u - 0.28f) / 0.027f))) < 0.6f)
+        if (a < 0.22f && u > 0.28f && u < 0.36f && fract((v + 0.26f) / 0.065f) < 0.65f &&
+            hashf(static_cast<std::uint32_t>(s.plate_seed), static_cast<std::uint32_t>(static_cast<int>(ch) + 50),
+                  static_cast<std::uint32_t>(static_cast<int>((u - 0.28f) / 0.027f))) < 0.6f)
           return grey(0.08f);
         return grey(0.9f);
       }
@@ -487,7 +539,8 @@ Vec3f car(const World& w, std::uint16_t m, int param, float u, float v, float fp
       }
       return grey(0.07f + (r > 0.66f && r < 0.7f ? 0.05f : 0.f));
     }
-    default: return paint;
+    default:
+      return paint;
   }
 }
 
@@ -498,23 +551,36 @@ float noiseTile(float u, float v) { return N(u, v); }
 Vec3f shadeSurface(const World& w, const ShadeInput& in) {
   const float u = in.u, v = in.v, fp = in.footprint;
   switch (in.material) {
-    case M_ROAD: return road(w, w.streets[in.param], u, v, fp);
-    case M_ASPHALT: return asphalt(u, v, fp);
-    case M_PAVEMENT: return pavement(u, v, fp);
-    case M_KERB: return kerb(u, v, fp);
-    case M_FACADE: return facade(w.facades[in.param], u, v, fp);
-    case M_ROOF: return grey(0.25f + 0.1f * N(u / 10.f, v / 10.f));
-    case M_BARK: return Vec3f(0.25f, 0.18f, 0.12f) * (0.8f + 0.5f * N(u / 0.5f, v / 4.f) + 0.8f * detail(u * 3.f, v, 0.02f, 3, fp, 4.f));
-    case M_LEAVES: return leaves(in.param, u, v, fp);
-    case M_POLE: return grey(0.42f + 0.1f * N(u / 2.f, v / 2.f));
-    case M_SIGN: return sign(w.signs[in.param], u, v, fp);
-    case M_SIGN_BACK: return grey(0.55f);
+    case M_ROAD:
+      return road(w, w.streets[in.param], u, v, fp);
+    case M_ASPHALT:
+      return asphalt(u, v, fp);
+    case M_PAVEMENT:
+      return pavement(u, v, fp);
+    case M_KERB:
+      return kerb(u, v, fp);
+    case M_FACADE:
+      return facade(w.facades[in.param], u, v, fp);
+    case M_ROOF:
+      return grey(0.25f + 0.1f * N(u / 10.f, v / 10.f));
+    case M_BARK:
+      return Vec3f(0.25f, 0.18f, 0.12f) *
+             (0.8f + 0.5f * N(u / 0.5f, v / 4.f) + 0.8f * detail(u * 3.f, v, 0.02f, 3, fp, 4.f));
+    case M_LEAVES:
+      return leaves(in.param, u, v, fp);
+    case M_POLE:
+      return grey(0.42f + 0.1f * N(u / 2.f, v / 2.f));
+    case M_SIGN:
+      return sign(w.signs[in.param], u, v, fp);
+    case M_SIGN_BACK:
+      return grey(0.55f);
     case M_FENCE: {  // garden fence: pickets on two rails
       const float pu = fract(u / 0.14f);
       const float picket = lineCov(std::min(pu, 1.f - pu) * 0.14f, 0.07f, fp);
       const float rail = std::max(lineCov(v - 0.35f, 0.06f, fp), lineCov(v - 0.8f, 0.06f, fp));
       const Vec3f wood = Vec3f(0.55f, 0.42f, 0.3f) * (0.85f + 0.3f * N(u / 3.f, v / 3.f));
-      return mix(mix(Vec3f(0.12f, 0.2f, 0.08f) * (1.f + 2.f * detail(u, v, 0.03f, 3, fp, 3.f)), wood, picket), wood * 0.8f, rail);
+      return mix(mix(Vec3f(0.12f, 0.2f, 0.08f) * (1.f + 2.f * detail(u, v, 0.03f, 3, fp, 3.f)), wood, picket),
+                 wood * 0.8f, rail);
     }
     case M_GRASS: {
       const float g = detail(u, v, 0.02f, 4, fp, 8.f) + 0.3f * speckle(u, v, 0.04f, fp, 9);
@@ -529,11 +595,17 @@ Vec3f shadeSurface(const World& w, const ShadeInput& in) {
       if (graffiti > 0.72f && v < 2.5f) return Vec3f(0.2f + graffiti * 0.5f, 0.1f, 0.5f - graffiti * 0.3f);
       return Vec3f(c, c * 0.98f, c * 0.94f);
     }
-    case M_RAIL: return grey(0.6f + 0.15f * (fract(v / 0.12f) < 0.5f ? 1.f : 0.f) * fade(0.06f, fp) - (fract(u / 2.0f) < 0.05f ? 0.3f : 0.f));
-    case M_PED_SHIRT: return w.ped_styles[in.param].shirt * (0.85f + 0.3f * N(u * 2, v * 2));
-    case M_PED_TROUSERS: return w.ped_styles[in.param].trousers * (0.85f + 0.3f * N(u * 2 + 0.5f, v * 2));
-    case M_PED_SKIN: return w.ped_styles[in.param].skin;
-    default: return car(w, in.material, in.param, u, v, fp);
+    case M_RAIL:
+      return grey(0.6f + 0.15f * (fract(v / 0.12f) < 0.5f ? 1.f : 0.f) * fade(0.06f, fp) -
+                  (fract(u / 2.0f) < 0.05f ? 0.3f : 0.f));
+    case M_PED_SHIRT:
+      return w.ped_styles[in.param].shirt * (0.85f + 0.3f * N(u * 2, v * 2));
+    case M_PED_TROUSERS:
+      return w.ped_styles[in.param].trousers * (0.85f + 0.3f * N(u * 2 + 0.5f, v * 2));
+    case M_PED_SKIN:
+      return w.ped_styles[in.param].skin;
+    default:
+      return car(w, in.material, in.param, u, v, fp);
   }
 }
 
@@ -542,7 +614,8 @@ Vec3f shadeSky(const Eigen::Vector3f& d) {
   Vec3f c = mix(Vec3f(0.78f, 0.84f, 0.90f), Vec3f(0.42f, 0.60f, 0.86f), std::sqrt(e));
   if (d.z() > 0.01f) {
     const float k = 1.f / d.z();
-    const float cl = N(d.x() * k * 0.35f + 0.3f, d.y() * k * 0.35f) * 0.7f + 0.3f * N(d.x() * k * 1.4f, d.y() * k * 1.4f + 0.2f);
+    const float cl =
+        N(d.x() * k * 0.35f + 0.3f, d.y() * k * 0.35f) * 0.7f + 0.3f * N(d.x() * k * 1.4f, d.y() * k * 1.4f + 0.2f);
     const float cover = std::clamp((cl - 0.5f) * 3.f, 0.f, 1.f);
     c = mix(c, Vec3f(0.93f, 0.93f, 0.95f) * (0.85f + 0.15f * cl), cover * std::min(1.f, e * 6.f));
   }
@@ -551,18 +624,34 @@ Vec3f shadeSky(const Eigen::Vector3f& d) {
 
 float lidarReflectance(std::uint16_t m) {
   switch (m) {
-    case M_ROAD: case M_ASPHALT: return 0.22f;
-    case M_PAVEMENT: case M_KERB: return 0.35f;
-    case M_FACADE: return 0.4f;
-    case M_LEAVES: return 0.3f;
-    case M_BARK: return 0.25f;
-    case M_POLE: case M_RAIL: return 0.6f;
-    case M_SIGN: return 0.95f;
-    case M_GRASS: return 0.3f;
-    case M_CAR_GLASS: return 0.05f;
-    case M_TYRE: return 0.08f;
-    case M_CAR_REAR: case M_CAR_FRONT: return 0.7f;
-    default: return 0.45f;
+    case M_ROAD:
+    case M_ASPHALT:
+      return 0.22f;
+    case M_PAVEMENT:
+    case M_KERB:
+      return 0.35f;
+    case M_FACADE:
+      return 0.4f;
+    case M_LEAVES:
+      return 0.3f;
+    case M_BARK:
+      return 0.25f;
+    case M_POLE:
+    case M_RAIL:
+      return 0.6f;
+    case M_SIGN:
+      return 0.95f;
+    case M_GRASS:
+      return 0.3f;
+    case M_CAR_GLASS:
+      return 0.05f;
+    case M_TYRE:
+      return 0.08f;
+    case M_CAR_REAR:
+    case M_CAR_FRONT:
+      return 0.7f;
+    default:
+      return 0.45f;
   }
 }
 

@@ -1,10 +1,11 @@
 // The procedural world: street grid (or ring highway), buildings, street furniture, cars, pedestrians,
 // and every object's trajectory. Everything is drawn from one seeded RNG in a fixed order.
+#include "world.hpp"
+
 #include <algorithm>
 #include <cmath>
 
 #include "beslam/common/error.hpp"
-#include "world.hpp"
 
 namespace beslam::sim::detail {
 namespace {
@@ -62,7 +63,9 @@ bool overlap(const Footprint& a, const Footprint& b) {
   return true;
 }
 
-Vec3f v3(double x, double y, double z) { return Vec3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)); }
+Vec3f v3(double x, double y, double z) {
+  return Vec3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+}
 
 }  // namespace
 
@@ -102,7 +105,8 @@ void addBox(std::vector<Tri>& out, const Vec3f& lo, const Vec3f& hi, std::uint16
 }
 
 // Planar triangle with texture axes taken from its own plane.
-static void addTriPlanar(std::vector<Tri>& out, const Vec3f& a, const Vec3f& b, const Vec3f& c, std::uint16_t m, int param) {
+static void addTriPlanar(std::vector<Tri>& out, const Vec3f& a, const Vec3f& b, const Vec3f& c, std::uint16_t m,
+                         int param) {
   Vec3f n = (b - a).cross(c - a);
   if (n.norm() < 1e-9f) return;
   n.normalize();
@@ -124,7 +128,9 @@ static void addCrown(std::vector<Tri>& out, const Vec3f& c, float cr, float sx, 
   const int faces[8][3] = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
   auto vert = [&](Vec3f dir) {
     dir.normalize();
-    const std::uint32_t key = static_cast<std::uint32_t>(std::lround(dir.x() * 1000) * 73856093 ^ std::lround(dir.y() * 1000) * 19349663 ^ std::lround(dir.z() * 1000) * 83492791);
+    const std::uint32_t key =
+        static_cast<std::uint32_t>(std::lround(dir.x() * 1000) * 73856093 ^ std::lround(dir.y() * 1000) * 19349663 ^
+                                   std::lround(dir.z() * 1000) * 83492791);
     const float rr = cr * (0.8f + 0.4f * hashf(tseed, key, 7));
     return Vec3f(c.x() + dir.x() * rr * sx, c.y() + dir.y() * rr * sx, c.z() + dir.z() * rr * sz);
   };
@@ -132,14 +138,15 @@ static void addCrown(std::vector<Tri>& out, const Vec3f& c, float cr, float sx, 
     const Vec3f A = ax[f[0]], Bv = ax[f[1]], C = ax[f[2]];
     const Vec3f ab = (A + Bv) * 0.5f, bc = (Bv + C) * 0.5f, ca = (C + A) * 0.5f;
     const Vec3f sub[4][3] = {{A, ab, ca}, {ab, Bv, bc}, {ca, bc, C}, {ab, bc, ca}};
-    for (const auto& s3 : sub) addTriPlanar(out, vert(s3[0]), vert(s3[1]), vert(s3[2]), M_LEAVES, static_cast<int>(tseed & 0xffff));
+    for (const auto& s3 : sub)
+      addTriPlanar(out, vert(s3[0]), vert(s3[1]), vert(s3[2]), M_LEAVES, static_cast<int>(tseed & 0xffff));
   }
 }
 
 // Extrudes a convex side profile (x, z) across y in [-hw, hw]; caps map (x, z), the rim maps (along, y).
 static void addPrism(std::vector<Tri>& out, const std::vector<std::pair<float, float>>& prof, float hw,
-                     std::uint16_t cap_material, std::uint16_t rim_material, int param,
-                     std::uint16_t front_material, std::uint16_t back_material, std::uint16_t top_material) {
+                     std::uint16_t cap_material, std::uint16_t rim_material, int param, std::uint16_t front_material,
+                     std::uint16_t back_material, std::uint16_t top_material) {
   const int n = static_cast<int>(prof.size());
   for (int i = 1; i + 1 < n; ++i) {  // caps (profile counter-clockwise seen from +y)
     Tri t;
@@ -159,30 +166,48 @@ static void addPrism(std::vector<Tri>& out, const std::vector<std::pair<float, f
   for (int i = 0; i < n; ++i) {
     const auto& p = prof[i];
     const auto& q = prof[(i + 1) % n];
-    const Vec3f a(p.first, -hw, p.second), b(q.first, -hw, q.second), c(q.first, hw, q.second), d(p.first, hw, p.second);
+    const Vec3f a(p.first, -hw, p.second), b(q.first, -hw, q.second), c(q.first, hw, q.second),
+        d(p.first, hw, p.second);
     Vec3f e = Vec3f(q.first - p.first, 0, q.second - p.second);
     if (e.norm() < 1e-6f) continue;
     e.normalize();
     const Vec3f nrm(e.z(), 0, -e.x());  // outward for a counter-clockwise profile in (x, z)
     std::uint16_t m = rim_material;
-    if (nrm.x() > 0.7f) m = front_material;
-    else if (nrm.x() < -0.7f) m = back_material;
-    else if (nrm.z() > 0.7f) m = top_material;
-    else if (nrm.z() < -0.7f) m = rim_material;
+    if (nrm.x() > 0.7f)
+      m = front_material;
+    else if (nrm.x() < -0.7f)
+      m = back_material;
+    else if (nrm.z() > 0.7f)
+      m = top_material;
+    else if (nrm.z() < -0.7f)
+      m = rim_material;
     addQuad(out, a, b, c, d, m, param, e, -e.dot(a), Vec3f(0, 1, 0), 0);
   }
 }
 
-std::vector<Tri> buildCarMesh(CarShape shape, double length, double width, double height, int style_index, CarStyle& st) {
+std::vector<Tri> buildCarMesh(CarShape shape, double length, double width, double height, int style_index,
+                              CarStyle& st) {
   const float l = static_cast<float>(length), w = static_cast<float>(width), h = static_cast<float>(height);
-  struct Shape { float hb, wb, rf, rr, rb; };
+  struct Shape {
+    float hb, wb, rf, rr, rb;
+  };
   Shape s{};
   switch (shape) {
-    case CarShape::Sedan: s = {0.60f, 0.20f, 0.02f, -0.22f, -0.33f}; break;
-    case CarShape::Hatchback: s = {0.60f, 0.22f, 0.05f, -0.38f, -0.48f}; break;
-    case CarShape::Wagon: s = {0.60f, 0.19f, 0.03f, -0.46f, -0.49f}; break;
-    case CarShape::Suv: s = {0.58f, 0.24f, 0.10f, -0.45f, -0.49f}; break;
-    case CarShape::Van: s = {0.48f, 0.44f, 0.32f, -0.48f, -0.50f}; break;
+    case CarShape::Sedan:
+      s = {0.60f, 0.20f, 0.02f, -0.22f, -0.33f};
+      break;
+    case CarShape::Hatchback:
+      s = {0.60f, 0.22f, 0.05f, -0.38f, -0.48f};
+      break;
+    case CarShape::Wagon:
+      s = {0.60f, 0.19f, 0.03f, -0.46f, -0.49f};
+      break;
+    case CarShape::Suv:
+      s = {0.58f, 0.24f, 0.10f, -0.45f, -0.49f};
+      break;
+    case CarShape::Van:
+      s = {0.48f, 0.44f, 0.32f, -0.48f, -0.50f};
+      break;
   }
   st.l = l, st.w = w, st.h = h;
   st.hb = s.hb * h;
@@ -193,9 +218,9 @@ std::vector<Tri> buildCarMesh(CarShape shape, double length, double width, doubl
   std::vector<Tri> out;
   // Lower body: chamfered nose and tail.
   const float nose = shape == CarShape::Van ? 0.10f : 0.28f;
-  std::vector<std::pair<float, float>> body = {
-      {-l / 2 + 0.05f, clr}, {l / 2 - 0.05f, clr}, {l / 2, clr + 0.15f}, {l / 2, hb - 0.18f},
-      {l / 2 - nose, hb}, {-l / 2 + 0.12f, hb}, {-l / 2, hb - 0.10f}, {-l / 2, clr + 0.12f}};
+  std::vector<std::pair<float, float>> body = {{-l / 2 + 0.05f, clr}, {l / 2 - 0.05f, clr}, {l / 2, clr + 0.15f},
+                                               {l / 2, hb - 0.18f},   {l / 2 - nose, hb},   {-l / 2 + 0.12f, hb},
+                                               {-l / 2, hb - 0.10f},  {-l / 2, clr + 0.12f}};
   addPrism(out, body, w / 2, M_CAR_BODY, M_CAR_BODY, style_index, M_CAR_FRONT, M_CAR_REAR, M_CAR_BODY);
   // Cabin: trapezoid, slightly narrower; a fraction of a millimetre above the body top.
   const float cw = w / 2 * (shape == CarShape::Van ? 0.97f : 0.86f);
@@ -226,13 +251,16 @@ std::vector<Tri> buildCarMesh(CarShape shape, double length, double width, doubl
         t.param = style_index;
         t.U = Vec4f(1, 0, 0, -cx);
         t.V = Vec4f(0, 0, 1, -r);
-        if (side > 0) t.a = rim_o[0], t.b = rim_o[k + 1], t.c = rim_o[k];
-        else t.a = rim_o[0], t.b = rim_o[k], t.c = rim_o[k + 1];
+        if (side > 0)
+          t.a = rim_o[0], t.b = rim_o[k + 1], t.c = rim_o[k];
+        else
+          t.a = rim_o[0], t.b = rim_o[k], t.c = rim_o[k + 1];
         out.push_back(t);
       }
       for (int k = 0; k < 8; ++k) {
         const int k2 = (k + 1) % 8;
-        addQuad(out, rim_o[k], rim_o[k2], rim_i[k2], rim_i[k], M_TYRE, -1 - style_index, Vec3f(0, 1, 0), 0, Vec3f(0, 0, 1), 0);
+        addQuad(out, rim_o[k], rim_o[k2], rim_i[k2], rim_i[k], M_TYRE, -1 - style_index, Vec3f(0, 1, 0), 0,
+                Vec3f(0, 0, 1), 0);
       }
     }
   return out;
@@ -263,8 +291,10 @@ World::World(const SynthConfig& cfg) : config(cfg) {
   const auto& wc = config.world;
   for (int i = 0; i <= wc.blocks_x; ++i) X_.push_back(i * wc.block_x);
   for (int j = 0; j <= wc.blocks_y; ++j) Y_.push_back(j * wc.block_y);
-  if (wc.type == "highway") buildHighway(rng);
-  else buildUrban(rng);
+  if (wc.type == "highway")
+    buildHighway(rng);
+  else
+    buildUrban(rng);
 
   // Ego: loop round the centre block in the rightmost lane.
   const int ex = wc.blocks_x / 2, ey = wc.blocks_y / 2;
@@ -347,7 +377,10 @@ void World::buildUrban(Rng& rng) {
     }
 
   // Blocks: the grid's blocks plus four border strips facing the outer streets.
-  struct Block { double x0, y0, x1, y1; bool sides[4]; };
+  struct Block {
+    double x0, y0, x1, y1;
+    bool sides[4];
+  };
   std::vector<Block> blocks;
   for (int i = 0; i < wc.blocks_x; ++i)
     for (int j = 0; j < wc.blocks_y; ++j)
@@ -368,9 +401,12 @@ void World::buildUrban(Rng& rng) {
     for (int a = 0; a < nx; ++a)
       for (int b = 0; b < ny; ++b) {
         Chunk ch;
-        const float xa = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * a / nx), xb = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * (a + 1) / nx);
-        const float ya = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * b / ny), yb = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * (b + 1) / ny);
-        addQuad(ch.tris, {xa, ya, kerb}, {xb, ya, kerb}, {xb, yb, kerb}, {xa, yb, kerb}, M_PAVEMENT, 0, {1, 0, 0}, 0, {0, 1, 0}, 0);
+        const float xa = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * a / nx),
+                    xb = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * (a + 1) / nx);
+        const float ya = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * b / ny),
+                    yb = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * (b + 1) / ny);
+        addQuad(ch.tris, {xa, ya, kerb}, {xb, ya, kerb}, {xb, yb, kerb}, {xa, yb, kerb}, M_PAVEMENT, 0, {1, 0, 0}, 0,
+                {0, 1, 0}, 0);
         ch.finish();
         chunks.push_back(std::move(ch));
       }
@@ -386,8 +422,8 @@ void World::buildUrban(Rng& rng) {
         const int m = std::max(1, static_cast<int>(std::ceil(L[k] / 20.0)));
         for (int q = 0; q < m; ++q) {
           const Vec2d a = S[k] + d * (L[k] * q / m), b = S[k] + d * (L[k] * (q + 1) / m);
-          addQuad(ch.tris, v3(a.x(), a.y(), 0), v3(b.x(), b.y(), 0), v3(b.x(), b.y(), kerb), v3(a.x(), a.y(), kerb), M_KERB, 0,
-                  v3(d.x(), d.y(), 0), static_cast<float>(-d.dot(S[k])), {0, 0, 1}, 0);
+          addQuad(ch.tris, v3(a.x(), a.y(), 0), v3(b.x(), b.y(), 0), v3(b.x(), b.y(), kerb), v3(a.x(), a.y(), kerb),
+                  M_KERB, 0, v3(d.x(), d.y(), 0), static_cast<float>(-d.dot(S[k])), {0, 0, 1}, 0);
         }
         ch.finish();
         chunks.push_back(std::move(ch));
@@ -414,7 +450,8 @@ void World::buildUrban(Rng& rng) {
         const auto& pc = palette[rng.index(9)];
         const float jit = static_cast<float>(rng.uniform(0.85, 1.12));
         f.colour = Vec3f(pc[0], pc[1], pc[2]) * jit;
-        f.frame_colour = rng.chance(0.6) ? Vec3f(0.92f, 0.92f, 0.90f) : Vec3f(0.25f, 0.22f, 0.20f) * static_cast<float>(rng.uniform(0.8, 1.6));
+        f.frame_colour = rng.chance(0.6) ? Vec3f(0.92f, 0.92f, 0.90f)
+                                         : Vec3f(0.25f, 0.22f, 0.20f) * static_cast<float>(rng.uniform(0.8, 1.6));
         f.trim_colour = f.colour * static_cast<float>(rng.uniform(0.55, 0.8));
         f.brick_w = static_cast<float>(rng.uniform(0.22, 0.30));
         f.brick_h = static_cast<float>(rng.uniform(0.065, 0.09));
@@ -429,7 +466,9 @@ void World::buildUrban(Rng& rng) {
         f.shop = rng.chance(0.4);
         f.panel_w = static_cast<float>(rng.uniform(2.0, 4.5));
         f.door_w = static_cast<float>(rng.uniform(1.0, 2.2));
-        const int floors = std::max(1, static_cast<int>(std::round((rng.uniform(wc.building_min_height, wc.building_max_height) - f.ground_h) / f.floor_h)));
+        const int floors = std::max(
+            1, static_cast<int>(
+                   std::round((rng.uniform(wc.building_min_height, wc.building_max_height) - f.ground_h) / f.floor_h)));
         const double height = f.ground_h + floors * f.floor_h + rng.uniform(0.3, 1.2);
         f.height = static_cast<float>(height);
         // Footprint corners (front-left, front-right, back-right, back-left seen from the street).
@@ -451,20 +490,23 @@ void World::buildUrban(Rng& rng) {
           facades.push_back(fw);
           const int fid = static_cast<int>(facades.size()) - 1;
           const Vec2d ud = (b - a).normalized();
-          addQuad(ch.tris, v3(a.x(), a.y(), kerb), v3(b.x(), b.y(), kerb), v3(b.x(), b.y(), height), v3(a.x(), a.y(), height),
-                  M_FACADE, fid, v3(ud.x(), ud.y(), 0), static_cast<float>(-ud.dot(a)), {0, 0, 1}, -kerb);
+          addQuad(ch.tris, v3(a.x(), a.y(), kerb), v3(b.x(), b.y(), kerb), v3(b.x(), b.y(), height),
+                  v3(a.x(), a.y(), height), M_FACADE, fid, v3(ud.x(), ud.y(), 0), static_cast<float>(-ud.dot(a)),
+                  {0, 0, 1}, -kerb);
         }
         const float hh = static_cast<float>(height);
-        addQuad(ch.tris, v3(c0.x(), c0.y(), hh), v3(c1.x(), c1.y(), hh), v3(c2.x(), c2.y(), hh), v3(c3.x(), c3.y(), hh), M_ROOF, building,
-                {1, 0, 0}, 0, {0, 1, 0}, 0);
+        addQuad(ch.tris, v3(c0.x(), c0.y(), hh), v3(c1.x(), c1.y(), hh), v3(c2.x(), c2.y(), hh), v3(c3.x(), c3.y(), hh),
+                M_ROOF, building, {1, 0, 0}, 0, {0, 1, 0}, 0);
         // A hedge or low wall in the front garden when the building stands back from the pavement.
         if (setback > 1.0 && rng.chance(0.6)) {
           const double hd = std::min(0.9, setback - 0.2), hh = rng.uniform(0.6, 1.3);
-          const Vec2d h0 = S[k] + d * (along + 0.3) + in * (pw + 0.1), h1 = S[k] + d * (along + width - 0.3) + in * (pw + 0.1 + hd);
+          const Vec2d h0 = S[k] + d * (along + 0.3) + in * (pw + 0.1),
+                      h1 = S[k] + d * (along + width - 0.3) + in * (pw + 0.1 + hd);
           const bool wall = rng.chance(0.3);
           Chunk hc;
-          addBox(hc.tris, v3(std::min(h0.x(), h1.x()), std::min(h0.y(), h1.y()), kKerb), v3(std::max(h0.x(), h1.x()), std::max(h0.y(), h1.y()), kKerb + hh),
-                 wall ? M_FENCE : M_LEAVES, wall ? 0 : static_cast<int>(rng.next() & 0xffff));
+          addBox(hc.tris, v3(std::min(h0.x(), h1.x()), std::min(h0.y(), h1.y()), kKerb),
+                 v3(std::max(h0.x(), h1.x()), std::max(h0.y(), h1.y()), kKerb + hh), wall ? M_FENCE : M_LEAVES,
+                 wall ? 0 : static_cast<int>(rng.next() & 0xffff));
           hc.finish();
           chunks.push_back(std::move(hc));
         }
@@ -493,7 +535,8 @@ void World::buildUrban(Rng& rng) {
         addBox(ch.tris, {px - 0.08f, py - 0.08f, kerb}, {px + 0.08f, py + 0.08f, 6.5f}, M_POLE, 0);
         const Vec2d q = p + n * 1.3;
         const float qx = static_cast<float>(q.x()), qy = static_cast<float>(q.y());
-        addBox(ch.tris, {std::min(px, qx) - 0.05f, std::min(py, qy) - 0.05f, 6.3f}, {std::max(px, qx) + 0.05f, std::max(py, qy) + 0.05f, 6.42f}, M_POLE, 0);
+        addBox(ch.tris, {std::min(px, qx) - 0.05f, std::min(py, qy) - 0.05f, 6.3f},
+               {std::max(px, qx) + 0.05f, std::max(py, qy) + 0.05f, 6.42f}, M_POLE, 0);
         addBox(ch.tris, {qx - 0.25f, qy - 0.25f, 6.05f}, {qx + 0.25f, qy + 0.25f, 6.3f}, M_SIGN_BACK, 0);
         ch.finish();
         chunks.push_back(std::move(ch));
@@ -521,12 +564,13 @@ void World::buildUrban(Rng& rng) {
         const Vec2d f0 = p + face * 0.06;
         const Vec3f sa = v3(side.x(), side.y(), 0);
         const Vec2d a = f0 - side * hs, b = f0 + side * hs;
-        addQuad(ch.tris, v3(b.x(), b.y(), top), v3(a.x(), a.y(), top), v3(a.x(), a.y(), top + 2 * hs), v3(b.x(), b.y(), top + 2 * hs), M_SIGN, sid,
-                -sa, static_cast<float>(side.dot(f0)), {0, 0, 1}, -(top + hs));
+        addQuad(ch.tris, v3(b.x(), b.y(), top), v3(a.x(), a.y(), top), v3(a.x(), a.y(), top + 2 * hs),
+                v3(b.x(), b.y(), top + 2 * hs), M_SIGN, sid, -sa, static_cast<float>(side.dot(f0)), {0, 0, 1},
+                -(top + hs));
         const Vec2d f1 = p + face * 0.05;
         const Vec2d a1 = f1 - side * hs, b1 = f1 + side * hs;
-        addQuad(ch.tris, v3(a1.x(), a1.y(), top), v3(b1.x(), b1.y(), top), v3(b1.x(), b1.y(), top + 2 * hs), v3(a1.x(), a1.y(), top + 2 * hs), M_SIGN_BACK, sid,
-                sa, 0, {0, 0, 1}, 0);
+        addQuad(ch.tris, v3(a1.x(), a1.y(), top), v3(b1.x(), b1.y(), top), v3(b1.x(), b1.y(), top + 2 * hs),
+                v3(a1.x(), a1.y(), top + 2 * hs), M_SIGN_BACK, sid, sa, 0, {0, 0, 1}, 0);
         ch.finish();
         chunks.push_back(std::move(ch));
       }
@@ -590,20 +634,23 @@ void World::buildHighway(Rng& rng) {
       const double s0 = L * q / n, s1 = L * (q + 1) / n;
       Vec2d d0, d1;
       // Road ribbon: u = s, v = lateral offset (left positive).
-      auto ribbon = [&](std::vector<Tri>& out, double o0, double o1, double z0, double z1, std::uint16_t m, bool road_uv) {
+      auto ribbon = [&](std::vector<Tri>& out, double o0, double o1, double z0, double z1, std::uint16_t m,
+                        bool road_uv) {
         Vec2d p00, p01, p10, p11;
         pointAt(s0, o0, p00, d0);
         pointAt(s1, o0, p01, d1);
         pointAt(s0, o1, p10, d0);
         pointAt(s1, o1, p11, d1);
-        const Vec3f A = v3(p00.x(), p00.y(), z0), B = v3(p01.x(), p01.y(), z0), C = v3(p11.x(), p11.y(), z1), D = v3(p10.x(), p10.y(), z1);
+        const Vec3f A = v3(p00.x(), p00.y(), z0), B = v3(p01.x(), p01.y(), z0), C = v3(p11.x(), p11.y(), z1),
+                    D = v3(p10.x(), p10.y(), z1);
         // Affine (u, v) from the local frame at s0: exact enough per 4 m quad.
         const Vec2d dm = (d0 + d1).normalized(), lm(-dm.y(), dm.x());
         Vec2d c0;
         double hh, kk;
         ring.at(s0, c0, hh, kk);
         if (road_uv) {
-          addQuad(out, A, B, C, D, m, 0, v3(dm.x(), dm.y(), 0), static_cast<float>(s0 - dm.dot(c0)), v3(lm.x(), lm.y(), 0), static_cast<float>(-lm.dot(c0)));
+          addQuad(out, A, B, C, D, m, 0, v3(dm.x(), dm.y(), 0), static_cast<float>(s0 - dm.dot(c0)),
+                  v3(lm.x(), lm.y(), 0), static_cast<float>(-lm.dot(c0)));
         } else {
           const Vec3f ud = (B - A).normalized();
           const Vec3f vd = (D - A).normalized();
@@ -647,8 +694,8 @@ void World::buildHighway(Rng& rng) {
         const Vec2d f0 = p + face * 0.12;
         const float hs = 1.2f;
         const Vec2d a = f0 - sd * hs, b = f0 + sd * hs;
-        addQuad(ch.tris, v3(b.x(), b.y(), 3.2), v3(a.x(), a.y(), 3.2), v3(a.x(), a.y(), 4.6), v3(b.x(), b.y(), 4.6), M_SIGN, sid,
-                v3(-sd.x(), -sd.y(), 0), static_cast<float>(sd.dot(f0)), {0, 0, 1}, -3.9f);
+        addQuad(ch.tris, v3(b.x(), b.y(), 3.2), v3(a.x(), a.y(), 3.2), v3(a.x(), a.y(), 4.6), v3(b.x(), b.y(), 4.6),
+                M_SIGN, sid, v3(-sd.x(), -sd.y(), 0), static_cast<float>(sd.dot(f0)), {0, 0, 1}, -3.9f);
       }
       ch.finish();
       chunks.push_back(std::move(ch));
@@ -682,7 +729,8 @@ void World::buildHighway(Rng& rng) {
       for (int b = 0; b < m; ++b) {
         const float xa = x0 + (x1 - x0) * a / m, xb = x0 + (x1 - x0) * (a + 1) / m;
         const float ya = y0 + (y1 - y0) * b / m, yb = y0 + (y1 - y0) * (b + 1) / m;
-        addQuad(ch.tris, {xa, ya, -0.05f}, {xb, ya, -0.05f}, {xb, yb, -0.05f}, {xa, yb, -0.05f}, M_GRASS, 0, {1, 0, 0}, 0, {0, 1, 0}, 0);
+        addQuad(ch.tris, {xa, ya, -0.05f}, {xb, ya, -0.05f}, {xb, yb, -0.05f}, {xa, yb, -0.05f}, M_GRASS, 0, {1, 0, 0},
+                0, {0, 1, 0}, 0);
       }
     ch.finish();
     chunks.push_back(std::move(ch));
@@ -703,7 +751,8 @@ void World::buildHighway(Rng& rng) {
     const float w = static_cast<float>(rng.uniform(15, 40)), dd = static_cast<float>(rng.uniform(12, 25));
     const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
     Chunk ch;
-    const Vec2d cs[4] = {{px - w / 2, py - dd / 2}, {px + w / 2, py - dd / 2}, {px + w / 2, py + dd / 2}, {px - w / 2, py + dd / 2}};
+    const Vec2d cs[4] = {
+        {px - w / 2, py - dd / 2}, {px + w / 2, py - dd / 2}, {px + w / 2, py + dd / 2}, {px - w / 2, py + dd / 2}};
     for (int k = 0; k < 4; ++k) {
       Facade fw = f;
       const Vec2d a = cs[k], b = cs[(k + 1) % 4];
@@ -711,8 +760,9 @@ void World::buildHighway(Rng& rng) {
       fw.seed = static_cast<std::uint32_t>(rng.next());
       facades.push_back(fw);
       const Vec2d ud = (b - a).normalized();
-      addQuad(ch.tris, v3(a.x(), a.y(), 0), v3(b.x(), b.y(), 0), v3(b.x(), b.y(), f.height), v3(a.x(), a.y(), f.height), M_FACADE,
-              static_cast<int>(facades.size()) - 1, v3(ud.x(), ud.y(), 0), static_cast<float>(-ud.dot(a)), {0, 0, 1}, 0);
+      addQuad(ch.tris, v3(a.x(), a.y(), 0), v3(b.x(), b.y(), 0), v3(b.x(), b.y(), f.height), v3(a.x(), a.y(), f.height),
+              M_FACADE, static_cast<int>(facades.size()) - 1, v3(ud.x(), ud.y(), 0), static_cast<float>(-ud.dot(a)),
+              {0, 0, 1}, 0);
     }
     ch.finish();
     chunks.push_back(std::move(ch));
@@ -756,7 +806,8 @@ Eigen::Isometry3d World::T_sim_cam(double t) const {
   const double pitch = config.ego.pitch_amplitude_deg * deg *
                            (0.6 * std::sin(2 * M_PI * 0.37 * t + ph) + 0.4 * std::sin(2 * M_PI * 1.13 * t + 2 * ph)) -
                        0.15 * deg * a_long;
-  const double roll = -config.ego.roll_per_accel_deg * deg * a_lat + 0.05 * deg * std::sin(2 * M_PI * 0.71 * t + 3 * ph);
+  const double roll =
+      -config.ego.roll_per_accel_deg * deg * a_lat + 0.05 * deg * std::sin(2 * M_PI * 0.71 * t + 3 * ph);
   const double bounce = 0.008 * std::sin(2 * M_PI * 1.3 * t + ph);
   const Eigen::Vector3d fwd(std::cos(h), std::sin(h), 0), right(std::sin(h), -std::cos(h), 0), down(0, 0, -1);
   Eigen::Matrix3d R;
@@ -825,7 +876,8 @@ Pose2 World::objectPose(const Object& o, double t) const {
         pos = len, h = std::atan2(-dir.y(), -dir.x()), walked += len;
       } else {
         tau -= o.wait_b;
-        pos = len - tau * o.walk_speed, h = std::atan2(-dir.y(), -dir.x()), p.speed = o.walk_speed, walked += len + tau * o.walk_speed;
+        pos = len - tau * o.walk_speed, h = std::atan2(-dir.y(), -dir.x()), p.speed = o.walk_speed,
+        walked += len + tau * o.walk_speed;
       }
       xy = o.a + dir * pos;
       p.walked = walked;
@@ -894,7 +946,9 @@ void World::placeObjects(Rng& rng) {
   const double T = config.frames / config.rate_hz;
   const double egoSpeed = config.ego.speed_kmh / 3.6;
 
-  struct Track { std::vector<Footprint> fp; };
+  struct Track {
+    std::vector<Footprint> fp;
+  };
   std::vector<Track> tracks;  // accepted objects' footprints over time (static: one entry)
   Track egoTrack;
   for (int i = 0; i <= steps; ++i) {
@@ -938,16 +992,27 @@ void World::placeObjects(Rng& rng) {
     o.info.behaviour = b;
     const double r = rng.uniform();
     double l, w, h;
-    if (r < 0.30) o.shape = CarShape::Sedan, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.74, 1.85), h = rng.uniform(1.40, 1.50), o.info.shape = "sedan";
-    else if (r < 0.52) o.shape = CarShape::Hatchback, l = rng.uniform(3.8, 4.25), w = rng.uniform(1.68, 1.78), h = rng.uniform(1.45, 1.55), o.info.shape = "hatchback";
-    else if (r < 0.70) o.shape = CarShape::Wagon, l = rng.uniform(4.55, 4.9), w = rng.uniform(1.76, 1.85), h = rng.uniform(1.45, 1.55), o.info.shape = "wagon";
-    else if (r < 0.87) o.shape = CarShape::Suv, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.84, 1.95), h = rng.uniform(1.65, 1.80), o.info.shape = "suv";
-    else o.shape = CarShape::Van, l = rng.uniform(4.8, 5.4), w = rng.uniform(1.9, 2.0), h = rng.uniform(1.9, 2.2), o.info.shape = "van";
+    if (r < 0.30)
+      o.shape = CarShape::Sedan, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.74, 1.85), h = rng.uniform(1.40, 1.50),
+      o.info.shape = "sedan";
+    else if (r < 0.52)
+      o.shape = CarShape::Hatchback, l = rng.uniform(3.8, 4.25), w = rng.uniform(1.68, 1.78),
+      h = rng.uniform(1.45, 1.55), o.info.shape = "hatchback";
+    else if (r < 0.70)
+      o.shape = CarShape::Wagon, l = rng.uniform(4.55, 4.9), w = rng.uniform(1.76, 1.85), h = rng.uniform(1.45, 1.55),
+      o.info.shape = "wagon";
+    else if (r < 0.87)
+      o.shape = CarShape::Suv, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.84, 1.95), h = rng.uniform(1.65, 1.80),
+      o.info.shape = "suv";
+    else
+      o.shape = CarShape::Van, l = rng.uniform(4.8, 5.4), w = rng.uniform(1.9, 2.0), h = rng.uniform(1.9, 2.2),
+      o.info.shape = "van";
     o.info.type = o.shape == CarShape::Van ? "Van" : "Car";
     CarStyle cs;
-    static const float colours[][3] = {{0.85f, 0.85f, 0.86f}, {0.08f, 0.08f, 0.09f}, {0.55f, 0.56f, 0.58f}, {0.62f, 0.08f, 0.07f},
-                                       {0.10f, 0.18f, 0.45f}, {0.75f, 0.75f, 0.72f}, {0.15f, 0.32f, 0.18f}, {0.80f, 0.55f, 0.10f},
-                                       {0.35f, 0.22f, 0.15f}, {0.30f, 0.45f, 0.62f}, {0.92f, 0.90f, 0.82f}, {0.45f, 0.05f, 0.20f}};
+    static const float colours[][3] = {{0.85f, 0.85f, 0.86f}, {0.08f, 0.08f, 0.09f}, {0.55f, 0.56f, 0.58f},
+                                       {0.62f, 0.08f, 0.07f}, {0.10f, 0.18f, 0.45f}, {0.75f, 0.75f, 0.72f},
+                                       {0.15f, 0.32f, 0.18f}, {0.80f, 0.55f, 0.10f}, {0.35f, 0.22f, 0.15f},
+                                       {0.30f, 0.45f, 0.62f}, {0.92f, 0.90f, 0.82f}, {0.45f, 0.05f, 0.20f}};
     const auto& c = colours[rng.index(12)];
     cs.colour = Vec3f(c[0], c[1], c[2]) * static_cast<float>(rng.uniform(0.9, 1.08));
     cs.seed = static_cast<std::uint32_t>(rng.next());
@@ -1096,8 +1161,10 @@ void World::placeObjects(Rng& rng) {
       const int kind = n % 3 == 0 ? 0 : (n % 3 == 1 ? 1 : 2);
       int lane = rng.index(wc.lanes_per_direction);
       double v = rng.uniform(oc.driving_speed_kmh_min, oc.driving_speed_kmh_max) / 3.6;
-      if (kind == 0 && wc.lanes_per_direction >= 2) lane = wc.lanes_per_direction - 2, v = std::max(v, egoSpeed * rng.uniform(1.3, 1.6));
-      else if (kind == 0) v = egoSpeed;  // same lane as the ego: keeps its distance
+      if (kind == 0 && wc.lanes_per_direction >= 2)
+        lane = wc.lanes_per_direction - 2, v = std::max(v, egoSpeed * rng.uniform(1.3, 1.6));
+      else if (kind == 0)
+        v = egoSpeed;  // same lane as the ego: keeps its distance
       bool cw;
       const int route = randomRoute(kind, lane, cw);
       o.path = route;
@@ -1123,7 +1190,8 @@ void World::placeObjects(Rng& rng) {
       o.info.height = rng.uniform(1.55, 1.92);
       o.info.length = 0.8, o.info.width = 0.6;
       PedStyle ps;
-      ps.shirt = Vec3f(static_cast<float>(rng.uniform(0.05, 0.9)), static_cast<float>(rng.uniform(0.05, 0.9)), static_cast<float>(rng.uniform(0.05, 0.9)));
+      ps.shirt = Vec3f(static_cast<float>(rng.uniform(0.05, 0.9)), static_cast<float>(rng.uniform(0.05, 0.9)),
+                       static_cast<float>(rng.uniform(0.05, 0.9)));
       ps.trousers = Vec3f(0.12f, 0.13f, 0.2f) * static_cast<float>(rng.uniform(0.6, 2.5));
       const float sk = static_cast<float>(rng.uniform(0.35, 0.85));
       ps.skin = Vec3f(sk * 0.75f, sk * 0.85f, sk);
@@ -1134,7 +1202,8 @@ void World::placeObjects(Rng& rng) {
         int bi = ex, bj = ey;
         if (rng.chance(0.4)) bi = rng.index(wc.blocks_x), bj = rng.index(wc.blocks_y);
         const double inset = rng.uniform(1.2, wc.pavement_width - 0.6);
-        auto pts = roundedRect(X_[bi] + hw + inset, Y_[bj] + hw + inset, X_[bi + 1] - hw - inset, Y_[bj + 1] - hw - inset, 2.0, rng.chance(0.5), 2.0);
+        auto pts = roundedRect(X_[bi] + hw + inset, Y_[bj] + hw + inset, X_[bi + 1] - hw - inset,
+                               Y_[bj + 1] - hw - inset, 2.0, rng.chance(0.5), 2.0);
         paths.emplace_back(pts, true);
         added_path = true;
         o.path = static_cast<int>(paths.size()) - 1;
@@ -1144,7 +1213,8 @@ void World::placeObjects(Rng& rng) {
         std::vector<int> egoSegs;
         for (std::size_t i = 0; i < segments_.size(); ++i)
           if (segments_[i].ego) egoSegs.push_back(static_cast<int>(i));
-        const int si = (!egoSegs.empty() && rng.chance(0.7)) ? egoSegs[rng.index(static_cast<int>(egoSegs.size()))] : rng.index(static_cast<int>(segments_.size()));
+        const int si = (!egoSegs.empty() && rng.chance(0.7)) ? egoSegs[rng.index(static_cast<int>(egoSegs.size()))]
+                                                             : rng.index(static_cast<int>(segments_.size()));
         const Segment& seg = segments_[si];
         const double u = rng.chance(0.5) ? rng.uniform(2.0, 4.0) : seg.length - rng.uniform(2.0, 4.0);
         const Vec2d left(-seg.dir.y(), seg.dir.x());
@@ -1157,12 +1227,16 @@ void World::placeObjects(Rng& rng) {
         o.wait_a = rng.uniform(2, 10), o.wait_b = rng.uniform(2, 10);
         o.phase = rng.uniform(0, 60);
       }
-      if (!place(o, placed_peds, [&] { if (added_path) paths.pop_back(); })) continue;
+      if (!place(o, placed_peds, [&] {
+            if (added_path) paths.pop_back();
+          }))
+        continue;
       ped_styles.push_back(ps);
       break;
     }
   }
-  count_stop_and_go = placed_sg, count_parked = placed_parked, count_driving = placed_driving, count_pedestrians = placed_peds;
+  count_stop_and_go = placed_sg, count_parked = placed_parked, count_driving = placed_driving,
+  count_pedestrians = placed_peds;
 }
 
 }  // namespace beslam::sim

@@ -71,7 +71,7 @@ class Profile {
   Profile() = default;
   // v_start/v_end < 0 mean "free" (cruise); closed paths are periodic.
   Profile(const Path& path, double v_cruise, double a_lat, double a_long, double v_start, double v_end);
-  double sAt(double t) const;      // distance travelled after time t (from s = 0 at t = 0)
+  double sAt(double t) const;  // distance travelled after time t (from s = 0 at t = 0)
   double speedAt(double t) const;
   double lapTime() const { return t_.empty() ? 0 : t_.back(); }
   double length() const { return length_; }
@@ -83,9 +83,31 @@ class Profile {
 };
 
 enum Mat : std::uint16_t {
-  M_ROAD, M_ASPHALT, M_PAVEMENT, M_KERB, M_FACADE, M_ROOF, M_BARK, M_LEAVES, M_POLE, M_SIGN,
-  M_SIGN_BACK, M_GRASS, M_WALL, M_RAIL, M_CAR_BODY, M_CAR_CABIN, M_CAR_GLASS, M_CAR_FRONT, M_CAR_REAR,
-  M_TYRE, M_FENCE, M_PED_SHIRT, M_PED_TROUSERS, M_PED_SKIN, M_COUNT
+  M_ROAD,
+  M_ASPHALT,
+  M_PAVEMENT,
+  M_KERB,
+  M_FACADE,
+  M_ROOF,
+  M_BARK,
+  M_LEAVES,
+  M_POLE,
+  M_SIGN,
+  M_SIGN_BACK,
+  M_GRASS,
+  M_WALL,
+  M_RAIL,
+  M_CAR_BODY,
+  M_CAR_CABIN,
+  M_CAR_GLASS,
+  M_CAR_FRONT,
+  M_CAR_REAR,
+  M_TYRE,
+  M_FENCE,
+  M_PED_SHIRT,
+  M_PED_TROUSERS,
+  M_PED_SKIN,
+  M_COUNT
 };
 
 // A triangle in its mesh frame; texture coordinates u = U.(p,1), v = V.(p,1) in metres.
@@ -93,7 +115,7 @@ struct Tri {
   Vec3f a, b, c;
   Vec4f U, V;
   std::uint16_t material = 0;
-  std::int32_t param = 0;   // material parameter: facade, street, sign, car index ...
+  std::int32_t param = 0;  // material parameter: facade, street, sign, car index ...
 };
 
 struct Chunk {  // a group of static triangles culled together
@@ -102,12 +124,12 @@ struct Chunk {  // a group of static triangles culled together
   void finish();
 };
 
-struct Facade {           // one building face
+struct Facade {  // one building face
   float length = 0, height = 0;
   std::uint32_t seed = 0;
   int building = 0;
   // style
-  int base = 0;           // 0 brick, 1 plaster, 2 concrete panels
+  int base = 0;  // 0 brick, 1 plaster, 2 concrete panels
   Vec3f colour, frame_colour, trim_colour;
   float brick_w = 0.25f, brick_h = 0.075f;
   float floor_h = 3.0f, ground_h = 3.6f;
@@ -117,16 +139,19 @@ struct Facade {           // one building face
   float panel_w = 3.0f;
 };
 
-struct Street {           // a road stretch: u along, v across from the centreline (metres)
+struct Street {  // a road stretch: u along, v across from the centreline (metres)
   float length = 0;
   int lanes = 1;
   float lane_w = 3.25f, parking_w = 0.f;
   bool crosswalk_start = false, crosswalk_end = false;
-  bool median = false;    // highway: a solid double line and a gap between carriageways
+  bool median = false;  // highway: a solid double line and a gap between carriageways
   std::uint32_t seed = 0;
 };
 
-struct SignStyle { int kind = 0; std::uint32_t seed = 0; };
+struct SignStyle {
+  int kind = 0;
+  std::uint32_t seed = 0;
+};
 
 struct CarStyle {
   Vec3f colour;
@@ -138,7 +163,9 @@ struct CarStyle {
   int plate_seed = 0;
 };
 
-struct PedStyle { Vec3f shirt, trousers, skin; };
+struct PedStyle {
+  Vec3f shirt, trousers, skin;
+};
 
 enum class CarShape { Sedan, Hatchback, Suv, Van, Wagon };
 
@@ -146,19 +173,19 @@ enum class CarShape { Sedan, Hatchback, Suv, Van, Wagon };
 struct Object {
   ObjectInfo info;
   CarShape shape = CarShape::Sedan;
-  std::vector<Tri> mesh;   // ISO object frame (cars); pedestrians are built per frame
-  int style = 0;           // index into car_styles / ped_styles
+  std::vector<Tri> mesh;  // ISO object frame (cars); pedestrians are built per frame
+  int style = 0;          // index into car_styles / ped_styles
   // Motion.
   enum class Kind { Static, Loop, PullOut, ParkIn, PedLoop, PedCross } kind = Kind::Static;
-  int path = -1;           // index into World::paths
+  int path = -1;  // index into World::paths
   Profile profile;
-  double s_offset = 0;     // start position on the path (loops)
-  double t_wait = 0;       // pull-out: standing until this time
+  double s_offset = 0;           // start position on the path (loops)
+  double t_wait = 0;             // pull-out: standing until this time
   double x = 0, y = 0, yaw = 0;  // static pose
   // Pedestrian crossing: walks A->B and back with waits.
   Vec2d a{0, 0}, b{0, 0};
   double walk_speed = 1.3, wait_a = 3, wait_b = 3, phase = 0;
-  double lateral = 0;      // pedestrians: offset from the path
+  double lateral = 0;  // pedestrians: offset from the path
 };
 
 struct Pose2 {
@@ -192,8 +219,10 @@ class World {
   std::vector<PedStyle> ped_styles;
   std::vector<Path> paths;
   std::vector<Object> objects;
-  struct Rect { double x0, y0, x1, y1; };
-  std::vector<Rect> raised;         // pavement areas (z = kerb height)
+  struct Rect {
+    double x0, y0, x1, y1;
+  };
+  std::vector<Rect> raised;  // pavement areas (z = kerb height)
   static constexpr double kKerb = 0.15;
 
   // Ego.
@@ -227,7 +256,7 @@ class World {
     int street = 0;            // index into streets
     Vec2d start, dir;          // centreline start and unit direction (u axis); v axis = left of dir
     double length = 0;
-    bool ego = false;          // borders the ego's block
+    bool ego = false;                                    // borders the ego's block
     std::vector<std::pair<double, double>> occupied[2];  // parking intervals (u), side 0: v<0, 1: v>0
   };
   std::vector<Segment> segments_;

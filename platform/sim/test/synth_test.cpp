@@ -1,24 +1,23 @@
 // beslam_sim: config validation, determinism, file layout, projection consistency (boxes vs masks,
 // LiDAR vs rendered depth), texture richness (FAST corners) and motion ground truth.
+#include "beslam/sim/synth.hpp"
+
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
-
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <yaml-cpp/yaml.h>
+#include <sstream>
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
-#include "beslam/sim/synth.hpp"
 
 namespace fs = std::filesystem;
 using beslam::sim::SynthConfig;
@@ -50,7 +49,8 @@ SynthConfig tinyConfig() {
 std::string slurp(const fs::path& p) { return beslam::readFile(p.string()); }
 
 double iou(double a0, double b0, double a1, double b1, double c0, double d0, double c1, double d1) {
-  const double ix = std::max(0.0, std::min(a1, c1) - std::max(a0, c0)), iy = std::max(0.0, std::min(b1, d1) - std::max(b0, d0));
+  const double ix = std::max(0.0, std::min(a1, c1) - std::max(a0, c0)),
+               iy = std::max(0.0, std::min(b1, d1) - std::max(b0, d0));
   const double inter = ix * iy;
   const double uni = (a1 - a0) * (b1 - b0) + (c1 - c0) * (d1 - d0) - inter;
   return uni > 0 ? inter / uni : 0;
@@ -68,7 +68,8 @@ TEST(SynthConfig, PresetsMatchTheConfigFiles) {
   }
   EXPECT_GE(beslam::sim::presetNames().size(), 5u);
   // urban_loop spells out the defaults.
-  EXPECT_EQ(beslam::sim::synthConfigToYaml(beslam::sim::presetConfig("urban_loop")), beslam::sim::synthConfigToYaml(SynthConfig{}));
+  EXPECT_EQ(beslam::sim::synthConfigToYaml(beslam::sim::presetConfig("urban_loop")),
+            beslam::sim::synthConfigToYaml(SynthConfig{}));
 }
 
 TEST(SynthConfig, RejectsUnknownKeysWrongTypesAndRanges) {
@@ -134,9 +135,9 @@ TEST(Synth, TinySequenceIsDeterministicAndKittiShaped) {
   }
 
   const fs::path seq = fs::path(a) / "sequences" / "00";
-  for (const char* p : {"calib.txt", "times.txt", "label_02/00.txt", "objects_motion.txt", "manifest.yaml", "objects/poses.txt",
-                        "objects/objects.txt", "image_0/000005.png", "image_2/000005.png", "velodyne/000005.bin",
-                        "instance/000005.png", "depth/000005.png"})
+  for (const char* p : {"calib.txt", "times.txt", "label_02/00.txt", "objects_motion.txt", "manifest.yaml",
+                        "objects/poses.txt", "objects/objects.txt", "image_0/000005.png", "image_2/000005.png",
+                        "velodyne/000005.bin", "instance/000005.png", "depth/000005.png"})
     EXPECT_TRUE(fs::exists(seq / p)) << p;
   EXPECT_TRUE(fs::exists(fs::path(a) / "poses" / "00.txt"));
 
@@ -183,8 +184,10 @@ TEST(Synth, TinySequenceIsDeterministicAndKittiShaped) {
     ASSERT_EQ(f.size(), 17u) << line;
     EXPECT_TRUE(f[2] == "Car" || f[2] == "Van" || f[2] == "Pedestrian") << line;
     const int frame = std::stoi(f[0]), id = std::stoi(f[1]);
-    const cv::Mat mask = cv::imread((seq / "instance" / (std::string(6 - std::to_string(frame).size(), '0') + std::to_string(frame) + ".png")).string(),
-                                    cv::IMREAD_UNCHANGED);
+    const cv::Mat mask = cv::imread(
+        (seq / "instance" / (std::string(6 - std::to_string(frame).size(), '0') + std::to_string(frame) + ".png"))
+            .string(),
+        cv::IMREAD_UNCHANGED);
     ASSERT_EQ(mask.type(), CV_16UC1);
     EXPECT_GT(cv::countNonZero(mask == id), 0) << line;
     ++nlabels;
@@ -234,13 +237,18 @@ TEST(Synth, MotionFlagsAgreeWithTrajectories) {
       everStill = everStill || !s0.moving;
     }
     switch (o.behaviour) {
-      case beslam::sim::Behaviour::Parked: EXPECT_FALSE(everMoved) << o.track_id; break;
-      case beslam::sim::Behaviour::Driving: EXPECT_FALSE(everStill) << o.track_id; break;
+      case beslam::sim::Behaviour::Parked:
+        EXPECT_FALSE(everMoved) << o.track_id;
+        break;
+      case beslam::sim::Behaviour::Driving:
+        EXPECT_FALSE(everStill) << o.track_id;
+        break;
       case beslam::sim::Behaviour::StopAndGo:
         EXPECT_TRUE(everMoved && everStill) << o.track_id;
         ++pullouts;
         break;
-      default: break;
+      default:
+        break;
     }
     (everMoved ? moving : still)++;
   }
@@ -302,8 +310,9 @@ TEST(Synth, BoxesProjectOntoMasksAndLidarLandsOnDepth) {
   std::sort(ious.begin(), ious.end());
   std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
   const double median = errors[errors.size() / 2];
-  std::cout << "[ figures ] unoccluded boxes " << ious.size() << ", IoU min " << ious.front() << " median " << ious[ious.size() / 2]
-            << "; LiDAR points " << errors.size() << ", median depth error " << median * 100 << " cm\n";
+  std::cout << "[ figures ] unoccluded boxes " << ious.size() << ", IoU min " << ious.front() << " median "
+            << ious[ious.size() / 2] << "; LiDAR points " << errors.size() << ", median depth error " << median * 100
+            << " cm\n";
   EXPECT_LT(median, 0.02);
 }
 
@@ -318,9 +327,12 @@ TEST(Synth, FramesHaveKittiDensityCorners) {
     cv::FAST(fr.grey, kps, 20, true);
     // Spread: corners in at least 3/4 of a 8 x 4 grid of cells.
     std::vector<int> cells(32, 0);
-    for (const auto& k : kps) cells[std::min(3, static_cast<int>(k.pt.y * 4 / fr.grey.rows)) * 8 + std::min(7, static_cast<int>(k.pt.x * 8 / fr.grey.cols))]++;
+    for (const auto& k : kps)
+      cells[std::min(3, static_cast<int>(k.pt.y * 4 / fr.grey.rows)) * 8 +
+            std::min(7, static_cast<int>(k.pt.x * 8 / fr.grey.cols))]++;
     const int covered = static_cast<int>(std::count_if(cells.begin(), cells.end(), [](int n) { return n > 5; }));
-    std::cout << "[ figures ] frame " << frame << ": " << kps.size() << " FAST-20 corners, " << covered << "/32 cells\n";
+    std::cout << "[ figures ] frame " << frame << ": " << kps.size() << " FAST-20 corners, " << covered
+              << "/32 cells\n";
     EXPECT_GT(kps.size(), 2500u) << "frame " << frame;
     EXPECT_GE(covered, 20) << "frame " << frame;
     total += kps.size();
@@ -334,7 +346,8 @@ TEST(Synth, EgoDrivesAClosedLoopAtKittiSpeeds) {
   EXPECT_GT(s.laps, 1.0);  // the loop closes within the sequence
   double vmin = 1e9, vmax = 0;
   for (int i = 1; i < synth.frameCount(); ++i) {
-    const double v = (synth.T_world_cam(i).translation() - synth.T_world_cam(i - 1).translation()).norm() * synth.config().rate_hz;
+    const double v =
+        (synth.T_world_cam(i).translation() - synth.T_world_cam(i - 1).translation()).norm() * synth.config().rate_hz;
     vmin = std::min(vmin, v), vmax = std::max(vmax, v);
     // Smooth: no jumps in rotation between frames.
     const Eigen::AngleAxisd d(synth.T_world_cam(i - 1).linear().transpose() * synth.T_world_cam(i).linear());

@@ -1,19 +1,17 @@
-#include "beslam/static_map/score.hpp"
-
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 #include <unordered_map>
-
-#include <nlohmann/json.hpp>
 
 #include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/datasets/labels.hpp"
+#include "beslam/static_map/score.hpp"
 #include "beslam/static_map/static_map.hpp"
 #include "beslam/trajectory/trajectory.hpp"
 
@@ -30,9 +28,9 @@ constexpr double kGroundBand = 0.3;  // metres
 bool carLike(const std::string& type) { return type == "Car" || type == "Van" || type == "Truck"; }
 
 struct WorldBox {
-  Eigen::Isometry3d T_box_world;     // world -> box frame (x length, y height, z width)
-  Eigen::Vector3d half;              // half extents in the box frame
-  Eigen::AlignedBox3d aabb;          // world
+  Eigen::Isometry3d T_box_world;  // world -> box frame (x length, y height, z width)
+  Eigen::Vector3d half;           // half extents in the box frame
+  Eigen::AlignedBox3d aabb;       // world
 };
 
 WorldBox worldBox(const datasets::ObjectLabel& o, const Eigen::Isometry3d& T_world_cam) {
@@ -111,7 +109,8 @@ MapScore scoreStaticMap(const octomap::OcTree& tree, const std::string& sequence
                         const Similarity& map_to_truth, double near) {
   const std::string labels_path = (fs::path(sequence_dir) / "label_02" / (sequence + ".txt")).string();
   const std::string motion_path = (fs::path(sequence_dir) / "objects_motion.txt").string();
-  const std::string poses_path = (fs::path(sequence_dir).parent_path().parent_path() / "poses" / (sequence + ".txt")).string();
+  const std::string poses_path =
+      (fs::path(sequence_dir).parent_path().parent_path() / "poses" / (sequence + ".txt")).string();
   const auto labels = datasets::readTrackingLabels(labels_path);
   const auto moving = datasets::readObjectMotion(motion_path);
   const trajectory::Trajectory poses = trajectory::readKitti(poses_path);
@@ -132,7 +131,9 @@ MapScore scoreStaticMap(const octomap::OcTree& tree, const std::string& sequence
     const WorldBox b = worldBox(l.object, poses.poses[static_cast<size_t>(l.frame)]);
     const auto m = moving.find({l.frame, l.track_id});
     if (m != moving.end() && m->second) {
-      if (carLike(l.object.type)) voxels.forEachInside(b, inset, [&](size_t i) { in_path[i] = 1; }, kGroundBand);
+      if (carLike(l.object.type))
+        voxels.forEachInside(
+            b, inset, [&](size_t i) { in_path[i] = 1; }, kGroundBand);
       continue;
     }
     voxels.forEachInside(b, -inset, [&](size_t i) { in_standing[i] = 1; });  // generous: touching counts
@@ -183,12 +184,18 @@ int runEvalCommand(const std::vector<std::string>& args, std::ostream& out, std:
   std::string run, json_path;
   double near = 20.0;
   try {
-    const bool help = cli::forEachFlag(args, [&] { out << kUsage; }, [&](const std::string& a, size_t& i) {
-      if (a == "--run") run = cli::nextValue(args, i);
-      else if (a == "--json") json_path = cli::nextValue(args, i);
-      else if (a == "--near") near = cli::nextPositiveNumber(args, i);
-      else throw std::invalid_argument("unknown argument '" + a + "'");
-    });
+    const bool help = cli::forEachFlag(
+        args, [&] { out << kUsage; },
+        [&](const std::string& a, size_t& i) {
+          if (a == "--run")
+            run = cli::nextValue(args, i);
+          else if (a == "--json")
+            json_path = cli::nextValue(args, i);
+          else if (a == "--near")
+            near = cli::nextPositiveNumber(args, i);
+          else
+            throw std::invalid_argument("unknown argument '" + a + "'");
+        });
     if (help) return 0;
     if (run.empty()) throw std::invalid_argument("give --run DIR");
   } catch (const std::invalid_argument& e) {
@@ -220,7 +227,8 @@ int runEvalCommand(const std::vector<std::string>& args, std::ostream& out, std:
                                                 {"parked_cars_near", s.parked_cars},
                                                 {"parked_cars_near_mapped", s.parked_cars_mapped},
                                                 {"near_m", near}}
-                                         .dump(2) + "\n");
+                                         .dump(2) +
+                                     "\n");
     return 0;
   } catch (const std::exception& e) {
     err << "beslam eval-static-map: " << e.what() << "\n";

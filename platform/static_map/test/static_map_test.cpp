@@ -1,11 +1,12 @@
-#include <filesystem>
-#include <fstream>
+#include "beslam/static_map/static_map.hpp"
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 #include "beslam/common/error.hpp"
 #include "beslam/static_map/score.hpp"
-#include "beslam/static_map/static_map.hpp"
 
 namespace fs = std::filesystem;
 
@@ -157,9 +158,9 @@ TEST_F(TreeFiles, ScoreCountsVoxelsInMovingPathsAndParkedCars) {
     }
   }
   octomap::OcTree tree(0.2);
-  tree.updateNode(octomap::point3d(0.1f, 0.1f, 15.1f), true);  // in the moving car's path (frame 1)
-  tree.updateNode(octomap::point3d(5.1f, 0.1f, 10.1f), true);  // in the parked car
-  tree.updateNode(octomap::point3d(-6.1f, 0.1f, 10.1f), true); // elsewhere
+  tree.updateNode(octomap::point3d(0.1f, 0.1f, 15.1f), true);   // in the moving car's path (frame 1)
+  tree.updateNode(octomap::point3d(5.1f, 0.1f, 10.1f), true);   // in the parked car
+  tree.updateNode(octomap::point3d(-6.1f, 0.1f, 10.1f), true);  // elsewhere
   const MapScore s = scoreStaticMap(tree, seq.string(), "00", Similarity{});
   EXPECT_EQ(s.occupied, 3);
   EXPECT_EQ(s.in_moving_paths, 1);

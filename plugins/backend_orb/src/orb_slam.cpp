@@ -2,10 +2,10 @@
 #include "beslam_orb/orb_slam.hpp"
 
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
 #include <deque>
 #include <mutex>
 #include <stdexcept>
@@ -25,9 +25,7 @@ namespace beslam::orb {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 ExtractorOptions extractorOptions(const Options& o) {
   ExtractorOptions e;
@@ -91,8 +89,7 @@ bool Options::validate(std::string* error) const {
   if (triangulation_max_cos_parallax <= 0 || triangulation_max_cos_parallax >= 1)
     return fail("triangulation_max_cos_parallax must be in (0, 1)");
   if (triangulation_neighbours < 1) return fail("triangulation_neighbours must be >= 1");
-  if (!(ground_prior_sigma > 0) || !std::isfinite(ground_prior_sigma))
-    return fail("ground_prior_sigma must be > 0");
+  if (!(ground_prior_sigma > 0) || !std::isfinite(ground_prior_sigma)) return fail("ground_prior_sigma must be > 0");
   if (ground_reference_keyframes < 1) return fail("ground_reference_keyframes must be >= 1");
   if (ground_min_inliers < 3) return fail("ground_min_inliers must be >= 3");
   if (metric_scale && !(camera_height > 0 && camera_height < 100))
@@ -124,17 +121,19 @@ struct OrbSlam::Impl {
   std::thread worker;
   std::mutex mutex;
   std::condition_variable cv;
-  std::deque<std::pair<KeyFrame*, bool>> queue;  // keyframes waiting for local mapping
+  std::deque<std::pair<KeyFrame*, bool>> queue;     // keyframes waiting for local mapping
   std::vector<std::pair<KeyFrame*, bool>> pending;  // made during the current track() call
   bool busy = false, stop = false;
   double last_mapping_ms = 0;
 
   Impl(const Camera& c, const Options& o)
-      : camera(c), options(o), extractor(extractorOptions(o)),
+      : camera(c),
+        options(o),
+        extractor(extractorOptions(o)),
         mapper(map, c, extractor.pyramid(), mapperOptions(o)),
-        tracker(c, o, extractor.pyramid(), map,
-                [this](KeyFrame* kf, bool initial) { pending.emplace_back(kf, initial); },
-                [this] { mapper.reset(); }) {
+        tracker(
+            c, o, extractor.pyramid(), map, [this](KeyFrame* kf, bool initial) { pending.emplace_back(kf, initial); },
+            [this] { mapper.reset(); }) {
     if (options.threaded_mapping) worker = std::thread([this] { run(); });
   }
 
@@ -242,8 +241,8 @@ struct OrbSlam::Impl {
       result.keypoints.reserve(features->size());
       for (size_t i = 0; i < features->size(); ++i) {
         const cv::KeyPoint& k = features->keypoints[i];
-        result.keypoints.push_back({k.pt.x, k.pt.y, features->labels[i], i < matched.size() && matched[i],
-                                    static_cast<uint8_t>(k.octave)});
+        result.keypoints.push_back(
+            {k.pt.x, k.pt.y, features->labels[i], i < matched.size() && matched[i], static_cast<uint8_t>(k.octave)});
       }
     }
     // The two-view map's unit settles over its first keyframes (KITTI 00: 0.76 of the later one at frames

@@ -14,29 +14,47 @@ using beslam::sdk::setting;
 // Each setting once: its schema entry and the beslam::orb::Options member it sets.
 // clang-format off: one setting a line
 const beslam::sdk::Settings<Options> kSettings{
-    setting(&Options::features, "features", "2000", 100, 20000, "ORB keypoints per frame (twice that while initialising)"),
+    setting(&Options::features, "features", "2000", 100, 20000,
+            "ORB keypoints per frame (twice that while initialising)"),
     setting(&Options::scale_factor, "scale_factor", "1.2", 1.01, 2.0, "image pyramid scale step"),
     setting(&Options::levels, "levels", "8", 1, 16, "image pyramid levels"),
     setting(&Options::fast_initial, "fast_initial", "20", 1, 255, "FAST threshold per cell"),
     setting(&Options::fast_fallback, "fast_fallback", "7", 1, 255, "FAST threshold of a cell that found nothing"),
-    setting(&Options::static_object_fast, "static_object_fast", "7", 1, 255, "FAST threshold on static objects (mask label >= 1000)"),
-    setting(&Options::static_object_budget_share, "static_object_budget_share", "0.3", 0.0, 1.0, "share of each level's features reserved for static objects"),
-    setting(&Options::static_object_weight, "static_object_weight", "1.0", 0.01, 100.0, "optimisation weight of map points on static objects"),
+    setting(&Options::static_object_fast, "static_object_fast", "7", 1, 255,
+            "FAST threshold on static objects (mask label >= 1000)"),
+    setting(&Options::static_object_budget_share, "static_object_budget_share", "0.3", 0.0, 1.0,
+            "share of each level's features reserved for static objects"),
+    setting(&Options::static_object_weight, "static_object_weight", "1.0", 0.01, 100.0,
+            "optimisation weight of map points on static objects"),
     setting(&Options::fps, "fps", "10", 0.1, 1000.0, "frame rate: at most this many frames between keyframes"),
     setting(&Options::keyframe_min_gap, "keyframe_min_gap", "2", 1, 100, "at least this many frames between keyframes"),
     setting(&Options::keyframe_culling, "keyframe_culling", "true", "remove redundant keyframes"),
-    setting(&Options::local_ba_max_keyframes, "local_ba_max_keyframes", "0", 0, 1000, "keyframes moved by local BA (0: all covisible)"),
-    setting(&Options::ground_prior, "ground_prior", "false", "hold the camera height over the fitted ground plane in local BA (vehicle cameras)"),
-    setting(&Options::ground_prior_sigma, "ground_prior_sigma", "0.2", 0.001, 10.0, "std-dev of one ground point's height, as a share of the camera height"),
-    setting(&Options::ground_reference_keyframes, "ground_reference_keyframes", "5", 1, 1000, "first keyframes whose median camera height is the reference"),
-    setting(&Options::ground_min_inliers, "ground_min_inliers", "25", 3, 100000, "map points a keyframe's ground plane needs"),
-    setting(&Options::metric_scale, "metric_scale", "false", "recover metres from the rig's camera height over the road (dataset camera_height) and hold them with the ground prior"),
-    setting(&Options::metric_max_spread, "metric_max_spread", "0.1", 0.001, 10.0, "metric scale: the reference ground fits' heights must agree this well (relative MAD)"),
-    setting(&Options::metric_correction_min, "metric_correction_min", "0.02", 0.0, 1.0, "metric scale: recent ground fits off by more than this share (and their noise) scale the newer map back (0: off)"),
-    setting(&Options::object_scale, "object_scale", "true", "metric scale: static objects' 3D boxes are a scale source and, once metric, range priors in local BA"),
-    setting(&Options::object_range_sigma, "object_range_sigma", "0.15", 0.001, 100.0, "std-dev (m) of a static-object point's range from its box"),
-    setting(&Options::object_range_sigma_per_m, "object_range_sigma_per_m", "0.02", 0.0, 10.0, "std-dev added per metre of range"),
-    setting(&Options::threaded_mapping, "threaded_mapping", "false", "local mapping on its own thread (same results, overlaps the next frame)"),
+    setting(&Options::local_ba_max_keyframes, "local_ba_max_keyframes", "0", 0, 1000,
+            "keyframes moved by local BA (0: all covisible)"),
+    setting(&Options::ground_prior, "ground_prior", "false",
+            "hold the camera height over the fitted ground plane in local BA (vehicle cameras)"),
+    setting(&Options::ground_prior_sigma, "ground_prior_sigma", "0.2", 0.001, 10.0,
+            "std-dev of one ground point's height, as a share of the camera height"),
+    setting(&Options::ground_reference_keyframes, "ground_reference_keyframes", "5", 1, 1000,
+            "first keyframes whose median camera height is the reference"),
+    setting(&Options::ground_min_inliers, "ground_min_inliers", "25", 3, 100000,
+            "map points a keyframe's ground plane needs"),
+    setting(&Options::metric_scale, "metric_scale", "false",
+            "recover metres from the rig's camera height over the road (dataset camera_height) and hold them with the "
+            "ground prior"),
+    setting(&Options::metric_max_spread, "metric_max_spread", "0.1", 0.001, 10.0,
+            "metric scale: the reference ground fits' heights must agree this well (relative MAD)"),
+    setting(&Options::metric_correction_min, "metric_correction_min", "0.02", 0.0, 1.0,
+            "metric scale: recent ground fits off by more than this share (and their noise) scale the newer map back "
+            "(0: off)"),
+    setting(&Options::object_scale, "object_scale", "true",
+            "metric scale: static objects' 3D boxes are a scale source and, once metric, range priors in local BA"),
+    setting(&Options::object_range_sigma, "object_range_sigma", "0.15", 0.001, 100.0,
+            "std-dev (m) of a static-object point's range from its box"),
+    setting(&Options::object_range_sigma_per_m, "object_range_sigma_per_m", "0.02", 0.0, 10.0,
+            "std-dev added per metre of range"),
+    setting(&Options::threaded_mapping, "threaded_mapping", "false",
+            "local mapping on its own thread (same results, overlaps the next frame)"),
     setting(&Options::seed, "seed", "42", 0, 2147483647.0, "seed of every random choice (RANSAC)"),
 };
 // clang-format on
@@ -112,10 +130,12 @@ class OrbBackend : public beslam::sdk::Backend {
     out.T_world_cam = r.T_world_cam;
     out.stage_ms = r.stage_ms;
     out.world_is_metric = r.world_is_metric;
-    out.counters = {{"features", r.features}, {"features_static", r.features_static}, {"tracked_static", r.tracked_static}};
+    out.counters = {
+        {"features", r.features}, {"features_static", r.features_static}, {"tracked_static", r.tracked_static}};
     out.keypoints.reserve(r.keypoints.size());
     for (const auto& k : r.keypoints)
-      out.keypoints.push_back({k.x, k.y, k.label, static_cast<uint8_t>(k.matched ? BESLAM_KEYPOINT_MATCHED : 0u), k.octave});
+      out.keypoints.push_back(
+          {k.x, k.y, k.label, static_cast<uint8_t>(k.matched ? BESLAM_KEYPOINT_MATCHED : 0u), k.octave});
     return out;
   }
 

@@ -215,8 +215,8 @@ TEST(GroundPrior, LocalBaPullsAScaledMapBackToTheReferenceHeight) {
     road.height = kHeight;
     ref.add(road);
     const optimize::GroundPrior prior{GroundPlaneOptions{}, &ref};
-    const auto report =
-        optimize::localBundleAdjustment(kfs.back(), map, optimize::BundleAdjustmentOptions{}, with_prior ? &prior : nullptr);
+    const auto report = optimize::localBundleAdjustment(kfs.back(), map, optimize::BundleAdjustmentOptions{},
+                                                        with_prior ? &prior : nullptr);
     if (with_prior) {
       EXPECT_GE(report.ground_keyframes, 4);
       EXPECT_GE(report.ground_residuals, 400);

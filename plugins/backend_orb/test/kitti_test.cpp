@@ -1,16 +1,16 @@
 // KITTI odometry excerpts (real data): 06 (51 frames) with the ORB-SLAM2 rules, 00 (200 frames) with the
 // ground-height prior. Each initialises within 10 frames, tracks every frame after and stays within its
 // APE bound (Sim(3)-aligned translation RMSE). Skipped without the shared data.
+#include "kitti.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <string>
-
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 
 #include "beslam/formats/align.hpp"
 #include "beslam_orb/orb_slam.hpp"
-#include "kitti.hpp"
 #include "test_util.hpp"
 
 namespace beslam::orb {
@@ -91,7 +91,8 @@ TEST(Kitti00, MetricScaleFromTheCameraHeight) {
     for (size_t n = 0;; ++n) {
       const cv::Mat image = cv::imread(kitti::imagePath(seq, n), cv::IMREAD_GRAYSCALE);
       if (image.empty()) break;
-      metric_reported = slam.track(image, cv::Mat(), 0.1 * static_cast<double>(n), static_cast<int64_t>(n)).world_is_metric;
+      metric_reported =
+          slam.track(image, cv::Mat(), 0.1 * static_cast<double>(n), static_cast<int64_t>(n)).world_is_metric;
     }
     slam.finish();
     EXPECT_TRUE(metric_reported) << "the last frame is tracked in metres";
@@ -105,7 +106,8 @@ TEST(Kitti00, MetricScaleFromTheCameraHeight) {
   EXPECT_LE(st.metric_from_frame, 30);
   ASSERT_EQ(traj.size(), traj_threaded.size());
   for (size_t i = 0; i < traj.size(); ++i)
-    ASSERT_TRUE(traj[i].T_world_cam.matrix() == traj_threaded[i].T_world_cam.matrix()) << "frame " << traj[i].frame_index;
+    ASSERT_TRUE(traj[i].T_world_cam.matrix() == traj_threaded[i].T_world_cam.matrix())
+        << "frame " << traj[i].frame_index;
   // Path length from frame 30 on (after the metric switch), estimate against truth: metres within 10 %.
   double est = 0, ref = 0;
   for (size_t i = 1; i < traj.size(); ++i) {

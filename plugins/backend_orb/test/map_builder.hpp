@@ -3,11 +3,10 @@
 // keyframes get the given (possibly perturbed) poses and the map points the given positions.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <memory>
 #include <random>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "features/feature_set.hpp"
 #include "features/scale_pyramid.hpp"

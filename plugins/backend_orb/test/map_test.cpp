@@ -1,5 +1,7 @@
 // Map bookkeeping on a simulated map: covisibility weights, keyframe culling of redundant keyframes
 // with spanning-tree re-parenting, point replacement (fusion) and observation erasure.
+#include "map/map.hpp"
+
 #include <gtest/gtest.h>
 
 #include <random>
@@ -7,7 +9,6 @@
 #include "features/scale_pyramid.hpp"
 #include "map/frame.hpp"
 #include "map/keyframe.hpp"
-#include "map/map.hpp"
 #include "map/map_point.hpp"
 #include "map_builder.hpp"
 #include "mapping/local_mapper.hpp"

@@ -3,13 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "optimize/cost_functions.hpp"
 #include "optimize/se3.hpp"
 #include "scale/object_range.hpp"
 #include "scale/parked_car_scale.hpp"
-
-#include <random>
 
 namespace beslam::orb {
 namespace {
@@ -36,8 +35,8 @@ TEST(RayBoxEntry, StraightAheadHitsTheNearFace) {
 }
 
 TEST(RayBoxEntry, MissesAndInsideGiveNothing) {
-  EXPECT_FALSE(rayBoxEntry(Eigen::Vector3d(1, 0, 0.2).normalized(), carAhead(10, 0)));   // far to the right
-  EXPECT_FALSE(rayBoxEntry(Eigen::Vector3d(0, 0, -1), carAhead(10, 0)));                 // behind the camera
+  EXPECT_FALSE(rayBoxEntry(Eigen::Vector3d(1, 0, 0.2).normalized(), carAhead(10, 0)));  // far to the right
+  EXPECT_FALSE(rayBoxEntry(Eigen::Vector3d(0, 0, -1), carAhead(10, 0)));                // behind the camera
   ObjectBox around = carAhead(0, 0);
   around.T_cam_box.translation() = Eigen::Vector3d::Zero();
   EXPECT_FALSE(rayBoxEntry(Eigen::Vector3d(0, 0, 1), around)) << "a camera inside the box has no range";

@@ -9,9 +9,9 @@
 #include "map/keyframe.hpp"
 #include "map/map.hpp"
 #include "map/map_point.hpp"
+#include "map_builder.hpp"
 #include "optimize/bundle_adjustment.hpp"
 #include "optimize/pose_optimizer.hpp"
-#include "map_builder.hpp"
 
 namespace beslam::orb {
 namespace {

@@ -2,7 +2,6 @@
 #include <gtest/gtest.h>
 
 #include <numeric>
-
 #include <opencv2/imgproc.hpp>
 
 #include "features/orb_extractor.hpp"

@@ -1,8 +1,7 @@
 // The backend_orb plugin the way the host uses it: dlopen, the C descriptor, create from schema
 // defaults, track rendered frames through the C function table, read the trajectory, destroy.
-#include <gtest/gtest.h>
-
 #include <dlfcn.h>
+#include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <cstring>

@@ -3,10 +3,9 @@
 // rendering is one perspective warp per face, no depth test.
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "beslam_orb/orb_slam.hpp"
 #include "test_util.hpp"
@@ -77,8 +76,8 @@ class CorridorWorld {
     cv::Mat texture;
   };
   void addFace(Eigen::Vector3d origin, Eigen::Vector3d a, Eigen::Vector3d b, double la, double lb, uint64_t seed) {
-    faces_.push_back({origin, a, b,
-                      texturedImage(static_cast<int>(la * kPxPerMetre), static_cast<int>(lb * kPxPerMetre), seed)});
+    faces_.push_back(
+        {origin, a, b, texturedImage(static_cast<int>(la * kPxPerMetre), static_cast<int>(lb * kPxPerMetre), seed)});
   }
   std::vector<Face> faces_;
 };

@@ -1,11 +1,11 @@
 // Shared helpers for the backend_orb tests: a synthetic textured image and KITTI paths.
 #pragma once
 
-#include <string>
 #include <sys/stat.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 namespace beslam::orb::test {
 

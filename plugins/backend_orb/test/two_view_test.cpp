@@ -1,10 +1,10 @@
 // Two-view initialisation on simulated geometry: a 3D scene picks F and recovers the motion, a plane
 // picks H; both triangulate most inliers in front of the cameras.
+#include "init/two_view.hpp"
+
 #include <gtest/gtest.h>
 
 #include <random>
-
-#include "init/two_view.hpp"
 
 namespace beslam::orb {
 namespace {

@@ -1,15 +1,15 @@
 // Minimal KITTI odometry reading for this module's tool and tests: P0 intrinsics from calib.txt (rows
-// with or without the "P0:" name), image_0/NNNNNN.png, times.txt; KITTI pose rows (3 x 4, camera to world) come from the SDK's formats.
+// with or without the "P0:" name), image_0/NNNNNN.png, times.txt; KITTI pose rows (3 x 4, camera to world) come from
+// the SDK's formats.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "beslam/formats/trajectory.hpp"
 #include "beslam_orb/orb_slam.hpp"

@@ -2,18 +2,17 @@
 // Runs OrbSlam over image_0, writes the final trajectory (KITTI rows prefixed by the frame index), and
 // with ground truth prints APE (Sim(3) Umeyama, translation RMSE) and per-stage timing medians.
 #include <algorithm>
-#include <ctime>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
-#include <string>
-#include <vector>
-
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <vector>
 
 #include "beslam/formats/align.hpp"
 #include "beslam_orb/orb_slam.hpp"
@@ -53,7 +52,8 @@ int main(int argc, char** argv) {
     std::cerr << "usage: orb_run_kitti <sequence_dir> <poses.txt|-> <out.txt> [--threaded] [--frames N] [--seed S]"
                  " [--quiet] [--kf-gap N] [--tri-ratio R] [--ba-max-kfs N] [--features N] [--no-kf-culling]"
                  " [--tri-cos C] [--ba-iters ROBUST REFINE] [--init-parallax DEG] [--init-levels L]"
-                 " [--cv-threads N] [--tri-orientation] [--fast INITIAL FALLBACK] [--kf-ratio R] [--ground SIGMA MIN_INLIERS]\n";
+                 " [--cv-threads N] [--tri-orientation] [--fast INITIAL FALLBACK] [--kf-ratio R] [--ground SIGMA "
+                 "MIN_INLIERS]\n";
     return 2;
   }
   const std::string seq = argv[1], gt_path = argv[2], out_path = argv[3];
@@ -61,20 +61,34 @@ int main(int argc, char** argv) {
   size_t max_frames = 0;
   bool quiet = false;
   for (int i = 4; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--threaded")) options.threaded_mapping = true;
-    else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) max_frames = std::stoul(argv[++i]);
-    else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc) options.seed = std::stoull(argv[++i]);
-    else if (!std::strcmp(argv[i], "--quiet")) quiet = true;
-    else if (!std::strcmp(argv[i], "--cv-threads") && i + 1 < argc) cv::setNumThreads(std::stoi(argv[++i]));
-    else if (!std::strcmp(argv[i], "--kf-gap") && i + 1 < argc) options.keyframe_min_gap = std::stoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--tri-ratio") && i + 1 < argc) options.triangulation_ratio = std::stod(argv[++i]);
-    else if (!std::strcmp(argv[i], "--ba-max-kfs") && i + 1 < argc) options.local_ba_max_keyframes = std::stoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--features") && i + 1 < argc) options.features = std::stoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--no-kf-culling")) options.keyframe_culling = false;
-    else if (!std::strcmp(argv[i], "--init-parallax") && i + 1 < argc) options.init_min_parallax_deg = std::stod(argv[++i]);
-    else if (!std::strcmp(argv[i], "--init-levels") && i + 1 < argc) options.init_match_max_level = std::stoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--tri-orientation")) options.triangulation_check_orientation = true;
-    else if (!std::strcmp(argv[i], "--tri-cos") && i + 1 < argc) options.triangulation_max_cos_parallax = std::stod(argv[++i]);
+    if (!std::strcmp(argv[i], "--threaded"))
+      options.threaded_mapping = true;
+    else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc)
+      max_frames = std::stoul(argv[++i]);
+    else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc)
+      options.seed = std::stoull(argv[++i]);
+    else if (!std::strcmp(argv[i], "--quiet"))
+      quiet = true;
+    else if (!std::strcmp(argv[i], "--cv-threads") && i + 1 < argc)
+      cv::setNumThreads(std::stoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--kf-gap") && i + 1 < argc)
+      options.keyframe_min_gap = std::stoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--tri-ratio") && i + 1 < argc)
+      options.triangulation_ratio = std::stod(argv[++i]);
+    else if (!std::strcmp(argv[i], "--ba-max-kfs") && i + 1 < argc)
+      options.local_ba_max_keyframes = std::stoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--features") && i + 1 < argc)
+      options.features = std::stoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--no-kf-culling"))
+      options.keyframe_culling = false;
+    else if (!std::strcmp(argv[i], "--init-parallax") && i + 1 < argc)
+      options.init_min_parallax_deg = std::stod(argv[++i]);
+    else if (!std::strcmp(argv[i], "--init-levels") && i + 1 < argc)
+      options.init_match_max_level = std::stoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--tri-orientation"))
+      options.triangulation_check_orientation = true;
+    else if (!std::strcmp(argv[i], "--tri-cos") && i + 1 < argc)
+      options.triangulation_max_cos_parallax = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--fast") && i + 2 < argc) {
       options.fast_initial = std::stoi(argv[++i]);
       options.fast_fallback = std::stoi(argv[++i]);
@@ -87,8 +101,7 @@ int main(int argc, char** argv) {
     } else if (!std::strcmp(argv[i], "--ba-iters") && i + 2 < argc) {
       options.local_ba_iterations_robust = std::stoi(argv[++i]);
       options.local_ba_iterations_refine = std::stoi(argv[++i]);
-    }
-    else {
+    } else {
       std::cerr << "unknown option " << argv[i] << "\n";
       return 2;
     }
@@ -159,9 +172,11 @@ int main(int argc, char** argv) {
         }
       }
     }
-    std::cout << "median_ms tracking_total " << median(track_ms) << " total " << median(total_ms) << " mean_total "
-              << (total_ms.empty() ? 0.0 : [&] { double s = 0; for (double x : total_ms) s += x; return s / total_ms.size(); }())
-              << "\n";
+    std::cout << "median_ms tracking_total " << median(track_ms) << " total " << median(total_ms) << " mean_total " << (total_ms.empty() ? 0.0 : [&] {
+      double s = 0;
+      for (double x : total_ms) s += x;
+      return s / total_ms.size();
+    }()) << "\n";
     {
       double sum = 0;
       for (double x : cpu_ms) sum += x;

@@ -1,11 +1,11 @@
 // backend_pose_replay through the host's registry: KITTI rows by frame index, TUM rows by nearest
 // timestamp within max_time_diff, frames without a pose reported (never invented), keyframe spacing,
 // and malformed pose files named with their line.
-#include <filesystem>
-#include <fstream>
+#include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <gtest/gtest.h>
+#include <filesystem>
+#include <fstream>
 
 #include "beslam/common/error.hpp"
 #include "beslam/test/plugin_harness.hpp"
@@ -27,7 +27,8 @@ std::string write(const std::string& name, const std::string& text) {
 
 TEST(PoseReplay, KittiRowsByFrameIndex) {
   PluginHarness h(kLib);
-  const std::string poses = write("kitti.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 2\n1 0 0 2 0 1 0 0 0 0 1 4\n");
+  const std::string poses =
+      write("kitti.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 2\n1 0 0 2 0 1 0 0 0 0 1 4\n");
   const auto& config = h.config("backend_pose_replay", {{"poses", poses}, {"keyframe_interval", "2"}});
   beslam::registry::BackendInstance backend(h.plugin("backend_pose_replay"), h.info(config), h.log);
   for (int64_t i = 0; i < 4; ++i) {
@@ -51,7 +52,8 @@ TEST(PoseReplay, KittiRowsByFrameIndex) {
 
 TEST(PoseReplay, TumRowsByNearestTimestamp) {
   PluginHarness h(kLib);
-  const std::string poses = write("tum.txt", "# t x y z qx qy qz qw\n10.00 0 0 0 0 0 0 1\n10.10 0 0 1 0 0 0 1\n10.30 0 0 3 0 0 0 1\n");
+  const std::string poses =
+      write("tum.txt", "# t x y z qx qy qz qw\n10.00 0 0 0 0 0 0 1\n10.10 0 0 1 0 0 0 1\n10.30 0 0 3 0 0 0 1\n");
   const auto& config = h.config("backend_pose_replay", {{"poses", poses}, {"max_time_diff", "0.02"}});
   beslam::registry::BackendInstance backend(h.plugin("backend_pose_replay"), h.info(config), h.log);
   const auto at = [&](double t) { return backend.predictPose(PluginHarness::frame(0, t)); };

@@ -5,10 +5,9 @@
 
 #include <filesystem>
 #include <memory>
-#include <string>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 
 #include "beslam/detector_image/image_detector.hpp"
 
@@ -44,9 +43,15 @@ void detectAndLift(benchmark::State& state) {
       ++boxes;
     }
   }
-  state.counters["boxes_per_frame"] = benchmark::Counter(static_cast<double>(boxes), benchmark::Counter::kAvgIterations);
+  state.counters["boxes_per_frame"] =
+      benchmark::Counter(static_cast<double>(boxes), benchmark::Counter::kAvgIterations);
 }
-BENCHMARK(detectAndLift)->Args({320, 320})->Args({512, 160})->Args({640, 192})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(detectAndLift)
+    ->Args({320, 320})
+    ->Args({512, 160})
+    ->Args({640, 192})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void liftOnly(benchmark::State& state) {
   const GroundLifter lifter(kCamera, LiftOptions{});

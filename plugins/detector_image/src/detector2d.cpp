@@ -1,9 +1,8 @@
 // Detector2D: OpenCV DNN YOLO-style detector, COCO classes mapped to cars, pedestrians and cyclists.
 #include <algorithm>
 #include <fstream>
-#include <stdexcept>
-
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 #include "beslam/detector_image/image_detector.hpp"
 
@@ -50,14 +49,16 @@ Detector2D::Detector2D(const DnnOptions& options) : options_(options) {
     if (!endsWith(options_.model, ".cfg"))
       throw std::invalid_argument("model '" + options_.model + "': expected a Darknet .cfg or an .onnx file");
     if (options_.weights.empty())
-      throw std::invalid_argument("model '" + options_.model + "' is a Darknet .cfg: set `weights` to its .weights file");
+      throw std::invalid_argument("model '" + options_.model +
+                                  "' is a Darknet .cfg: set `weights` to its .weights file");
     requireReadable(options_.weights, "weights file");
   }
   try {
-    net_ = onnx_ ? cv::dnn::readNetFromONNX(options_.model) : cv::dnn::readNetFromDarknet(options_.model, options_.weights);
+    net_ = onnx_ ? cv::dnn::readNetFromONNX(options_.model)
+                 : cv::dnn::readNetFromDarknet(options_.model, options_.weights);
   } catch (const cv::Exception& e) {
-    throw std::invalid_argument("cannot load model '" + options_.model + (onnx_ ? "" : "' with weights '" + options_.weights) +
-                                "': " + e.err);
+    throw std::invalid_argument("cannot load model '" + options_.model +
+                                (onnx_ ? "" : "' with weights '" + options_.weights) + "': " + e.err);
   }
   if (net_.empty()) throw std::invalid_argument("cannot load model '" + options_.model + "': empty network");
   net_.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
@@ -155,11 +156,12 @@ std::vector<Detection2D> Detector2D::detect(const cv::Mat& image) {
     if (best < 0) continue;  // a parked bicycle is neither a cyclist nor a pedestrian
     rider[best] = true;
     const int p = kept_people[best];
-    detections.push_back({BESLAM_CLASS_CYCLIST, 0.5f * (people.scores[p] + cycles.scores[b]),
-                          people.boxes[p] | cycles.boxes[b]});
+    detections.push_back(
+        {BESLAM_CLASS_CYCLIST, 0.5f * (people.scores[p] + cycles.scores[b]), people.boxes[p] | cycles.boxes[b]});
   }
   for (size_t p = 0; p < kept_people.size(); ++p)
-    if (!rider[p]) detections.push_back({BESLAM_CLASS_PEDESTRIAN, people.scores[kept_people[p]], people.boxes[kept_people[p]]});
+    if (!rider[p])
+      detections.push_back({BESLAM_CLASS_PEDESTRIAN, people.scores[kept_people[p]], people.boxes[kept_people[p]]});
   return detections;
 }
 

@@ -1,10 +1,9 @@
 // GroundLifter: a class-size prior placed on a flat road so that its projection matches the 2D box.
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-
-#include <Eigen/Core>
 
 #include "beslam/detector_image/image_detector.hpp"
 
@@ -57,7 +56,9 @@ Projected project(const Geometry& g, double X, double Z, double yaw, const std::
 enum class UEdge { Center, Left, Right };
 enum class VEdge { Bottom, Top };
 
-double uOf(const Projected& p, UEdge e) { return e == UEdge::Left ? p.u0 : e == UEdge::Right ? p.u1 : 0.5 * (p.u0 + p.u1); }
+double uOf(const Projected& p, UEdge e) {
+  return e == UEdge::Left ? p.u0 : e == UEdge::Right ? p.u1 : 0.5 * (p.u0 + p.u1);
+}
 double vOf(const Projected& p, VEdge e) { return e == VEdge::Bottom ? p.v1 : p.v0; }
 
 struct Fit {
@@ -68,8 +69,8 @@ struct Fit {
 };
 
 // Newton on (X, Z) so that the chosen horizontal and vertical edges land on (u_target, v_target).
-Fit solvePosition(const Geometry& g, double yaw, const std::array<double, 3>& size, UEdge ue, VEdge ve,
-                  double u_target, double v_target, double X0, double Z0) {
+Fit solvePosition(const Geometry& g, double yaw, const std::array<double, 3>& size, UEdge ue, VEdge ve, double u_target,
+                  double v_target, double X0, double Z0) {
   Fit f;
   double X = X0, Z = std::max(Z0, 1.0);
   for (int it = 0; it < 20; ++it) {
@@ -141,8 +142,9 @@ GroundLifter::GroundLifter(const beslam_camera& camera, const LiftOptions& optio
 
 beslam_box3d GroundLifter::lift(const Detection2D& d) const {
   const LiftOptions& o = options_;
-  const Geometry g{camera_.fx, camera_.fy, camera_.cx, camera_.cy, std::cos(o.camera_pitch), std::sin(o.camera_pitch),
-                   o.camera_height};
+  const Geometry g{
+      camera_.fx,     camera_.fy, camera_.cx, camera_.cy, std::cos(o.camera_pitch), std::sin(o.camera_pitch),
+      o.camera_height};
   const std::array<double, 3>& size = d.class_id == BESLAM_CLASS_PEDESTRIAN ? o.pedestrian_size
                                       : d.class_id == BESLAM_CLASS_CYCLIST  ? o.cyclist_size
                                                                             : o.car_size;
@@ -209,7 +211,8 @@ beslam_box3d GroundLifter::lift(const Detection2D& d) const {
 
   const double distance = center.norm();
   const double sigma_v = std::hypot(o.pixel_sigma, g.fy * o.pitch_sigma);
-  const double sigma_z = std::abs(best.dv_dZ) > 1e-9 ? sigma_v / std::abs(best.dv_dZ) : std::numeric_limits<double>::infinity();
+  const double sigma_z =
+      std::abs(best.dv_dZ) > 1e-9 ? sigma_v / std::abs(best.dv_dZ) : std::numeric_limits<double>::infinity();
   if (distance > o.max_distance || !(sigma_z / std::max(best.Z, 1e-6) <= o.max_relative_uncertainty)) uncertain = true;
   if (uncertain) box.flags |= BESLAM_BOX_UNCERTAIN;
   return box;

@@ -1,5 +1,7 @@
 // detector_image: the real 2D detector on KITTI 06 frame 20, the ground lifting against synthetic ground
 // truth, uncertainty flags, and malformed input (missing / unreadable model files) through the C ABI.
+#include "beslam/detector_image/image_detector.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -7,14 +9,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <string>
 
-#include <opencv2/imgcodecs.hpp>
-
 #include "beslam/datasets/kitti_calib.hpp"
 #include "beslam/datasets/labels.hpp"
-#include "beslam/detector_image/image_detector.hpp"
 #include "beslam/sdk/views.hpp"
 #include "beslam/test/abi_harness.hpp"
 
@@ -50,10 +50,12 @@ bool projectBox(const beslam_camera& cam, const beslam_box3d& box, cv::Rect2d& o
   double u0 = 1e18, v0 = 1e18, u1 = -1e18, v1 = -1e18;
   for (int i = 0; i < 8; ++i) {
     if (corners(2, i) < 0.2) return false;
-    const double u = cam.fx * corners(0, i) / corners(2, i) + cam.cx, v = cam.fy * corners(1, i) / corners(2, i) + cam.cy;
+    const double u = cam.fx * corners(0, i) / corners(2, i) + cam.cx,
+                 v = cam.fy * corners(1, i) / corners(2, i) + cam.cy;
     u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
   }
-  u0 = std::max(u0, 0.0), v0 = std::max(v0, 0.0), u1 = std::min(u1, cam.width - 1.0), v1 = std::min(v1, cam.height - 1.0);
+  u0 = std::max(u0, 0.0), v0 = std::max(v0, 0.0), u1 = std::min(u1, cam.width - 1.0),
+  v1 = std::min(v1, cam.height - 1.0);
   if (u1 - u0 < 4 || v1 - v0 < 4) return false;
   out = cv::Rect2d(u0, v0, u1 - u0, v1 - v0);
   return true;
@@ -79,10 +81,11 @@ TEST(ImageDetector, Kitti06Frame20FindsTheParkedCarOnTheRight) {
   for (const Detection2D& d : detector.detect(image)) {
     const beslam_box3d b = lifter.lift(d);
     const double distance = std::hypot(b.center_cam[0], b.center_cam[2]);
-    std::printf("class %d score %.2f box [%.0f %.0f %.0f %.0f] -> centre x %.2f y %.2f z %.2f (ground distance %.2f m), "
-                "yaw %.2f%s\n",
-                d.class_id, d.score, d.box.x, d.box.y, d.box.x + d.box.width, d.box.y + d.box.height, b.center_cam[0],
-                b.center_cam[1], b.center_cam[2], distance, b.yaw, (b.flags & BESLAM_BOX_UNCERTAIN) ? " uncertain" : "");
+    std::printf(
+        "class %d score %.2f box [%.0f %.0f %.0f %.0f] -> centre x %.2f y %.2f z %.2f (ground distance %.2f m), "
+        "yaw %.2f%s\n",
+        d.class_id, d.score, d.box.x, d.box.y, d.box.x + d.box.width, d.box.y + d.box.height, b.center_cam[0],
+        b.center_cam[1], b.center_cam[2], distance, b.yaw, (b.flags & BESLAM_BOX_UNCERTAIN) ? " uncertain" : "");
     EXPECT_TRUE(b.flags & BESLAM_BOX_HAS_BBOX2D);
     const double u = d.box.x + d.box.width / 2;
     if (d.class_id == BESLAM_CLASS_CAR && u > image.cols / 2.0 && b.center_cam[2] > 12 && b.center_cam[2] < 19 &&
@@ -105,7 +108,8 @@ TEST(ImageDetector, Kitti000008LiftedDistancesAgainstLabels) {
   dnn.model = kCfg, dnn.weights = kWeights;
   Detector2D detector(dnn);
   const GroundLifter lifter({sizeof(beslam_camera), c.width, c.height, 0, c.fx, c.fy, c.cx, c.cy}, LiftOptions{});
-  const std::vector<beslam::datasets::ObjectLabel> labels = beslam::datasets::readObjectLabels(kObject + "/label_2/000008.txt");
+  const std::vector<beslam::datasets::ObjectLabel> labels =
+      beslam::datasets::readObjectLabels(kObject + "/label_2/000008.txt");
   std::vector<double> errors;
   int flagged = 0, cars = 0;
   for (const Detection2D& d : detector.detect(image)) {
@@ -174,7 +178,8 @@ TEST(GroundLifter, SyntheticCarsWithin20mMedianDistanceErrorUnder10Percent) {
       double u0 = 1e18, v0 = 1e18, u1 = -1e18, v1 = -1e18;
       bool behind = false;
       for (int i = 0; i < 8; ++i) {
-        const Eigen::Vector3d q(corners(0, i), c * corners(1, i) - s * corners(2, i), s * corners(1, i) + c * corners(2, i));
+        const Eigen::Vector3d q(corners(0, i), c * corners(1, i) - s * corners(2, i),
+                                s * corners(1, i) + c * corners(2, i));
         if (q.z() < 0.2) behind = true;
         const double u = cam.fx * q.x() / q.z() + cam.cx, v = cam.fy * q.y() / q.z() + cam.cy;
         u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
@@ -192,9 +197,11 @@ TEST(GroundLifter, SyntheticCarsWithin20mMedianDistanceErrorUnder10Percent) {
     }
     std::vector<double> sorted = errors;
     std::sort(sorted.begin(), sorted.end());
-    std::printf("pitch %.2f, edge noise %s: %zu cars within 20 m, median relative distance error %.3f, 90th "
-                "percentile %.3f, %d flagged uncertain\n",
-                pitch, k.relative_noise > 0 ? "4 % of the box" : "1 px", errors.size(), median(errors), sorted[sorted.size() * 9 / 10], uncertain);
+    std::printf(
+        "pitch %.2f, edge noise %s: %zu cars within 20 m, median relative distance error %.3f, 90th "
+        "percentile %.3f, %d flagged uncertain\n",
+        pitch, k.relative_noise > 0 ? "4 % of the box" : "1 px", errors.size(), median(errors),
+        sorted[sorted.size() * 9 / 10], uncertain);
     EXPECT_LT(median(errors), 0.10);
   }
 }
@@ -219,7 +226,7 @@ TEST(GroundLifter, FlagsFarCutAndHorizonBoxes) {
   EXPECT_EQ(near.track_id, -1);
   EXPECT_FLOAT_EQ(near.score, 0.8f);
   EXPECT_TRUE(lifter.lift({BESLAM_CLASS_CAR, 0.8f, boxAt(60, 2)}).flags & BESLAM_BOX_UNCERTAIN);  // far
-  const beslam_box3d cut = lifter.lift({BESLAM_CLASS_CAR, 0.8f, cv::Rect2d(0, 150, 200, 150)});    // left border
+  const beslam_box3d cut = lifter.lift({BESLAM_CLASS_CAR, 0.8f, cv::Rect2d(0, 150, 200, 150)});   // left border
   EXPECT_TRUE(cut.flags & BESLAM_BOX_UNCERTAIN);
   // Bottom edge above the horizon: the road is never there; the height prior places it, uncertain.
   const beslam_box3d sky = lifter.lift({BESLAM_CLASS_CAR, 0.8f, cv::Rect2d(600, 100, 60, 40)});

@@ -12,10 +12,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "beslam/datasets/kitti_calib.hpp"
 #include "beslam/datasets/labels.hpp"
@@ -27,8 +26,9 @@ using namespace beslam::detector_image;
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::fprintf(stderr, "usage: detector_image_eval <sequence folder> <tracking labels.txt> <model> [weights] "
-                         "[max_distance_m=20] [camera_height=1.65] [score_threshold=0.3]\n");
+    std::fprintf(stderr,
+                 "usage: detector_image_eval <sequence folder> <tracking labels.txt> <model> [weights] "
+                 "[max_distance_m=20] [camera_height=1.65] [score_threshold=0.3]\n");
     return 2;
   }
   try {
@@ -91,9 +91,10 @@ int main(int argc, char** argv) {
     std::sort(errors.begin(), errors.end());
     const double median = errors.empty() ? NAN : errors[errors.size() / 2];
     const double p90 = errors.empty() ? NAN : errors[errors.size() * 9 / 10];
-    std::printf("%zu frames: %d/%d cars within %.0f m detected (2D IoU >= 0.5), %d of them flagged uncertain; "
-                "unflagged: median relative distance error %.1f %%, 90th percentile %.1f %% (%zu boxes)\n",
-                images.size(), found, truth, max_distance, flagged_matches, 100 * median, 100 * p90, errors.size());
+    std::printf(
+        "%zu frames: %d/%d cars within %.0f m detected (2D IoU >= 0.5), %d of them flagged uncertain; "
+        "unflagged: median relative distance error %.1f %%, 90th percentile %.1f %% (%zu boxes)\n",
+        images.size(), found, truth, max_distance, flagged_matches, 100 * median, 100 * p90, errors.size());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "detector_image_eval: %s\n", e.what());

@@ -1,14 +1,6 @@
 // LiDAR BEV car detector: ground removal, Euclidean clustering, L-shape box fitting (see the header).
 #include "beslam/detector_lidar/lidar_detector.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <limits>
-#include <optional>
-#include <stdexcept>
-#include <unordered_map>
-
-#include <opencv2/imgproc.hpp>
 #include <pcl/ModelCoefficients.h>
 #include <pcl/PointIndices.h>
 #include <pcl/point_cloud.h>
@@ -16,6 +8,14 @@
 #include <pcl/search/kdtree.h>
 #include <pcl/segmentation/extract_clusters.h>
 #include <pcl/segmentation/sac_segmentation.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <optional>
+#include <stdexcept>
+#include <unordered_map>
 
 namespace beslam::detector_lidar {
 
@@ -46,7 +46,8 @@ Ground ransacGround(const std::vector<Eigen::Vector3d>& p, const Options& o) {
   candidates->reserve(p.size());
   for (const Eigen::Vector3d& q : p)
     if (q.y() > 0.3)  // below the camera: the road cannot be above it
-      candidates->push_back(pcl::PointXYZ(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z())));
+      candidates->push_back(
+          pcl::PointXYZ(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z())));
   if (candidates->size() < 30) return g;
   pcl::SACSegmentation<pcl::PointXYZ> seg;
   seg.setOptimizeCoefficients(true);
@@ -213,9 +214,9 @@ class FreeSpace {
   }
 
  private:
-  static constexpr int kBins = 1440;        // 0.25 degrees
-  static constexpr double kEndGap = 0.2;    // m before a return that do not count as passed through
-  static constexpr double kStartGap = 0.15; // m beyond a seen side before free space counts
+  static constexpr int kBins = 1440;         // 0.25 degrees
+  static constexpr double kEndGap = 0.2;     // m before a return that do not count as passed through
+  static constexpr double kStartGap = 0.15;  // m beyond a seen side before free space counts
   struct Ray {
     Eigen::Vector2d dir;  // unit BEV direction from the sensor
     double ra, rb;        // BEV range interval that is free at body height
@@ -254,9 +255,12 @@ void completeWithFreeSpace(const FreeSpace& fs, const Eigen::Vector2d& sensor, c
     // sides (rays grazing them), at least 0.6 m wide, widened away from the sensor (the hidden body).
     double band_lo = lo[j] + 0.1, band_hi = hi[j] - 0.1;
     if (band_hi - band_lo < 0.6) {
-      if (lo[j] >= 0) band_lo = lo[j] + 0.05, band_hi = band_lo + 0.6;
-      else if (hi[j] <= 0) band_hi = hi[j] - 0.05, band_lo = band_hi - 0.6;
-      else band_lo = (lo[j] + hi[j]) / 2 - 0.3, band_hi = band_lo + 0.6;
+      if (lo[j] >= 0)
+        band_lo = lo[j] + 0.05, band_hi = band_lo + 0.6;
+      else if (hi[j] <= 0)
+        band_hi = hi[j] - 0.05, band_lo = band_hi - 0.6;
+      else
+        band_lo = (lo[j] + hi[j]) / 2 - 0.3, band_hi = band_lo + 0.6;
     }
     room[k][1] = fs.room(axis[k], hi[k], axis[j], band_lo, band_hi, max_grow);
     room[k][0] = fs.room(-axis[k], -lo[k], axis[j], band_lo, band_hi, max_grow);
@@ -305,7 +309,8 @@ void Options::validate() const {
   require(min_range >= 0 && max_range > min_range, "max_range must exceed min_range >= 0");
   require(fov_margin_px >= 0, "fov_margin_px must be >= 0");
   require(fov_context >= 0, "fov_context must be >= 0");
-  require(ground_method == "ransac" || ground_method == "grid", "ground_method must be ransac or grid, not '" + ground_method + "'");
+  require(ground_method == "ransac" || ground_method == "grid",
+          "ground_method must be ransac or grid, not '" + ground_method + "'");
   require(ground_threshold > 0, "ground_threshold must be > 0");
   require(max_ground_tilt_deg > 0 && max_ground_tilt_deg < 45, "max_ground_tilt_deg must be in (0, 45)");
   require(ransac_iterations > 0, "ransac_iterations must be > 0");
@@ -472,7 +477,8 @@ std::vector<beslam_box3d> LidarDetector::detect(const float* xyzi, std::size_t c
       continue;
     }
     if (ground.height[i] > o.max_height) continue;
-    objects->push_back(pcl::PointXYZ(static_cast<float>(p[i].x()), static_cast<float>(p[i].y()), static_cast<float>(p[i].z())));
+    objects->push_back(
+        pcl::PointXYZ(static_cast<float>(p[i].x()), static_cast<float>(p[i].y()), static_cast<float>(p[i].z())));
     object_index.push_back(i);
   }
   stats.object_points = objects->size();
@@ -501,7 +507,8 @@ std::vector<beslam_box3d> LidarDetector::detect(const float* xyzi, std::size_t c
     // The sensor's height above the ground: the ground below the nearby points, seen from the sensor.
     std::vector<double> below;
     for (size_t i = 0; i < p.size(); ++i)
-      if ((Eigen::Vector2d(p[i].x(), p[i].z()) - sensor).squaredNorm() < 15.0 * 15.0) below.push_back(ground.ground_y[i] - t.y());
+      if ((Eigen::Vector2d(p[i].x(), p[i].z()) - sensor).squaredNorm() < 15.0 * 15.0)
+        below.push_back(ground.ground_y[i] - t.y());
     double sensor_height = 1.73;
     if (!below.empty()) {
       std::nth_element(below.begin(), below.begin() + static_cast<long>(below.size() / 2), below.end());
@@ -543,7 +550,8 @@ std::vector<beslam_box3d> LidarDetector::detect(const float* xyzi, std::size_t c
         // No side is longer than a car is wide: the car is seen from behind or ahead, so its length runs
         // along the line of sight (the axis closer to the viewing ray).
         const Eigen::Vector2d ray = (r.center - sensor).normalized();
-        if (std::abs(axis[1].dot(ray)) > std::abs(axis[0].dot(ray))) std::swap(axis[0], axis[1]), std::swap(extent[0], extent[1]);
+        if (std::abs(axis[1].dot(ray)) > std::abs(axis[0].dot(ray)))
+          std::swap(axis[0], axis[1]), std::swap(extent[0], extent[1]);
       }
       // Grow sides the sensor cannot have measured away from it, up to the prior. A side along axis k is
       // measured when the sensor looks at the face parallel to it (it lies outside the box's slab across k)
@@ -558,9 +566,12 @@ std::vector<beslam_box3d> LidarDetector::detect(const float* xyzi, std::size_t c
         const double mid = (center - sensor).dot(axis[k]);
         const double lo = mid - extent[k] / 2, hi = mid + extent[k] / 2;
         double new_lo = lo, new_hi = hi;
-        if (lo >= 0) new_hi = lo + prior;
-        else if (hi <= 0) new_lo = hi - prior;
-        else new_lo = mid - prior / 2, new_hi = mid + prior / 2;
+        if (lo >= 0)
+          new_hi = lo + prior;
+        else if (hi <= 0)
+          new_lo = hi - prior;
+        else
+          new_lo = mid - prior / 2, new_hi = mid + prior / 2;
         center += ((new_lo + new_hi) / 2 - mid) * axis[k];
         extent[k] = prior;
       }

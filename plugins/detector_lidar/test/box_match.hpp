@@ -18,8 +18,8 @@ double bevDistance(const beslam_box3d& a, const beslam_box3d& b);
 
 struct Match {
   std::size_t truth = 0;
-  int detection = -1;   // index into detections, -1: none within max_distance
-  double error = 0;     // BEV centre distance (m) when matched
+  int detection = -1;  // index into detections, -1: none within max_distance
+  double error = 0;    // BEV centre distance (m) when matched
 };
 
 // Greedy one-to-one matching, closest pairs first, pairs farther than max_distance left unmatched.

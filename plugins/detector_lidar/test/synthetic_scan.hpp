@@ -3,10 +3,9 @@
 // rectified camera frame of a KITTI-like camera.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "beslam/data.h"
 
@@ -16,7 +15,7 @@ struct Object {
   Eigen::Vector2d center_xy;  // LiDAR frame (x forward, y left), metres
   double yaw = 0;             // heading about LiDAR z (0: along x)
   double length = 4, width = 1.7, height = 1.5;
-  double bottom = 0;          // height of the box bottom above the ground
+  double bottom = 0;  // height of the box bottom above the ground
   bool is_car = true;
 };
 
@@ -35,8 +34,8 @@ beslam_camera kittiLikeCamera();
 Scene randomScene(uint32_t seed, int cars, double max_distance);
 
 struct Scan {
-  std::vector<float> xyzi;          // x y z intensity, LiDAR frame
-  std::vector<int> hits_per_object; // points that landed on each scene object
+  std::vector<float> xyzi;           // x y z intensity, LiDAR frame
+  std::vector<int> hits_per_object;  // points that landed on each scene object
 };
 
 // Ray-casts the scene: 64 beams from +2 to -24.8 degrees, azimuth step az_step_deg over +-fov_deg.

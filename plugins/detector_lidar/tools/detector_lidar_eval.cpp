@@ -16,10 +16,10 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
-#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -61,7 +61,8 @@ std::vector<beslam_box3d> timedDetect(const beslam::detector_lidar::LidarDetecto
   const double c0 = cpu();
   std::vector<beslam_box3d> boxes = detector.detect(scan.data(), scan.size() / 4);
   totals.cpu_milliseconds.push_back(cpu() - c0);
-  totals.milliseconds.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  totals.milliseconds.push_back(
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   return boxes;
 }
 
@@ -86,9 +87,9 @@ int pointsInBox(const std::vector<Eigen::Vector3d>& p_cam, const beslam_box3d& b
   return n;
 }
 
-void score(const std::vector<beslam_box3d>& truth_all, const std::vector<beslam_box3d>& detections,
-           double max_distance, double match, Totals& totals, const std::string& name,
-           const std::vector<Eigen::Vector3d>* p_cam = nullptr, const std::vector<beslam_box3d>* fp_truth = nullptr) {
+void score(const std::vector<beslam_box3d>& truth_all, const std::vector<beslam_box3d>& detections, double max_distance,
+           double match, Totals& totals, const std::string& name, const std::vector<Eigen::Vector3d>* p_cam = nullptr,
+           const std::vector<beslam_box3d>* fp_truth = nullptr) {
   std::vector<beslam_box3d> truth;
   for (const beslam_box3d& t : truth_all)
     if (std::hypot(t.center_cam[0], t.center_cam[2]) <= max_distance) truth.push_back(t);
@@ -110,7 +111,8 @@ void score(const std::vector<beslam_box3d>& truth_all, const std::vector<beslam_
     double nearest = 1e9;
     int k = -1;
     for (size_t d = 0; d < detections.size(); ++d)
-      if (eval::bevDistance(detections[d], t) < nearest) nearest = eval::bevDistance(detections[d], t), k = static_cast<int>(d);
+      if (eval::bevDistance(detections[d], t) < nearest)
+        nearest = eval::bevDistance(detections[d], t), k = static_cast<int>(d);
     if (k >= 0 && nearest < 3) {
       const beslam_box3d& d = detections[static_cast<size_t>(k)];
       std::printf("; nearest box %.2f m off at x %.2f z %.2f, %.2f x %.2f, yaw %.2f", nearest, d.center_cam[0],
@@ -142,10 +144,11 @@ void summary(Totals& t, double max_distance, double match) {
   const double ms = t.milliseconds.empty() ? NAN : t.milliseconds[t.milliseconds.size() / 2];
   std::sort(t.cpu_milliseconds.begin(), t.cpu_milliseconds.end());
   const double cpu_ms = t.cpu_milliseconds.empty() ? NAN : t.cpu_milliseconds[t.cpu_milliseconds.size() / 2];
-  std::printf("total: recall %.3f (%d/%d cars within %.0f m found within %.2f m), median BEV error %.3f m, "
-              "%d detections, %d false positives, median %.1f ms per scan (%.1f ms CPU, all threads)\n",
-              t.truth ? static_cast<double>(t.found) / t.truth : 0.0, t.found, t.truth, max_distance, match, median,
-              t.detections, t.false_positives, ms, cpu_ms);
+  std::printf(
+      "total: recall %.3f (%d/%d cars within %.0f m found within %.2f m), median BEV error %.3f m, "
+      "%d detections, %d false positives, median %.1f ms per scan (%.1f ms CPU, all threads)\n",
+      t.truth ? static_cast<double>(t.found) / t.truth : 0.0, t.found, t.truth, max_distance, match, median,
+      t.detections, t.false_positives, ms, cpu_ms);
 }
 
 // Applies trailing key=value arguments to the options; returns the number of positional arguments.
@@ -211,7 +214,8 @@ int main(int argc, char** argv) {
       const cv::Size size = ds::readImageSize(root + "/image_2/" + index + ".png");
       const ds::Camera c = ds::cameraFromProjection(*calib.P[2], size.width, size.height, "P2");
       const beslam::detector_lidar::LidarDetector detector(
-          options, *ds::T_cami_velo(calib, 2), beslam_camera{sizeof(beslam_camera), c.width, c.height, 0, c.fx, c.fy, c.cx, c.cy});
+          options, *ds::T_cami_velo(calib, 2),
+          beslam_camera{sizeof(beslam_camera), c.width, c.height, 0, c.fx, c.fy, c.cx, c.cy});
       const std::vector<float> scan = ds::readVelodyneBin(root + "/velodyne/" + index + ".bin");
       std::vector<beslam_box3d> truth;
       for (const ds::ObjectLabel& l : ds::readObjectLabels(root + "/label_2/" + index + ".txt"))
@@ -267,7 +271,8 @@ int main(int argc, char** argv) {
       const ds::CalibEntry* tr = find({"Tr_velo_to_cam", "Tr_velo_cam", "Tr"});
       const ds::CalibEntry* p = find({"P2", "P0"});
       if (tr == nullptr || tr->values.size() != 12 || p == nullptr || p->values.size() != 12) {
-        std::fprintf(stderr, "%s/calib.txt: needs Tr_velo_to_cam (or Tr) and P2 (or P0) with 12 values\n", folder.c_str());
+        std::fprintf(stderr, "%s/calib.txt: needs Tr_velo_to_cam (or Tr) and P2 (or P0) with 12 values\n",
+                     folder.c_str());
         return 1;
       }
       Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -305,8 +310,10 @@ int main(int argc, char** argv) {
         const std::vector<float> scan = ds::readVelodyneBin(s.string());
         std::vector<Eigen::Vector3d> p_cam;
         if (std::getenv("BESLAM_EVAL_VERBOSE") != nullptr)
-          for (size_t i = 0; i + 3 < scan.size(); i += 4) p_cam.push_back(T * Eigen::Vector3d(scan[i], scan[i + 1], scan[i + 2]));
-        score(truth[frame], timedDetect(detector, scan, totals), max_distance, match, totals, s.stem().string(), &p_cam);
+          for (size_t i = 0; i + 3 < scan.size(); i += 4)
+            p_cam.push_back(T * Eigen::Vector3d(scan[i], scan[i + 1], scan[i + 2]));
+        score(truth[frame], timedDetect(detector, scan, totals), max_distance, match, totals, s.stem().string(),
+              &p_cam);
       }
       summary(totals, max_distance, match);
       return 0;

@@ -7,8 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "beslam/formats/labels.hpp"
 #include "beslam/detector_replay/replay.hpp"
+#include "beslam/formats/labels.hpp"
 
 namespace beslam::detector_oracle {
 
@@ -70,7 +70,8 @@ std::vector<beslam_box3d> LabelOracle::detect(int64_t frame) const {
                          rng.normal(), rng.normal(), rng.normal(), rng.normal()};
     const double score = rng.uniform(o_.true_score_min, 1.0);
     beslam_box3d b = t.box;
-    if (!o_.classes.empty() && std::find(o_.classes.begin(), o_.classes.end(), b.class_id) == o_.classes.end()) continue;
+    if (!o_.classes.empty() && std::find(o_.classes.begin(), o_.classes.end(), b.class_id) == o_.classes.end())
+      continue;
     const double range = std::hypot(b.center_cam[0], b.center_cam[2]);
     if (range > o_.max_range || b.center_cam[2] <= 0.5) continue;
     if (miss < o_.miss_rate) continue;
@@ -113,7 +114,8 @@ std::vector<std::vector<TruthBox>> readTruth(const std::string& labels, const st
     if (first == std::string::npos || line[first] == '#') return;
     const formats::TrackingLabel l = formats::parseTrackingRow(line, labels, line_no);
     if (l.frame < 0 || l.frame > 10'000'000)
-      throw std::runtime_error(labels + ":" + std::to_string(line_no) + ": frame " + std::to_string(l.frame) + " is out of range");
+      throw std::runtime_error(labels + ":" + std::to_string(line_no) + ": frame " + std::to_string(l.frame) +
+                               " is out of range");
     if (static_cast<size_t>(l.frame) >= frames.size()) frames.resize(static_cast<size_t>(l.frame) + 1);
     if (l.object.isDontCare()) return;
     int32_t class_id = 0;
@@ -123,7 +125,8 @@ std::vector<std::vector<TruthBox>> readTruth(const std::string& labels, const st
     if (!(o.h > 0 && o.w > 0 && o.l > 0))
       throw std::runtime_error(labels + ":" + std::to_string(line_no) + ": non-positive box size");
     TruthBox t;
-    t.box = detector_replay::boxFromKitti(class_id, o.h, o.w, o.l, o.p_cam_bottom.x(), o.p_cam_bottom.y(), o.p_cam_bottom.z(), o.ry);
+    t.box = detector_replay::boxFromKitti(class_id, o.h, o.w, o.l, o.p_cam_bottom.x(), o.p_cam_bottom.y(),
+                                          o.p_cam_bottom.z(), o.ry);
     t.box.track_id = static_cast<int32_t>(l.track_id);
     t.box.bbox2d[0] = o.x1, t.box.bbox2d[1] = o.y1, t.box.bbox2d[2] = o.x2, t.box.bbox2d[3] = o.y2;
     t.box.truncation = static_cast<float>(std::clamp(o.truncated, 0.0, 1.0));

@@ -1,12 +1,13 @@
 // The label oracle: truth reading (KITTI and synthetic layouts, motion flags), seeded faults (noise
 // statistics, misses, false positives), determinism, track-id pass-through, errors, and the plugin.
+#include "beslam/detector_oracle/oracle.hpp"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 
-#include <gtest/gtest.h>
-
-#include "beslam/detector_oracle/oracle.hpp"
 #include "beslam/test/plugin_harness.hpp"
 #include "beslam/test/temp_dir.hpp"
 
@@ -68,7 +69,8 @@ TEST(LabelOracle, ReadsTruthWithGeometryAndMotion) {
   EXPECT_EQ(truth[0][1].box.motion_state, BESLAM_MOTION_DYNAMIC);
   EXPECT_EQ(truth[1][0].box.motion_state, BESLAM_MOTION_UNKNOWN);  // no motion row
   for (const auto& [name, text, cause] : std::vector<std::tuple<std::string, std::string, std::string>>{
-           {"bad_class.txt", "0 1 Bus 0 0 -1.5 1 1 2 2 1.5 1.6 4.0 -3.0 1.7 20.0 1.57\n", "bad_class.txt:1: unknown class 'Bus'"},
+           {"bad_class.txt", "0 1 Bus 0 0 -1.5 1 1 2 2 1.5 1.6 4.0 -3.0 1.7 20.0 1.57\n",
+            "bad_class.txt:1: unknown class 'Bus'"},
            {"bad_number.txt", "0 1 Car 0 0 -1.5 1 1 2 2 1.5 1.6 4.0 -3.0 nan 20.0 1.57\n", "bad_number.txt:1"},
            {"bad_size.txt", "0 1 Car 0 0 -1.5 1 1 2 2 1.5 0 4.0 -3.0 1.7 20.0 1.57\n", "bad_size.txt:1: non-positive"},
            {"empty.txt", "\n", "no labels"}}) {
@@ -181,8 +183,11 @@ TEST(DetectorOraclePlugin, ThroughTheRegistry) {
   PluginHarness h(std::string(PLUGIN_DIR) + "/detector_oracle.so");
   Dir d;
   d.write("label_02/0004.txt", labels());
-  const auto& config = h.config("detector_oracle", {{"labels", (d.path() / "label_02").string()}, {"sequence", "0004"},
-                                                    {"position_noise", "0.1"}, {"seed", "3"}, {"pass_track_ids", "true"}});
+  const auto& config = h.config("detector_oracle", {{"labels", (d.path() / "label_02").string()},
+                                                    {"sequence", "0004"},
+                                                    {"position_noise", "0.1"},
+                                                    {"seed", "3"},
+                                                    {"pass_track_ids", "true"}});
   beslam::registry::DetectorInstance det(h.plugin("detector_oracle"), h.info(config), h.log);
   const auto boxes = det.detect(PluginHarness::frame(3, 0.3));
   ASSERT_EQ(boxes.size(), 2u);
@@ -218,7 +223,8 @@ TEST(DetectorOraclePlugin, SharedKittiTrackingLabels) {
   const fs::path labels = fs::path(BESLAM_SHARED_DATA) / "kitti/tracking/training/label_02";
   if (!fs::exists(labels / "0000.txt")) GTEST_SKIP() << "shared data not found: " << labels;
   PluginHarness h(std::string(PLUGIN_DIR) + "/detector_oracle.so");
-  const auto& config = h.config("detector_oracle", {{"labels", labels.string()}, {"sequence", "0000"}, {"classes", "Car,Van"}});
+  const auto& config =
+      h.config("detector_oracle", {{"labels", labels.string()}, {"sequence", "0000"}, {"classes", "Car,Van"}});
   beslam::registry::DetectorInstance det(h.plugin("detector_oracle"), h.info(config), h.log);
   size_t n = 0;
   for (int64_t f = 0; f < 154; ++f) n += det.detect(PluginHarness::frame(f, 0.1 * f)).size();

@@ -1,10 +1,10 @@
 // Google Benchmark: replaying real PointRCNN detections (KITTI tracking 0000, AB3DMOT rows of the three
 // classes). BM_ReplayLoadAnd100Frames parses the sequence's files and hands out 100 frames, reported per
 // frame (the target: under 1 ms per frame); BM_ReplayFrame is one frame's lookup and copy after loading.
+#include <benchmark/benchmark.h>
+
 #include <filesystem>
 #include <string>
-
-#include <benchmark/benchmark.h>
 
 #include "beslam/detector_replay/replay.hpp"
 

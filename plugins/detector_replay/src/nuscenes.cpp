@@ -2,10 +2,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
-
-#include <nlohmann/json.hpp>
 
 namespace beslam::detector_replay {
 
@@ -121,7 +120,8 @@ NuScenesBox globalFromCamera(const beslam_box3d& b, const Eigen::Isometry3d& T_c
   const Eigen::Vector3d h = T_global_cam.linear() * heading_cam;
   out.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(std::atan2(h.y(), h.x()), Eigen::Vector3d::UnitZ()));
   if (b.flags & BESLAM_BOX_HAS_VELOCITY) {
-    const Eigen::Vector3d v = T_global_cam.linear() * Eigen::Vector3d(b.velocity_cam[0], b.velocity_cam[1], b.velocity_cam[2]);
+    const Eigen::Vector3d v =
+        T_global_cam.linear() * Eigen::Vector3d(b.velocity_cam[0], b.velocity_cam[1], b.velocity_cam[2]);
     out.velocity = v.head<2>();
   }
   out.score = b.score;
@@ -138,7 +138,8 @@ NuScenesFrames readNuScenesFrames(const std::string& path) {
       const auto b = line.find_last_not_of(" \t");
       const std::string token = line.substr(a, b - a + 1);
       if (token.find_first_of(" \t") != std::string::npos)
-        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": expected one sample token, got '" + token + "'");
+        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": expected one sample token, got '" + token +
+                                 "'");
       f.tokens.push_back(token);
       f.T_global_ego.emplace_back();
     });
@@ -190,8 +191,10 @@ void readNuScenes(const NuScenesOptions& o, DetectionTable& table, std::vector<c
     auto it = results.find(token);
     if (it == results.end()) continue;  // missing frame: the caller's policy
     std::optional<Eigen::Isometry3d> T_global_ego;
-    if (i < o.ego_poses.size()) T_global_ego = o.ego_poses[i];
-    else if (o.frames.T_global_ego[i]) T_global_ego = o.frames.T_global_ego[i];
+    if (i < o.ego_poses.size())
+      T_global_ego = o.ego_poses[i];
+    else if (o.frames.T_global_ego[i])
+      T_global_ego = o.frames.T_global_ego[i];
     if (!T_global_ego) continue;
     const Eigen::Isometry3d T_cam_global = T_cam_ego * T_global_ego->inverse();
     if (!it->is_array()) throw std::runtime_error(o.results + ": sample " + token + ": expected a list of boxes");

@@ -103,7 +103,8 @@ void keep(const beslam_box3d& box, int64_t frame, const Filter& filter, Detectio
 
 beslam_box3d boxFromLabel(const formats::ObjectLabel& o, int32_t class_id, ScoreTransform transform,
                           const std::string& path, int line_no) {
-  beslam_box3d b = boxFromKitti(class_id, o.h, o.w, o.l, o.p_cam_bottom.x(), o.p_cam_bottom.y(), o.p_cam_bottom.z(), o.ry);
+  beslam_box3d b =
+      boxFromKitti(class_id, o.h, o.w, o.l, o.p_cam_bottom.x(), o.p_cam_bottom.y(), o.p_cam_bottom.z(), o.ry);
   checkGeometry(b, path, line_no);
   b.bbox2d[0] = o.x1, b.bbox2d[1] = o.y1, b.bbox2d[2] = o.x2, b.bbox2d[3] = o.y2;
   b.flags |= BESLAM_BOX_HAS_BBOX2D;
@@ -152,20 +153,33 @@ int64_t DetectionTable::boxCount() const {
 
 bool ab3dmotClass(int64_t id, int32_t& class_id) {
   switch (id) {
-    case 1: class_id = BESLAM_CLASS_PEDESTRIAN; return true;
-    case 2: class_id = BESLAM_CLASS_CAR; return true;
-    case 3: class_id = BESLAM_CLASS_CYCLIST; return true;
-    default: return false;
+    case 1:
+      class_id = BESLAM_CLASS_PEDESTRIAN;
+      return true;
+    case 2:
+      class_id = BESLAM_CLASS_CAR;
+      return true;
+    case 3:
+      class_id = BESLAM_CLASS_CYCLIST;
+      return true;
+    default:
+      return false;
   }
 }
 
 bool nuscenesClass(const std::string& name, int32_t& class_id) {
-  if (name == "car") class_id = BESLAM_CLASS_CAR;
-  else if (name == "truck" || name == "bus" || name == "trailer" || name == "construction_vehicle") class_id = BESLAM_CLASS_TRUCK;
-  else if (name == "pedestrian") class_id = BESLAM_CLASS_PEDESTRIAN;
-  else if (name == "bicycle" || name == "motorcycle") class_id = BESLAM_CLASS_CYCLIST;
-  else if (name == "barrier" || name == "traffic_cone") class_id = BESLAM_CLASS_UNKNOWN;
-  else return false;
+  if (name == "car")
+    class_id = BESLAM_CLASS_CAR;
+  else if (name == "truck" || name == "bus" || name == "trailer" || name == "construction_vehicle")
+    class_id = BESLAM_CLASS_TRUCK;
+  else if (name == "pedestrian")
+    class_id = BESLAM_CLASS_PEDESTRIAN;
+  else if (name == "bicycle" || name == "motorcycle")
+    class_id = BESLAM_CLASS_CYCLIST;
+  else if (name == "barrier" || name == "traffic_cone")
+    class_id = BESLAM_CLASS_UNKNOWN;
+  else
+    return false;
   return true;
 }
 
@@ -178,12 +192,18 @@ std::vector<int32_t> parseClassList(const std::string& list) {
     const std::string l = lower(item);
     if (l.empty()) continue;
     if (l == "all") return {};
-    if (l == "car") out.push_back(BESLAM_CLASS_CAR);
-    else if (l == "van") out.push_back(BESLAM_CLASS_VAN);
-    else if (l == "truck") out.push_back(BESLAM_CLASS_TRUCK);
-    else if (l == "pedestrian") out.push_back(BESLAM_CLASS_PEDESTRIAN);
-    else if (l == "cyclist") out.push_back(BESLAM_CLASS_CYCLIST);
-    else if (l == "unknown" || l == "misc") out.push_back(BESLAM_CLASS_UNKNOWN);
+    if (l == "car")
+      out.push_back(BESLAM_CLASS_CAR);
+    else if (l == "van")
+      out.push_back(BESLAM_CLASS_VAN);
+    else if (l == "truck")
+      out.push_back(BESLAM_CLASS_TRUCK);
+    else if (l == "pedestrian")
+      out.push_back(BESLAM_CLASS_PEDESTRIAN);
+    else if (l == "cyclist")
+      out.push_back(BESLAM_CLASS_CYCLIST);
+    else if (l == "unknown" || l == "misc")
+      out.push_back(BESLAM_CLASS_UNKNOWN);
     else
       throw std::invalid_argument("unknown class '" + item +
                                   "' (known: Car, Van, Truck, Pedestrian, Cyclist, Unknown, or all)");
@@ -197,13 +217,15 @@ beslam_box3d parseAb3dmotRow(const std::string& line, const std::string& path, i
                                        "w",     "l",        "x",  "y",  "z",  "ry", "alpha"};
   const std::vector<std::string_view> f = splitFields(line);
   if (f.size() != 15)
-    failAt(path, line_no, "expected 15 fields (frame, class id, x1 y1 x2 y2, score, h w l, x y z, ry, alpha), got " +
-                              std::to_string(f.size()));
+    failAt(path, line_no,
+           "expected 15 fields (frame, class id, x1 y1 x2 y2, score, h w l, x y z, ry, alpha), got " +
+               std::to_string(f.size()));
   double v[15];
   for (int i = 0; i < 15; ++i) {
     if (!parseNumber(f[i], v[i]))
       failAt(path, line_no, std::string(kNames[i]) + " '" + std::string(f[i]) + "' is not a number");
-    if (!std::isfinite(v[i])) failAt(path, line_no, std::string(kNames[i]) + " is not finite ('" + std::string(f[i]) + "')");
+    if (!std::isfinite(v[i]))
+      failAt(path, line_no, std::string(kNames[i]) + " is not finite ('" + std::string(f[i]) + "')");
   }
   if (v[0] != std::floor(v[0]) || v[0] < 0 || v[0] > kMaxFrame)
     failAt(path, line_no, "frame '" + std::string(f[0]) + "' is not a frame index");
@@ -233,7 +255,8 @@ void readKittiTrackingFile(const std::string& path, const Filter& filter, Policy
                            DetectionTable& table, Report& report) {
   forEachRow(path, policy, report, [&](const std::string& line, int line_no) {
     const formats::TrackingLabel t = formats::parseTrackingRow(line, path, line_no);
-    if (t.frame < 0 || t.frame > kMaxFrame) failAt(path, line_no, "frame " + std::to_string(t.frame) + " is out of range");
+    if (t.frame < 0 || t.frame > kMaxFrame)
+      failAt(path, line_no, "frame " + std::to_string(t.frame) + " is out of range");
     if (t.object.isDontCare()) {
       table.cover(t.frame);
       ++report.filtered;

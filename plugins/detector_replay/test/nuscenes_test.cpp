@@ -1,13 +1,14 @@
 // nuScenes results: the global -> ego -> camera transform and back, the token/ego-pose files, the JSON
 // reader and every malformed-input path.
+#include "beslam/detector_replay/nuscenes.hpp"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "beslam/detector_replay/nuscenes.hpp"
 #include "beslam/test/temp_dir.hpp"
 
 namespace fs = std::filesystem;
@@ -31,21 +32,18 @@ Eigen::Isometry3d egoPose(double x, double y, double yaw, double pitch = 0) {
 
 json box(const std::string& token, Eigen::Vector3d t, double yaw, const std::string& name = "car", double score = 0.8) {
   const Eigen::Quaterniond q(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
-  return json{{"sample_token", token},
-              {"translation", {t.x(), t.y(), t.z()}},
-              {"size", {1.9, 4.6, 1.7}},
-              {"rotation", {q.w(), q.x(), q.y(), q.z()}},
-              {"velocity", {3.0, -1.0}},
-              {"detection_name", name},
-              {"detection_score", score},
-              {"attribute_name", "vehicle.moving"}};
+  return json{{"sample_token", token},    {"translation", {t.x(), t.y(), t.z()}},
+              {"size", {1.9, 4.6, 1.7}},  {"rotation", {q.w(), q.x(), q.y(), q.z()}},
+              {"velocity", {3.0, -1.0}},  {"detection_name", name},
+              {"detection_score", score}, {"attribute_name", "vehicle.moving"}};
 }
 
 }  // namespace
 
 TEST(NuScenesTransform, GlobalToCameraAndBack) {
   const Eigen::Isometry3d T_ego_cam = poseFromTranslationQuaternion(kCamFront, "cam");
-  for (const Eigen::Isometry3d& T_global_ego : {egoPose(0, 0, 0), egoPose(400.5, 1100.2, 2.1), egoPose(-30, 12, -0.7)}) {
+  for (const Eigen::Isometry3d& T_global_ego :
+       {egoPose(0, 0, 0), egoPose(400.5, 1100.2, 2.1), egoPose(-30, 12, -0.7)}) {
     const Eigen::Isometry3d T_cam_global = T_ego_cam.inverse() * T_global_ego.inverse();
     // A car 15 m ahead of the ego, 2 m to its left, heading 30 degrees left of the ego's heading.
     NuScenesBox b;
@@ -97,8 +95,8 @@ TEST(NuScenesFramesFile, TextAndJsonForms) {
   EXPECT_FALSE(text.T_global_ego[0]);
   const NuScenesFrames plain = readNuScenesFrames(d.write("tokens.json", R"(["a", "b"])"));
   EXPECT_EQ(plain.tokens.size(), 2u);
-  const NuScenesFrames posed = readNuScenesFrames(d.write(
-      "frames.json", R"({"frames": [{"token": "a", "ego_translation": [1, 2, 0], "ego_rotation": [1, 0, 0, 0]},
+  const NuScenesFrames posed = readNuScenesFrames(
+      d.write("frames.json", R"({"frames": [{"token": "a", "ego_translation": [1, 2, 0], "ego_rotation": [1, 0, 0, 0]},
                                     {"token": "b"}]})"));
   ASSERT_TRUE(posed.T_global_ego[0]);
   EXPECT_NEAR(posed.T_global_ego[0]->translation().y(), 2.0, 1e-12);
@@ -110,7 +108,8 @@ TEST(NuScenesFramesFile, TextAndJsonForms) {
            {"object.json", R"({"x": 1})", "expected an array"},
            {"number.json", R"([1])", "frame 0: expected a token string"},
            {"half.json", R"([{"token": "a", "ego_translation": [1, 2, 0]}])", "go together"},
-           {"zeroq.json", R"([{"token": "a", "ego_translation": [1, 2, 0], "ego_rotation": [0, 0, 0, 0]}])", "zero quaternion"}}) {
+           {"zeroq.json", R"([{"token": "a", "ego_translation": [1, 2, 0], "ego_rotation": [0, 0, 0, 0]}])",
+            "zero quaternion"}}) {
     try {
       readNuScenesFrames(d.write(name, text_in));
       ADD_FAILURE() << name << " accepted";
@@ -128,7 +127,8 @@ TEST(NuScenesResults, ReadsFramesThroughTheTokenMap) {
   o.frames.T_global_ego = {egoPose(0, 0, 0), egoPose(5, 0, 0), std::nullopt, egoPose(15, 0, 0)};
   o.T_ego_cam = poseFromTranslationQuaternion({0, 0, 0, 0.5, -0.5, 0.5, -0.5}, "cam");
   json results = json::object();
-  results["t0"] = json::array({box("t0", {20, 3, 1}, 0.0), box("t0", {-20, 0, 1}, 0.0), box("t0", {30, 0, 1}, 0, "barrier")});
+  results["t0"] =
+      json::array({box("t0", {20, 3, 1}, 0.0), box("t0", {-20, 0, 1}, 0.0), box("t0", {30, 0, 1}, 0, "barrier")});
   results["t1"] = json::array({box("t1", {25, 3, 1}, 0.0, "car", 0.2)});
   results["t2"] = json::array({box("t2", {25, 3, 1}, 0.0)});  // no ego pose for frame 2
   // t3 absent from the results
@@ -145,9 +145,9 @@ TEST(NuScenesResults, ReadsFramesThroughTheTokenMap) {
   EXPECT_NEAR(table.at(0)[0].center_cam[2], 20.0, 1e-9);
   EXPECT_NEAR(table.at(0)[0].center_cam[0], -3.0, 1e-9);
   EXPECT_NEAR(table.at(0)[0].center_cam[1], -1.0 + 0.3, 1e-9);  // 1 m up, ego 0.3 m above global z = 0
-  EXPECT_NEAR(table.at(0)[0].yaw, -M_PI / 2, 1e-9);              // heading forward = camera +z
-  EXPECT_TRUE(table.at(1).empty());                              // score 0.2 < 0.3
-  EXPECT_EQ(report.rows, 4);  // frame 2 (no ego pose) is not read
+  EXPECT_NEAR(table.at(0)[0].yaw, -M_PI / 2, 1e-9);             // heading forward = camera +z
+  EXPECT_TRUE(table.at(1).empty());                             // score 0.2 < 0.3
+  EXPECT_EQ(report.rows, 4);                                    // frame 2 (no ego pose) is not read
   EXPECT_EQ(report.boxes, 1);
   EXPECT_EQ(report.filtered, 3);
   // Per-frame poses from a pose list override the token file's.
@@ -162,8 +162,10 @@ TEST(NuScenesResults, EveryMalformedBoxIsReported) {
   const json good = box("t0", {20, 3, 1}, 0.0);
   auto with = [&](const std::string& key, const json& value) {
     json b = good;
-    if (value.is_null()) b.erase(key);
-    else b[key] = value;
+    if (value.is_null())
+      b.erase(key);
+    else
+      b[key] = value;
     return b;
   };
   const std::vector<std::pair<json, std::string>> cases = {
@@ -204,7 +206,9 @@ TEST(NuScenesResults, EveryMalformedBoxIsReported) {
   NuScenesOptions o;
   o.frames.tokens = {"t0"};
   o.frames.T_global_ego = {egoPose(0, 0, 0)};
-  o.results = d.write("nanvel.json", json{{"results", {{"t0", json::array({with("velocity", json::array({nullptr, nullptr}))})}}}}.dump());
+  o.results =
+      d.write("nanvel.json",
+              json{{"results", {{"t0", json::array({with("velocity", json::array({nullptr, nullptr}))})}}}}.dump());
   DetectionTable table;
   std::vector<char> covered;
   Report report;

@@ -1,12 +1,13 @@
 // AB3DMOT rows and KITTI labels: geometry, classes, scores, filters, every malformed-input path (stop
 // and skip policies), and the real shared files.
+#include "beslam/detector_replay/replay.hpp"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 
-#include <gtest/gtest.h>
-
-#include "beslam/detector_replay/replay.hpp"
 #include "beslam/test/temp_dir.hpp"
 
 namespace fs = std::filesystem;
@@ -16,7 +17,8 @@ namespace {
 
 using beslam::test::TempDir;
 
-const std::string kRow0 = "0,2,298.3125,165.1800,458.2292,293.4391,8.2981,1.9605,1.8137,4.7549,-4.5720,1.8435,13.5308,-2.1125,-1.7867";
+const std::string kRow0 =
+    "0,2,298.3125,165.1800,458.2292,293.4391,8.2981,1.9605,1.8137,4.7549,-4.5720,1.8435,13.5308,-2.1125,-1.7867";
 const std::string kRow1 = "1,1,700,150,740,260,-0.4501,1.70,0.60,0.80,2.0,1.60,9.0,0.5,0.3";
 
 // Expects readAb3dmotFile to stop on `row` (as line 2) with a message naming file:2 and `cause`.
@@ -79,8 +81,8 @@ TEST(Ab3dmot, RowGeometryClassesAndScores) {
 
 TEST(Ab3dmot, FileIntoFramesWithFilters) {
   TempDir dir;
-  const std::string file = dir.write("det.txt", "# comment\n\n" + kRow0 + "\n" + kRow1 + "\n" +
-                                                    "5,2,1,1,20,20,3.0,1.5,1.6,4.0,10,1.6,60,0,0\n");
+  const std::string file = dir.write(
+      "det.txt", "# comment\n\n" + kRow0 + "\n" + kRow1 + "\n" + "5,2,1,1,20,20,3.0,1.5,1.6,4.0,10,1.6,60,0,0\n");
   DetectionTable table;
   Report report;
   Filter filter;
@@ -133,11 +135,12 @@ TEST(Ab3dmot, MissingFileIsNamed) {
 
 TEST(KittiLabels, TrackingFileClassesDontCareAndErrors) {
   TempDir dir;
-  const std::string file = dir.write(
-      "0000.txt",
-      "0 -1 DontCare -1 -1 -10.000000 219.31 188.49 245.50 218.56 -1000 -1000 -1000 -10 -1 -1 -1\n"
-      "0 0 Van 0 0 -1.793451 296.744956 161.752147 455.226042 292.372804 2.000000 1.823255 4.433886 -4.552284 1.858523 13.410495 -2.115488\n"
-      "2 1 Pedestrian 0 1 0.1 700 150 740 260 1.7 0.6 0.8 2.0 1.6 9.0 0.5 0.93\n");
+  const std::string file =
+      dir.write("0000.txt",
+                "0 -1 DontCare -1 -1 -10.000000 219.31 188.49 245.50 218.56 -1000 -1000 -1000 -10 -1 -1 -1\n"
+                "0 0 Van 0 0 -1.793451 296.744956 161.752147 455.226042 292.372804 2.000000 1.823255 4.433886 "
+                "-4.552284 1.858523 13.410495 -2.115488\n"
+                "2 1 Pedestrian 0 1 0.1 700 150 740 260 1.7 0.6 0.8 2.0 1.6 9.0 0.5 0.93\n");
   DetectionTable table;
   Report report;
   readKittiTrackingFile(file, Filter{}, Policy::stop, ScoreTransform::none, table, report);
@@ -191,8 +194,10 @@ TEST(KittiLabels, ObjectFile) {
   EXPECT_EQ(table.at(3)[1].class_id, BESLAM_CLASS_CYCLIST);
   EXPECT_FLOAT_EQ(table.at(3)[1].truncation, 0.5f);
   EXPECT_EQ(table.at(3)[2].class_id, BESLAM_CLASS_UNKNOWN);  // Tram: a KITTI class without an ABI class
-  const std::string bad = dir.write("000004.txt", "Car 0.00 0 1.74 741.18 168.83 792.25 208.43 1.70 1.63 4.08 7.24 1.55\n");
-  EXPECT_THROW(readKittiObjectFile(bad, 4, Filter{}, Policy::stop, ScoreTransform::none, table, report), std::exception);
+  const std::string bad =
+      dir.write("000004.txt", "Car 0.00 0 1.74 741.18 168.83 792.25 208.43 1.70 1.63 4.08 7.24 1.55\n");
+  EXPECT_THROW(readKittiObjectFile(bad, 4, Filter{}, Policy::stop, ScoreTransform::none, table, report),
+               std::exception);
 }
 
 TEST(SharedData, PointRcnnDetectionsOfAllSequences) {

@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
-
-#include <opencv2/imgproc.hpp>
 
 #include "beslam/sdk/views.hpp"
 
@@ -73,8 +72,8 @@ std::vector<cv::Point2f> clipPolygonToRect(const std::vector<cv::Point2f>& polyg
   return poly;
 }
 
-std::vector<cv::Point2f> projectBoxPolygon(const beslam_box3d& box, const Intrinsics& K, double near,
-                                           double margin_px, double guard) {
+std::vector<cv::Point2f> projectBoxPolygon(const beslam_box3d& box, const Intrinsics& K, double near, double margin_px,
+                                           double guard) {
   if (!(near > 0)) throw std::invalid_argument("near plane must be positive");
   const std::vector<Eigen::Vector3d> v = clippedBoxVertices(box, near);
   if (v.empty()) return {};
@@ -86,7 +85,8 @@ std::vector<cv::Point2f> projectBoxPolygon(const beslam_box3d& box, const Intrin
     // below brings them into the image anyway; clamping a vertex of a convex polygon far outside the
     // image moves only parts outside the guarded rectangle).
     const double lim = 1e6;
-    const cv::Point2f q(static_cast<float>(std::clamp(uv.x(), -lim, lim)), static_cast<float>(std::clamp(uv.y(), -lim, lim)));
+    const cv::Point2f q(static_cast<float>(std::clamp(uv.x(), -lim, lim)),
+                        static_cast<float>(std::clamp(uv.y(), -lim, lim)));
     if (margin_px > 0) {
       for (int k = 0; k < 8; ++k) {
         const double a = k * M_PI / 4 + M_PI / 8;
@@ -106,7 +106,8 @@ std::vector<cv::Point2f> projectBoxPolygon(const beslam_box3d& box, const Intrin
   if (clipped.size() < 3) return {};
   // A polygon entirely in the guard band misses the image.
   float u0 = 1e30f, v0 = 1e30f, u1 = -1e30f, v1 = -1e30f;
-  for (const auto& p : clipped) u0 = std::min(u0, p.x), u1 = std::max(u1, p.x), v0 = std::min(v0, p.y), v1 = std::max(v1, p.y);
+  for (const auto& p : clipped)
+    u0 = std::min(u0, p.x), u1 = std::max(u1, p.x), v0 = std::min(v0, p.y), v1 = std::max(v1, p.y);
   if (u1 < -0.5f || v1 < -0.5f || u0 > K.width - 0.5f || v0 > K.height - 0.5f) return {};
   return clipped;
 }
@@ -121,7 +122,8 @@ UnknownPolicy parseUnknownPolicy(const std::string& text) {
 std::optional<uint16_t> labelFor(const beslam_box3d& box, UnknownPolicy unknown) {
   const bool has_id = box.track_id >= 0 && box.track_id <= 65535 - BESLAM_LABEL_STATIC_BASE;
   switch (box.motion_state) {
-    case BESLAM_MOTION_DYNAMIC: return static_cast<uint16_t>(BESLAM_LABEL_DYNAMIC);
+    case BESLAM_MOTION_DYNAMIC:
+      return static_cast<uint16_t>(BESLAM_LABEL_DYNAMIC);
     case BESLAM_MOTION_STATIC:
       return has_id ? static_cast<uint16_t>(BESLAM_LABEL_STATIC_BASE + box.track_id)
                     : static_cast<uint16_t>(BESLAM_LABEL_DYNAMIC);

@@ -1,9 +1,9 @@
 #include "beslam/mask_common/contour.hpp"
 
+#include <ceres/ceres.h>
+
 #include <algorithm>
 #include <cmath>
-
-#include <ceres/ceres.h>
 #include <opencv2/imgproc.hpp>
 
 namespace beslam::mask {
@@ -124,8 +124,10 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
     auto I = [&](int xx, int yy) {
       return static_cast<double>(blurred.at<uint8_t>(std::clamp(yy, 0, H - 1), std::clamp(xx, 0, W - 1)));
     };
-    const double gx = (I(x + 1, y - 1) + 2 * I(x + 1, y) + I(x + 1, y + 1)) - (I(x - 1, y - 1) + 2 * I(x - 1, y) + I(x - 1, y + 1));
-    const double gy = (I(x - 1, y + 1) + 2 * I(x, y + 1) + I(x + 1, y + 1)) - (I(x - 1, y - 1) + 2 * I(x, y - 1) + I(x + 1, y - 1));
+    const double gx =
+        (I(x + 1, y - 1) + 2 * I(x + 1, y) + I(x + 1, y + 1)) - (I(x - 1, y - 1) + 2 * I(x - 1, y) + I(x - 1, y + 1));
+    const double gy =
+        (I(x - 1, y + 1) + 2 * I(x, y + 1) + I(x + 1, y + 1)) - (I(x - 1, y - 1) + 2 * I(x, y - 1) + I(x + 1, y - 1));
     const double n = std::hypot(gx, gy);
     if (n < 1e-9) return false;
     nx = gx / n, ny = gy / n;
@@ -134,12 +136,13 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
 
   // Six equal rectangles of the region's bounding rectangle, clockwise from the top left.
   const double ymid = 0.5 * (y0 + y1);
-  const double xb[4] = {static_cast<double>(xl), xl + (xr - xl) / 3.0, xl + 2 * (xr - xl) / 3.0, static_cast<double>(xr)};
+  const double xb[4] = {static_cast<double>(xl), xl + (xr - xl) / 3.0, xl + 2 * (xr - xl) / 3.0,
+                        static_cast<double>(xr)};
   struct Piece {
     double xa, xb;
     bool top;
   };
-  const Piece pieces[6] = {{xb[0], xb[1], true}, {xb[1], xb[2], true}, {xb[2], xb[3], true},
+  const Piece pieces[6] = {{xb[0], xb[1], true},  {xb[1], xb[2], true},  {xb[2], xb[3], true},
                            {xb[2], xb[3], false}, {xb[1], xb[2], false}, {xb[0], xb[1], false}};
   auto pieceOf = [&xb](int x, bool top) {
     const int col = x < xb[1] ? 0 : (x < xb[2] ? 1 : 2);
@@ -239,12 +242,14 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
     problem.AddParameterBlock(coef[i].data(), 4);
     const Cubic& c = result.curves[i];
     // Evenly thinned to at most max_points_per_piece (the fit is over-determined long before that).
-    const size_t stride = std::max<size_t>(1, (data[i].size() + params.max_points_per_piece - 1) / params.max_points_per_piece);
+    const size_t stride =
+        std::max<size_t>(1, (data[i].size() + params.max_points_per_piece - 1) / params.max_points_per_piece);
     const double weight = (result.from_edges[i] ? 1.0 : 0.5) * static_cast<double>(stride);
     for (size_t k = 0; k < data[i].size(); k += stride) {
       const cv::Point2d& p = data[i][k];
       problem.AddResidualBlock(new PointCost((p.x - c.x_mid) / c.half_width, p.y),
-                               new ceres::ScaledLoss(new ceres::CauchyLoss(2.0), weight, ceres::TAKE_OWNERSHIP), coef[i].data());
+                               new ceres::ScaledLoss(new ceres::CauchyLoss(2.0), weight, ceres::TAKE_OWNERSHIP),
+                               coef[i].data());
     }
   }
   // Neighbours sharing an end: R1-R2, R2-R3 (top row) and R4-R5, R5-R6 (bottom row) at the column
@@ -255,8 +260,8 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
     const Cubic& a = result.curves[j[0]];
     const Cubic& b = result.curves[j[1]];
     const double x = (j[0] < 3) ? pieces[j[0]].xb : pieces[j[0]].xa;  // shared boundary
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<JoinCost, 1, 4, 4>(
-                                 new JoinCost{(x - a.x_mid) / a.half_width, (x - b.x_mid) / b.half_width, params.join_weight}),
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<JoinCost, 1, 4, 4>(new JoinCost{
+                                 (x - a.x_mid) / a.half_width, (x - b.x_mid) / b.half_width, params.join_weight}),
                              nullptr, coef[j[0]].data(), coef[j[1]].data());
     // Equation (3): the M edge points of both rectangles near the shared boundary, against both curves.
     const double band = std::max(2.0, 0.25 * (pieces[j[0]].xb - pieces[j[0]].xa));
@@ -267,8 +272,9 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
         if (std::abs(e.x - x) > band) continue;
         for (int k = 0; k < 2; ++k) {
           const Cubic& c = result.curves[j[k]];
-          problem.AddResidualBlock(new SmoothCost((e.x - c.x_mid) / c.half_width, c.half_width, e.nx, e.ny, params.smooth_weight),
-                                   new ceres::SoftLOneLoss(0.1 * params.smooth_weight), coef[j[k]].data());
+          problem.AddResidualBlock(
+              new SmoothCost((e.x - c.x_mid) / c.half_width, c.half_width, e.nx, e.ny, params.smooth_weight),
+              new ceres::SoftLOneLoss(0.1 * params.smooth_weight), coef[j[k]].data());
           ++smooth_terms;
         }
       }

@@ -4,9 +4,8 @@
 #include <cmath>
 #include <cstring>
 #include <numeric>
-#include <unordered_map>
-
 #include <opencv2/imgproc.hpp>
+#include <unordered_map>
 
 namespace beslam::mask {
 
@@ -63,7 +62,8 @@ Fit fitAtYaw(const std::vector<Eigen::Vector2d>& pts, double theta, double l, do
     a[i] = pts[i].x() * c - pts[i].y() * s;
     b[i] = pts[i].x() * s + pts[i].y() * c;
   }
-  auto place = [](const std::vector<double>& v, double len, double prior, double& centre, double& face, bool& has_face) {
+  auto place = [](const std::vector<double>& v, double len, double prior, double& centre, double& face,
+                  bool& has_face) {
     const double lo = percentile(v, 0.03), hi = percentile(v, 0.97);
     has_face = false;
     if (lo > 0) {
@@ -107,8 +107,8 @@ double truncatedFraction(const beslam_box3d& box, const Intrinsics& K) {
   return std::clamp(1.0 - inside / area, 0.0, 1.0);
 }
 
-std::vector<int> pointsNearBox(const beslam_box3d& box, const CameraPoints& points, double margin, double ground_clearance,
-                               const Intrinsics* K) {
+std::vector<int> pointsNearBox(const beslam_box3d& box, const CameraPoints& points, double margin,
+                               double ground_clearance, const Intrinsics* K) {
   std::vector<int> out;
   const double l2 = box.size[0] / 2 + margin, w2 = box.size[1] / 2 + margin;
   const double y_top = box.center_cam[1] - box.size[2] / 2 - 0.1;
@@ -164,7 +164,8 @@ BevRefineResult refineBoxBev(const beslam_box3d& box, const CameraPoints& points
   std::vector<std::pair<int, int>> cell_xy;
   for (size_t k = 0; k < cand.size(); ++k) {
     const Eigen::Vector3f& p = points.p[cand[k]];
-    const int cx = static_cast<int>(std::floor(p.x() / cell_size)), cz = static_cast<int>(std::floor(p.z() / cell_size));
+    const int cx = static_cast<int>(std::floor(p.x() / cell_size)),
+              cz = static_cast<int>(std::floor(p.z() / cell_size));
     auto [it, inserted] = cells.try_emplace(key(cx, cz), static_cast<int>(cell_xy.size()));
     if (inserted) cell_xy.emplace_back(cx, cz);
     point_cell[k] = it->second;
@@ -259,13 +260,15 @@ cv::Mat pointMask(const CameraPoints& points, const std::vector<int>& indices, c
     const int v = static_cast<int>(std::lround(points.uv[i].y)) - roi.y;
     if (u < 0 || v < 0 || u >= roi.width || v >= roi.height) continue;
     const int x0 = std::max(0, u - params.splat_half_width), x1 = std::min(roi.width - 1, u + params.splat_half_width);
-    const int y0 = std::max(0, v - params.splat_half_height), y1 = std::min(roi.height - 1, v + params.splat_half_height);
+    const int y0 = std::max(0, v - params.splat_half_height),
+              y1 = std::min(roi.height - 1, v + params.splat_half_height);
     for (int y = y0; y <= y1; ++y) std::memset(splat.ptr<uint8_t>(y) + x0, 255, static_cast<size_t>(x1 - x0 + 1));
     ++drawn;
   }
   if (drawn < params.min_points) return {};
   if (params.close_px > 0) {
-    const cv::Mat k = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * params.close_px + 1, 2 * params.close_px + 1));
+    const cv::Mat k =
+        cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * params.close_px + 1, 2 * params.close_px + 1));
     cv::morphologyEx(splat, splat, cv::MORPH_CLOSE, k);
   }
   // Fill holes: flood the background from a 1-pixel frame around the crop.

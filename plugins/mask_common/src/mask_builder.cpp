@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
-
-#include <opencv2/imgproc.hpp>
 
 namespace beslam::mask {
 
@@ -23,13 +22,14 @@ std::vector<ObjectMask> MaskBuilder::objects(const cv::Mat& gray, const beslam_p
                                              const std::vector<beslam_box3d>& boxes) const {
   std::vector<ObjectMask> out;
   if (!gray.empty() && (gray.cols != K_.width || gray.rows != K_.height || gray.type() != CV_8UC1))
-    throw std::invalid_argument("mask generator: image is " + std::to_string(gray.cols) + "x" + std::to_string(gray.rows) +
-                                " (or not 8-bit grey), the camera " + std::to_string(K_.width) + "x" + std::to_string(K_.height));
+    throw std::invalid_argument("mask generator: image is " + std::to_string(gray.cols) + "x" +
+                                std::to_string(gray.rows) + " (or not 8-bit grey), the camera " +
+                                std::to_string(K_.width) + "x" + std::to_string(K_.height));
   CameraPoints points;
   const bool have_lidar = options_.use_lidar && lidar.data != nullptr && lidar.count > 0;
   if (have_lidar)
-    points = lidarToCamera(lidar.data, lidar.count, lidar.stride_bytes >= 16 ? lidar.stride_bytes / 4 : 4, *T_cam_lidar_,
-                           K_, 0.5, options_.max_range);
+    points = lidarToCamera(lidar.data, lidar.count, lidar.stride_bytes >= 16 ? lidar.stride_bytes / 4 : 4,
+                           *T_cam_lidar_, K_, 0.5, options_.max_range);
   const cv::Rect image(0, 0, K_.width, K_.height);
   for (const beslam_box3d& input : boxes) {
     for (double v : input.center_cam)
@@ -67,7 +67,8 @@ std::vector<ObjectMask> MaskBuilder::objects(const cv::Mat& gray, const beslam_p
     ipoly.reserve(poly.size());
     // Fixed point (4 fractional bits) keeps sub-pixel vertices.
     for (const cv::Point2f& p : poly)
-      ipoly.emplace_back(static_cast<int>(std::lround((p.x - roi.x) * 16)), static_cast<int>(std::lround((p.y - roi.y) * 16)));
+      ipoly.emplace_back(static_cast<int>(std::lround((p.x - roi.x) * 16)),
+                         static_cast<int>(std::lround((p.y - roi.y) * 16)));
     cv::fillConvexPoly(region, ipoly, cv::Scalar(255), cv::LINE_8, 4);
     cv::Mat prior;
     if (have_lidar && options_.point_masks) {

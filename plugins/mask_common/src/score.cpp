@@ -5,11 +5,10 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
-#include <stdexcept>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <stdexcept>
 
 #include "beslam/formats/labels.hpp"
 
@@ -117,7 +116,8 @@ ScoreSummary scoreSequence(const std::string& masks_dir, const std::string& sequ
   std::map<int64_t, std::vector<formats::TrackingLabel>> labels;
   for (auto& l : formats::readTrackingLabels(label_file)) labels[l.frame].push_back(std::move(l));
 
-  const std::map<std::pair<int64_t, int64_t>, bool> moving = readObjectMotionIfPresent((seq / "objects_motion.txt").string());
+  const std::map<std::pair<int64_t, int64_t>, bool> moving =
+      readObjectMotionIfPresent((seq / "objects_motion.txt").string());
 
   ScoreSummary summary;
   for (const auto& e : fs::directory_iterator(masks_dir)) {
@@ -128,13 +128,15 @@ ScoreSummary scoreSequence(const std::string& masks_dir, const std::string& sequ
     if (frame < options.first || (options.last >= 0 && frame > options.last)) continue;
     const cv::Mat pred = readLabel16(e.path().string());
     const cv::Mat inst = readLabel16((seq / "instance" / frameName(frame)).string());
-    if (pred.size() != inst.size()) throw std::runtime_error(e.path().string() + ": size differs from the instance mask");
+    if (pred.size() != inst.size())
+      throw std::runtime_error(e.path().string() + ": size differs from the instance mask");
     ++summary.frames;
     for (const formats::TrackingLabel& l : labels[frame]) {
       const auto& o = l.object;
       if (std::find(options.types.begin(), options.types.end(), o.type) == options.types.end()) continue;
       const double dist = o.p_cam_bottom.norm();
-      if (dist > options.max_distance || o.occluded > options.max_occlusion || o.truncated > options.max_truncation) continue;
+      if (dist > options.max_distance || o.occluded > options.max_occlusion || o.truncated > options.max_truncation)
+        continue;
       ObjectScore s;
       s.frame = frame;
       s.track_id = static_cast<int>(l.track_id);
@@ -148,8 +150,9 @@ ScoreSummary scoreSequence(const std::string& masks_dir, const std::string& sequ
       summary.objects.push_back(s);
     }
   }
-  std::sort(summary.objects.begin(), summary.objects.end(),
-            [](const ObjectScore& a, const ObjectScore& b) { return std::tie(a.frame, a.track_id) < std::tie(b.frame, b.track_id); });
+  std::sort(summary.objects.begin(), summary.objects.end(), [](const ObjectScore& a, const ObjectScore& b) {
+    return std::tie(a.frame, a.track_id) < std::tie(b.frame, b.track_id);
+  });
   summarise(summary);
   return summary;
 }

@@ -1,11 +1,11 @@
 // Contour refinement on synthetic shapes with a known outline.
+#include "beslam/mask_common/contour.hpp"
+
 #include <gtest/gtest.h>
 
+#include <opencv2/imgproc.hpp>
 #include <random>
 
-#include <opencv2/imgproc.hpp>
-
-#include "beslam/mask_common/contour.hpp"
 #include "beslam/mask_common/score.hpp"
 
 using namespace beslam::mask;
@@ -27,13 +27,15 @@ Shape carShape(uint32_t seed, int contrast) {
   for (int y = 0; y < size.height; ++y)
     for (int x = 0; x < size.width; ++x) img.at<float>(y, x) = 110.f + 8.f * std::sin(0.3f * x) * std::cos(0.2f * y);
   s.truth = cv::Mat::zeros(size, CV_8UC1);
-  const std::vector<cv::Point> outline = {{12, 100}, {12, 58}, {60, 52}, {85, 14}, {150, 14}, {178, 52}, {207, 58}, {207, 100}};
+  const std::vector<cv::Point> outline = {{12, 100}, {12, 58},  {60, 52},  {85, 14},
+                                          {150, 14}, {178, 52}, {207, 58}, {207, 100}};
   cv::fillPoly(s.truth, std::vector<std::vector<cv::Point>>{outline}, cv::Scalar(255));
   img.setTo(cv::Scalar(110 + contrast), s.truth);
   cv::GaussianBlur(img, img, cv::Size(0, 0), 0.7);
   s.gray = cv::Mat(size, CV_8UC1);
   for (int y = 0; y < size.height; ++y)
-    for (int x = 0; x < size.width; ++x) s.gray.at<uint8_t>(y, x) = cv::saturate_cast<uint8_t>(img.at<float>(y, x) + noise(rng));
+    for (int x = 0; x < size.width; ++x)
+      s.gray.at<uint8_t>(y, x) = cv::saturate_cast<uint8_t>(img.at<float>(y, x) + noise(rng));
   s.region = cv::Mat::zeros(size, CV_8UC1);
   cv::rectangle(s.region, cv::Point(8, 10), cv::Point(211, 104), cv::Scalar(255), cv::FILLED);
   return s;

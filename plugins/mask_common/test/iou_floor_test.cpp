@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
-
 #include <opencv2/imgcodecs.hpp>
 
 #include "beslam/mask_common/mask_builder.hpp"
@@ -120,4 +119,3 @@ TEST(IouFloors, PerturbedBoxesLidarHelps) {
   EXPECT_GT(median(iou.at("lidar_box")), median(iou.at("box")));
   EXPECT_GE(median(iou.at("lidar_contour")), 0.80);
 }
-

@@ -1,16 +1,16 @@
 // The LiDAR chain against KITTI 000008's calibration, point masks, malformed calibration input.
-#include <gtest/gtest.h>
+#include "beslam/mask_common/lidar.hpp"
 
-#include <algorithm>
-#include <cstdlib>
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <opencv2/imgcodecs.hpp>
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 
-#include "beslam/mask_common/lidar.hpp"
 #include "kitti_data.hpp"
 
 namespace fs = std::filesystem;
@@ -113,7 +113,8 @@ std::string sequenceWithCalib(const std::string& name, const std::string& calib)
 
 int runTool(const std::string& args, std::string& err) {
   const std::string log = (fs::temp_directory_path() / ("mask_bench_err" + std::to_string(::getpid()))).string();
-  const int rc = std::system((std::string(BESLAM_BINARY_DIR) + "/bin/mask_bench " + args + " >/dev/null 2>" + log).c_str());
+  const int rc =
+      std::system((std::string(BESLAM_BINARY_DIR) + "/bin/mask_bench " + args + " >/dev/null 2>" + log).c_str());
   std::ifstream in(log);
   err.assign(std::istreambuf_iterator<char>(in), {});
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
@@ -127,10 +128,13 @@ TEST(MalformedCalibration, ToolNamesTheFileAndLine) {
   struct Case {
     std::string name, calib, expect;
   } cases[] = {
-      {"short_row", "P0: 7 0 3 0 0 7 2\nP1: " + P + "\nP2: " + P + "\nP3: " + P + "\nR0_rect: 1 0 0 0 1 0 0 0 1\n", "calib.txt:1"},
-      {"not_number", "P0: " + P + "\nP1: " + P + "\nP2: " + P + "\nP3: " + P + "\nR0_rect: 1 0 0 0 1 0 0 0 x\n", "calib.txt:5"},
+      {"short_row", "P0: 7 0 3 0 0 7 2\nP1: " + P + "\nP2: " + P + "\nP3: " + P + "\nR0_rect: 1 0 0 0 1 0 0 0 1\n",
+       "calib.txt:1"},
+      {"not_number", "P0: " + P + "\nP1: " + P + "\nP2: " + P + "\nP3: " + P + "\nR0_rect: 1 0 0 0 1 0 0 0 x\n",
+       "calib.txt:5"},
       {"no_r0", "P0: " + P + "\nP1: " + P + "\nP2: " + P + "\nP3: " + P + "\n", "calib.txt"},
-      {"no_lidar", "P0: " + P + "\nP1: " + P + "\nP2: " + P + "\nP3: " + P + "\nR0_rect: 1 0 0 0 1 0 0 0 1\n", "Tr_velo_to_cam"},
+      {"no_lidar", "P0: " + P + "\nP1: " + P + "\nP2: " + P + "\nP3: " + P + "\nR0_rect: 1 0 0 0 1 0 0 0 1\n",
+       "Tr_velo_to_cam"},
   };
   for (const Case& c : cases) {
     const std::string seq = sequenceWithCalib(c.name, c.calib);

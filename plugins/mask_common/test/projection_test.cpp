@@ -19,8 +19,8 @@ Intrinsics camera() {
   return K;
 }
 
-beslam_box3d box(double x, double y, double z, double l, double w, double h, double yaw, int motion = BESLAM_MOTION_DYNAMIC,
-                 int id = -1) {
+beslam_box3d box(double x, double y, double z, double l, double w, double h, double yaw,
+                 int motion = BESLAM_MOTION_DYNAMIC, int id = -1) {
   beslam_box3d b = sdk::newBox();
   b.center_cam[0] = x, b.center_cam[1] = y, b.center_cam[2] = z;
   b.size[0] = l, b.size[1] = w, b.size[2] = h;
@@ -32,7 +32,8 @@ beslam_box3d box(double x, double y, double z, double l, double w, double h, dou
 
 cv::Rect2f bounds(const std::vector<cv::Point2f>& p) {
   float u0 = 1e9f, v0 = 1e9f, u1 = -1e9f, v1 = -1e9f;
-  for (const auto& q : p) u0 = std::min(u0, q.x), u1 = std::max(u1, q.x), v0 = std::min(v0, q.y), v1 = std::max(v1, q.y);
+  for (const auto& q : p)
+    u0 = std::min(u0, q.x), u1 = std::max(u1, q.x), v0 = std::min(v0, q.y), v1 = std::max(v1, q.y);
   return {u0, v0, u1 - u0, v1 - v0};
 }
 
@@ -120,7 +121,8 @@ TEST(Labels, DynamicStaticAndUnknownPolicy) {
   EXPECT_EQ(labelFor(box(0, 0, 5, 1, 1, 1, 0, BESLAM_MOTION_UNKNOWN, 7), UnknownPolicy::Dynamic), BESLAM_LABEL_DYNAMIC);
   EXPECT_EQ(labelFor(box(0, 0, 5, 1, 1, 1, 0, BESLAM_MOTION_UNKNOWN, 7), UnknownPolicy::Static), 1007);
   EXPECT_EQ(labelFor(box(0, 0, 5, 1, 1, 1, 0, BESLAM_MOTION_UNKNOWN, 7), UnknownPolicy::Skip), std::nullopt);
-  EXPECT_EQ(labelFor(box(0, 0, 5, 1, 1, 1, 0, BESLAM_MOTION_STATIC, 70000), UnknownPolicy::Dynamic), BESLAM_LABEL_DYNAMIC);
+  EXPECT_EQ(labelFor(box(0, 0, 5, 1, 1, 1, 0, BESLAM_MOTION_STATIC, 70000), UnknownPolicy::Dynamic),
+            BESLAM_LABEL_DYNAMIC);
   EXPECT_THROW(parseUnknownPolicy("maybe"), std::invalid_argument);
 }
 
@@ -128,11 +130,12 @@ TEST(Painting, NearerObjectsWinAndLabelsAreWritten) {
   const beslam_box3d far_static = box(0, 0, 20, 4, 2, 1.5, 0, BESLAM_MOTION_STATIC, 3);
   const beslam_box3d near_dynamic = box(0.5, 0, 10, 1, 1, 1.5, 0, BESLAM_MOTION_DYNAMIC, 4);
   MaskBuilder builder(camera(), std::nullopt, MaskOptions{});
-  for (const auto& order : {std::vector<beslam_box3d>{far_static, near_dynamic}, std::vector<beslam_box3d>{near_dynamic, far_static}}) {
+  for (const auto& order :
+       {std::vector<beslam_box3d>{far_static, near_dynamic}, std::vector<beslam_box3d>{near_dynamic, far_static}}) {
     cv::Mat mask = cv::Mat::zeros(360, 1200, CV_16UC1);
     builder.generate(cv::Mat(), beslam_point_cloud_view{}, order, mask);
     EXPECT_EQ(mask.at<uint16_t>(180, 635), BESLAM_LABEL_DYNAMIC);  // the near box's centre (u = 600 + 35)
-    EXPECT_EQ(mask.at<uint16_t>(180, 560), 1003);                   // far box only
+    EXPECT_EQ(mask.at<uint16_t>(180, 560), 1003);                  // far box only
     EXPECT_EQ(mask.at<uint16_t>(20, 20), 0);
   }
 }
@@ -151,5 +154,6 @@ TEST(Builder, RejectsInvalidCameraAndMissingExtrinsics) {
   EXPECT_THROW(ok.generate(cv::Mat(), beslam_point_cloud_view{}, {nan_box}, mask), std::invalid_argument);
   // An image of another size than the camera's.
   const cv::Mat small(100, 200, CV_8UC1, cv::Scalar(0));
-  EXPECT_THROW(ok.generate(small, beslam_point_cloud_view{}, {box(0, 0, 10, 4, 2, 1.5, 0)}, mask), std::invalid_argument);
+  EXPECT_THROW(ok.generate(small, beslam_point_cloud_view{}, {box(0, 0, 10, 4, 2, 1.5, 0)}, mask),
+               std::invalid_argument);
 }

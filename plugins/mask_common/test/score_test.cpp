@@ -1,22 +1,21 @@
 // Scoring written masks against instance masks in the synthetic sequence layout.
+#include "beslam/mask_common/score.hpp"
+
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-
-#include "beslam/mask_common/score.hpp"
 
 namespace fs = std::filesystem;
 using namespace beslam::mask;
 
 TEST(Score, ObjectIouUsesStaticIdsAndDynamicComponents) {
   cv::Mat inst = cv::Mat::zeros(50, 100, CV_16UC1), pred = cv::Mat::zeros(50, 100, CV_16UC1);
-  inst(cv::Rect(10, 10, 20, 20)).setTo(3);  // parked car 3
-  inst(cv::Rect(60, 10, 20, 20)).setTo(4);  // moving car 4
+  inst(cv::Rect(10, 10, 20, 20)).setTo(3);     // parked car 3
+  inst(cv::Rect(60, 10, 20, 20)).setTo(4);     // moving car 4
   pred(cv::Rect(10, 10, 20, 10)).setTo(1003);  // half of car 3
   pred(cv::Rect(60, 10, 20, 20)).setTo(1);     // all of car 4 ...
   pred(cv::Rect(90, 40, 5, 5)).setTo(1);       // ... and an unrelated dynamic blob (not counted)

@@ -67,13 +67,16 @@ TEST(SimIou, DynamicStreetFloors) {
       cv::Mat mask = cv::Mat::zeros(r.grey.size(), CV_16UC1);
       builder.generate(r.grey, view, boxes, mask);
       for (const sim::ObjectLabel& l : r.labels) {
-        if ((l.type != "Car" && l.type != "Van") || l.occluded != 0 || l.truncated > 0.1 || l.location.norm() > 30) continue;
+        if ((l.type != "Car" && l.type != "Van") || l.occluded != 0 || l.truncated > 0.1 || l.location.norm() > 30)
+          continue;
         if (cv::countNonZero(r.instance == l.track_id) < 50) continue;
         iou[name].push_back(objectIou(mask, r.instance, l.track_id));
       }
     }
   }
-  for (const auto& [name, v] : iou) std::printf("beslam synth dynamic_street  %-14s objects %3zu  median IoU %.3f\n", name.c_str(), v.size(), median(v));
+  for (const auto& [name, v] : iou)
+    std::printf("beslam synth dynamic_street  %-14s objects %3zu  median IoU %.3f\n", name.c_str(), v.size(),
+                median(v));
   ASSERT_GE(iou["box"].size(), 15u);
   EXPECT_GE(median(iou["lidar_contour"]), 0.80);
   EXPECT_GE(median(iou["lidar_contour"]), median(iou["box"]) + 0.05);

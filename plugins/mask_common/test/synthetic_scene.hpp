@@ -4,14 +4,13 @@
 // against the same geometry. Deterministic for a given seed.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <opencv2/imgproc.hpp>
 
 #include "beslam/mask_common/box_projection.hpp"
 #include "beslam/sdk/detector.hpp"
@@ -56,7 +55,8 @@ inline Car makeCar(int id, double x, double z, double yaw, double l, double w, d
 inline Eigen::Matrix<double, 3, 8> partCorners(const Car& car, const Part& p) {
   Eigen::Matrix<double, 3, 8> c;
   for (int i = 0; i < 8; ++i)
-    c.col(i) = Eigen::Vector3d((i & 1) ? p.hi.x() : p.lo.x(), (i & 2) ? p.hi.y() : p.lo.y(), (i & 4) ? p.hi.z() : p.lo.z());
+    c.col(i) =
+        Eigen::Vector3d((i & 1) ? p.hi.x() : p.lo.x(), (i & 2) ? p.hi.y() : p.lo.y(), (i & 4) ? p.hi.z() : p.lo.z());
   return sdk::boxPose(car.box) * c;
 }
 
@@ -64,9 +64,9 @@ struct Scene {
   Intrinsics K;
   Eigen::Isometry3d T_cam_lidar = Eigen::Isometry3d::Identity();
   std::vector<Car> cars;
-  cv::Mat gray;                // CV_8UC1
-  cv::Mat instance;            // CV_16UC1 track ids
-  std::vector<float> lidar;    // x y z i, LiDAR frame
+  cv::Mat gray;              // CV_8UC1
+  cv::Mat instance;          // CV_16UC1 track ids
+  std::vector<float> lidar;  // x y z i, LiDAR frame
 };
 
 inline Intrinsics kittiIntrinsics() {
@@ -186,7 +186,8 @@ inline void scan(Scene& s, double ground_y = 1.65, double az_step_deg = 0.2) {
         }
       if (best > 80) continue;
       const Eigen::Vector3d pl = best * dl;
-      s.lidar.insert(s.lidar.end(), {static_cast<float>(pl.x()), static_cast<float>(pl.y()), static_cast<float>(pl.z()), 0.5f});
+      s.lidar.insert(s.lidar.end(),
+                     {static_cast<float>(pl.x()), static_cast<float>(pl.y()), static_cast<float>(pl.z()), 0.5f});
     }
   }
 }
@@ -201,9 +202,13 @@ inline Scene street(uint32_t seed, int variant) {
   const double side = (variant % 2) ? 1 : -1;
   // Parked, one per side at staggered depths (left and right), plus one ahead (driving).
   const double z1 = 8 + 4 * u(rng) + variant, z2 = 14 + 6 * u(rng) + variant;
-  s.cars.push_back(makeCar(id++, side * (3.6 + 0.4 * u(rng)), z1, M_PI / 2 + 0.05 * (u(rng) - 0.5), 4.2, 1.75, 1.5, 170, BESLAM_MOTION_STATIC));
-  s.cars.push_back(makeCar(id++, -side * (3.8 + 0.4 * u(rng)), z2, -M_PI / 2 + 0.1 * (u(rng) - 0.5), 4.5, 1.8, 1.45, 60, BESLAM_MOTION_STATIC));
-  s.cars.push_back(makeCar(id++, 0.3 * (u(rng) - 0.5), 12 + 10 * u(rng), M_PI / 2 + 0.2 * (u(rng) - 0.5) + (variant % 3) * 0.5, 4.0, 1.7, 1.5, 210, BESLAM_MOTION_DYNAMIC));
+  s.cars.push_back(makeCar(id++, side * (3.6 + 0.4 * u(rng)), z1, M_PI / 2 + 0.05 * (u(rng) - 0.5), 4.2, 1.75, 1.5, 170,
+                           BESLAM_MOTION_STATIC));
+  s.cars.push_back(makeCar(id++, -side * (3.8 + 0.4 * u(rng)), z2, -M_PI / 2 + 0.1 * (u(rng) - 0.5), 4.5, 1.8, 1.45, 60,
+                           BESLAM_MOTION_STATIC));
+  s.cars.push_back(makeCar(id++, 0.3 * (u(rng) - 0.5), 12 + 10 * u(rng),
+                           M_PI / 2 + 0.2 * (u(rng) - 0.5) + (variant % 3) * 0.5, 4.0, 1.7, 1.5, 210,
+                           BESLAM_MOTION_DYNAMIC));
   render(s, seed);
   scan(s);
   return s;

@@ -18,12 +18,11 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "beslam/datasets/image_io.hpp"
 #include "beslam/datasets/kitti_calib.hpp"
@@ -44,7 +43,8 @@ struct Usage : std::runtime_error {
 
 const char* kUsage =
     "usage: mask_bench score --masks DIR --sequence DIR [filters] [--csv FILE]\n"
-    "       mask_bench generate --sequence DIR --out DIR --variant box|box_contour|lidar_box|lidar_points|lidar_contour\n"
+    "       mask_bench generate --sequence DIR --out DIR --variant "
+    "box|box_contour|lidar_box|lidar_points|lidar_contour\n"
     "                           [--first N] [--last N] [--overlay DIR] [--perturb-m M] [--perturb-deg D]\n"
     "                           [filters] [--csv FILE]\n"
     "filters: --max-distance M (30) --max-occlusion N (0) --max-truncation F (0.1) --min-pixels N (50)\n";
@@ -65,15 +65,16 @@ int32_t classOf(const std::string& type) {
 
 void printSummary(const mask::ScoreSummary& s, const std::string& csv) {
   std::cout << std::fixed << std::setprecision(4) << "frames: " << s.frames << "\nobjects: " << s.objects.size()
-            << "\nmedian IoU: " << s.median_iou << "\nmean IoU: " << s.mean_iou << "\n10th percentile IoU: " << s.p10_iou
-            << "\nlabels right (dynamic/static): " << s.label_correct << "/" << s.label_checked << "\n";
+            << "\nmedian IoU: " << s.median_iou << "\nmean IoU: " << s.mean_iou
+            << "\n10th percentile IoU: " << s.p10_iou << "\nlabels right (dynamic/static): " << s.label_correct << "/"
+            << s.label_checked << "\n";
   if (!csv.empty()) {
     std::ofstream out(csv);
     if (!out) throw std::runtime_error(csv + ": cannot write");
     out << "frame,track_id,distance,moving,predicted_label,gt_pixels,iou\n";
     for (const auto& o : s.objects)
-      out << o.frame << ',' << o.track_id << ',' << o.distance << ',' << (o.moving ? 1 : 0) << ',' << o.predicted_label << ','
-          << o.gt_pixels << ',' << o.iou << '\n';
+      out << o.frame << ',' << o.track_id << ',' << o.distance << ',' << (o.moving ? 1 : 0) << ',' << o.predicted_label
+          << ',' << o.gt_pixels << ',' << o.iou << '\n';
   }
 }
 
@@ -95,8 +96,9 @@ int run(const std::vector<std::string>& args) {
       opt[a.substr(2)] = args[++i];
     }
   }
-  static const std::vector<std::string> known = {"masks", "sequence", "out", "variant", "overlay", "perturb-m", "perturb-deg", "first", "last", "csv",
-                                                 "max-distance", "max-occlusion", "max-truncation", "min-pixels"};
+  static const std::vector<std::string> known = {
+      "masks", "sequence", "out", "variant",      "overlay",       "perturb-m",      "perturb-deg",
+      "first", "last",     "csv", "max-distance", "max-occlusion", "max-truncation", "min-pixels"};
   for (const auto& [k, v] : opt)
     if (std::find(known.begin(), known.end(), k) == known.end()) throw Usage("unknown option --" + k);
   auto num = [&opt](const std::string& k, double def) {
@@ -161,7 +163,8 @@ int run(const std::vector<std::string>& args) {
   mask::Intrinsics K;
   K.fx = cam.fx, K.fy = cam.fy, K.cx = cam.cx, K.cy = cam.cy, K.width = cam.width, K.height = cam.height;
   const std::optional<Eigen::Isometry3d> T = datasets::T_cami_velo(calib, cam_index);
-  if (mo.use_lidar && !T) throw std::runtime_error((seq / "calib.txt").string() + ": no Tr_velo_to_cam for a LiDAR variant");
+  if (mo.use_lidar && !T)
+    throw std::runtime_error((seq / "calib.txt").string() + ": no Tr_velo_to_cam for a LiDAR variant");
   const mask::MaskBuilder builder(K, T, mo);
 
   std::string label_file;
@@ -190,7 +193,8 @@ int run(const std::vector<std::string>& args) {
       b.class_id = classOf(l.object.type);
       b.track_id = static_cast<int32_t>(l.track_id);
       const auto it = moving.find({frame, l.track_id});
-      b.motion_state = it == moving.end() ? BESLAM_MOTION_UNKNOWN : (it->second ? BESLAM_MOTION_DYNAMIC : BESLAM_MOTION_STATIC);
+      b.motion_state =
+          it == moving.end() ? BESLAM_MOTION_UNKNOWN : (it->second ? BESLAM_MOTION_DYNAMIC : BESLAM_MOTION_STATIC);
       b.center_cam[0] = l.object.p_cam_bottom.x();
       b.center_cam[1] = l.object.p_cam_bottom.y() - l.object.h / 2;
       b.center_cam[2] = l.object.p_cam_bottom.z();

@@ -5,8 +5,8 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "beslam/mask_common/lidar.hpp"
 #include "../../mask_common/test/kitti_data.hpp"
+#include "beslam/mask_common/lidar.hpp"
 
 using namespace beslam;
 using namespace beslam::mask;
@@ -44,8 +44,9 @@ TEST(KittiRefine, PerturbedBoxesMoveBackToTheLabels) {
     }
   }
   ASSERT_EQ(n, 48);
-  std::printf("KITTI 000008, %d perturbed boxes: centre error %.3f -> %.3f m, yaw error %.2f -> %.2f deg, %d improved\n", n,
-              before_t / n, after_t / n, before_r / n * 180 / M_PI, after_r / n * 180 / M_PI, improved);
+  std::printf(
+      "KITTI 000008, %d perturbed boxes: centre error %.3f -> %.3f m, yaw error %.2f -> %.2f deg, %d improved\n", n,
+      before_t / n, after_t / n, before_r / n * 180 / M_PI, after_r / n * 180 / M_PI, improved);
   // Floors below the measured 0.181 m / 5.16 deg (cars 0, truncated 0.88, and 4, 39 returns at 33 m, keep
   // their input pose or yaw by design).
   EXPECT_LT(after_t / n, 0.6 * before_t / n);

@@ -1,14 +1,14 @@
 // mask_box and mask_lidar through the C ABI, as the host loads them: descriptors, configuration errors,
 // labels written into the host's buffer, LiDAR-less frames.
-#include <gtest/gtest.h>
+#include "beslam/plugin.h"
 
 #include <dlfcn.h>
+#include <gtest/gtest.h>
 
 #include <cstring>
 #include <map>
 #include <string>
 
-#include "beslam/plugin.h"
 #include "beslam/sdk/views.hpp"
 
 namespace {
@@ -52,9 +52,12 @@ struct Config {
       v.key = f.key;
       v.type = f.type;
       const std::string& t = texts[i];
-      if (f.type == BESLAM_CONFIG_BOOL) v.number = t == "true" ? 1 : 0;
-      else if (f.type == BESLAM_CONFIG_INT || f.type == BESLAM_CONFIG_DOUBLE) v.number = std::stod(t);
-      else v.text = t.c_str();
+      if (f.type == BESLAM_CONFIG_BOOL)
+        v.number = t == "true" ? 1 : 0;
+      else if (f.type == BESLAM_CONFIG_INT || f.type == BESLAM_CONFIG_DOUBLE)
+        v.number = std::stod(t);
+      else
+        v.text = t.c_str();
       values.push_back(v);
     }
   }
@@ -104,7 +107,8 @@ TEST(Plugins, WriteLabelsThroughTheAbi) {
     beslam_frame frame{};
     frame.struct_size = sizeof(frame);
     frame.gray = {gray.data(), 1200, 360, 1200, BESLAM_PIXEL_GRAY8};
-    const beslam_box3d boxes[] = {box(5, BESLAM_MOTION_STATIC, -3), box(6, BESLAM_MOTION_DYNAMIC, 3), box(7, BESLAM_MOTION_UNKNOWN, 0)};
+    const beslam_box3d boxes[] = {box(5, BESLAM_MOTION_STATIC, -3), box(6, BESLAM_MOTION_DYNAMIC, 3),
+                                  box(7, BESLAM_MOTION_UNKNOWN, 0)};
     const beslam_box_list list{boxes, 3, sizeof(beslam_box3d)};
     std::vector<uint16_t> mask(1200 * 360, 0);
     beslam_mask_buffer buf{mask.data(), 1200, 360, 2400, 0};

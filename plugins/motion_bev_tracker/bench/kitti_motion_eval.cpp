@@ -128,7 +128,8 @@ EvalCounts evaluateLoaded(const EvalOptions& o, const SequenceData& data) {
   for (int64_t f = 0; f < n_frames; ++f) {
     std::vector<beslam_box3d> boxes = table.at(f);
     const auto t0 = std::chrono::steady_clock::now();
-    const std::vector<Decision> decisions = tracker.update(static_cast<double>(f) * o.frame_dt, poses.poses[static_cast<size_t>(f)], boxes);
+    const std::vector<Decision> decisions =
+        tracker.update(static_cast<double>(f) * o.frame_dt, poses.poses[static_cast<size_t>(f)], boxes);
     for (size_t i = 0; i < boxes.size(); ++i)
       boxes[i].track_id = decisions[i].track_id, boxes[i].motion_state = decisions[i].motion_state;
     c.frame_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
@@ -152,7 +153,8 @@ EvalCounts evaluateLoaded(const EvalOptions& o, const SequenceData& data) {
         }
       const std::vector<int> a = solveAssignment(cost, static_cast<int>(gt.size()), static_cast<int>(cars.size()));
       for (size_t g = 0; g < gt.size(); ++g)
-        if (a[g] >= 0 && cost[g * cars.size() + static_cast<size_t>(a[g])] < kFar) label_to_det[g] = static_cast<int>(cars[static_cast<size_t>(a[g])]);
+        if (a[g] >= 0 && cost[g * cars.size() + static_cast<size_t>(a[g])] < kFar)
+          label_to_det[g] = static_cast<int>(cars[static_cast<size_t>(a[g])]);
     }
     for (size_t g = 0; g < gt.size(); ++g) {
       const LabelBox& l = gt[g];
@@ -167,14 +169,17 @@ EvalCounts evaluateLoaded(const EvalOptions& o, const SequenceData& data) {
       if (o.trace && ((truth == Truth::moving && state != BESLAM_MOTION_DYNAMIC) ||
                       (truth == Truth::parked && state == BESLAM_MOTION_DYNAMIC))) {
         const Decision& d = decisions[static_cast<size_t>(label_to_det[g])];
-        *o.trace << seq << " frame " << f << " label " << l.track_id << " truth " << (truth == Truth::moving ? "moving" : "parked")
-                 << " " << truth_speed << " m/s, called " << state << " track " << d.track_id << " speed " << d.speed
-                 << " +- " << d.speed_sigma << " range " << d.range << "\n";
+        *o.trace << seq << " frame " << f << " label " << l.track_id << " truth "
+                 << (truth == Truth::moving ? "moving" : "parked") << " " << truth_speed << " m/s, called " << state
+                 << " track " << d.track_id << " speed " << d.speed << " +- " << d.speed_sigma << " range " << d.range
+                 << "\n";
       }
       if (truth == Truth::moving) {
         ++c.moving;
-        if (state == BESLAM_MOTION_DYNAMIC) ++c.tp;
-        else ++c.fn;
+        if (state == BESLAM_MOTION_DYNAMIC)
+          ++c.tp;
+        else
+          ++c.fn;
         if (state == BESLAM_MOTION_STATIC) ++c.moving_static;
         if (state == BESLAM_MOTION_UNKNOWN) ++c.moving_unknown;
       } else {

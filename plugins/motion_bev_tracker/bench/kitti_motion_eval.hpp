@@ -24,11 +24,11 @@
 namespace beslam::motion {
 
 struct EvalOptions {
-  std::string root;                       // .../kitti/tracking/training
+  std::string root;  // .../kitti/tracking/training
   std::string detections = "det_pointrcnn";
   std::string poses = "ego_poses_orbslam3";
   std::string labels = "label_02";
-  double min_score = 0.8;                 // on sigmoid(PointRCNN logit), as configs/kitti_tracking_motion.yaml
+  double min_score = 0.8;  // on sigmoid(PointRCNN logit), as configs/kitti_tracking_motion.yaml
   Params params;
   double moving_speed = 1.0, parked_speed = 0.3;
   int half_window = 5, min_span = 6;
@@ -36,7 +36,7 @@ struct EvalOptions {
   double match_distance = 2.0;
   double max_range = 40.0;
   int warmup = 3;
-  std::ostream* trace = nullptr;          // when set: one line per wrongly called scored pair
+  std::ostream* trace = nullptr;  // when set: one line per wrongly called scored pair
 };
 
 struct EvalCounts {
@@ -50,7 +50,10 @@ struct EvalCounts {
   void add(const EvalCounts& o);
   double precision() const { return tp + fp ? double(tp) / double(tp + fp) : 0.0; }
   double recall() const { return tp + fn ? double(tp) / double(tp + fn) : 0.0; }
-  double f1() const { const double p = precision(), r = recall(); return p + r > 0 ? 2 * p * r / (p + r) : 0.0; }
+  double f1() const {
+    const double p = precision(), r = recall();
+    return p + r > 0 ? 2 * p * r / (p + r) : 0.0;
+  }
   double movingCalledStatic() const { return moving ? double(moving_static) / double(moving) : 0.0; }
   double parkedCalledDynamic() const { return parked ? double(parked_dynamic) / double(parked) : 0.0; }
   double medianMs() const;

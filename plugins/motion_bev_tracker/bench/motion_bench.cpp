@@ -44,28 +44,48 @@ void setParam(beslam::motion::Params& p, const std::string& kv) {
   const auto eq = kv.find('=');
   if (eq == std::string::npos) throw std::invalid_argument("--set expects key=value, got " + kv);
   const std::string k = kv.substr(0, eq), v = kv.substr(eq + 1);
-  std::map<std::string, double*> d = {
-      {"gate", &p.gate}, {"gate_per_m", &p.gate_per_m}, {"min_iou", &p.min_iou}, {"accel_sigma", &p.accel_sigma},
-      {"pos_sigma", &p.pos_sigma}, {"pos_sigma_per_m", &p.pos_sigma_per_m}, {"velocity_sigma", &p.velocity_sigma}, {"init_velocity_sigma", &p.init_velocity_sigma},
-      {"ego_speed_noise", &p.ego_speed_noise}, {"ego_turn_noise", &p.ego_turn_noise},
-      {"max_miss_time", &p.max_miss_time}, {"window_dynamic", &p.window_dynamic}, {"window_static", &p.window_static},
-      {"dynamic_speed", &p.dynamic_speed}, {"static_speed", &p.static_speed},
-      {"z_dynamic", &p.z_dynamic}, {"z_static", &p.z_static}, {"max_range", &p.max_range}, {"max_residual", &p.max_residual}, {"displacement_margin", &p.displacement_margin}};
-  std::map<std::string, int*> i = {{"min_observations", &p.min_observations}, {"start_frames", &p.start_frames},
-                                   {"stop_dwell", &p.stop_dwell}, {"anchor_frames", &p.anchor_frames}};
-  if (k == "association") p.association = v;
-  else if (d.count(k)) *d[k] = std::stod(v);
-  else if (i.count(k)) *i[k] = std::stoi(v);
-  else throw std::invalid_argument("unknown tracker parameter " + k);
+  std::map<std::string, double*> d = {{"gate", &p.gate},
+                                      {"gate_per_m", &p.gate_per_m},
+                                      {"min_iou", &p.min_iou},
+                                      {"accel_sigma", &p.accel_sigma},
+                                      {"pos_sigma", &p.pos_sigma},
+                                      {"pos_sigma_per_m", &p.pos_sigma_per_m},
+                                      {"velocity_sigma", &p.velocity_sigma},
+                                      {"init_velocity_sigma", &p.init_velocity_sigma},
+                                      {"ego_speed_noise", &p.ego_speed_noise},
+                                      {"ego_turn_noise", &p.ego_turn_noise},
+                                      {"max_miss_time", &p.max_miss_time},
+                                      {"window_dynamic", &p.window_dynamic},
+                                      {"window_static", &p.window_static},
+                                      {"dynamic_speed", &p.dynamic_speed},
+                                      {"static_speed", &p.static_speed},
+                                      {"z_dynamic", &p.z_dynamic},
+                                      {"z_static", &p.z_static},
+                                      {"max_range", &p.max_range},
+                                      {"max_residual", &p.max_residual},
+                                      {"displacement_margin", &p.displacement_margin}};
+  std::map<std::string, int*> i = {{"min_observations", &p.min_observations},
+                                   {"start_frames", &p.start_frames},
+                                   {"stop_dwell", &p.stop_dwell},
+                                   {"anchor_frames", &p.anchor_frames}};
+  if (k == "association")
+    p.association = v;
+  else if (d.count(k))
+    *d[k] = std::stod(v);
+  else if (i.count(k))
+    *i[k] = std::stoi(v);
+  else
+    throw std::invalid_argument("unknown tracker parameter " + k);
 }
 
 void row(const std::string& name, const beslam::motion::EvalCounts& c) {
-  std::printf("| %-7s | %6lld | %6lld | %6lld | %6lld | %5.3f | %5.3f | %5.3f | %6.2f%% | %6.2f%% | %5.1f%% | %7.4f | %7.4f |\n",
-              name.c_str(), static_cast<long long>(c.frames), static_cast<long long>(c.boxes),
-              static_cast<long long>(c.moving), static_cast<long long>(c.parked), c.precision(), c.recall(), c.f1(),
-              100 * c.movingCalledStatic(), 100 * c.parkedCalledDynamic(),
-              c.labels_scorable ? 100.0 * double(c.labels_matched) / double(c.labels_scorable) : 0.0, c.medianMs(),
-              c.meanMs());
+  std::printf(
+      "| %-7s | %6lld | %6lld | %6lld | %6lld | %5.3f | %5.3f | %5.3f | %6.2f%% | %6.2f%% | %5.1f%% | %7.4f | %7.4f "
+      "|\n",
+      name.c_str(), static_cast<long long>(c.frames), static_cast<long long>(c.boxes), static_cast<long long>(c.moving),
+      static_cast<long long>(c.parked), c.precision(), c.recall(), c.f1(), 100 * c.movingCalledStatic(),
+      100 * c.parkedCalledDynamic(),
+      c.labels_scorable ? 100.0 * double(c.labels_matched) / double(c.labels_scorable) : 0.0, c.medianMs(), c.meanMs());
 }
 
 std::vector<std::string> split(const std::string& s, char sep) {
@@ -121,8 +141,12 @@ size_t choose(const std::vector<std::vector<EvalCounts>>& counts, const std::vec
 }
 
 void header() {
-  std::printf("| seq     | frames |  boxes | moving | parked | prec  | rec   | F1    | mov->st | park->dyn | matched | med ms  | mean ms |\n");
-  std::printf("|---------|-------:|-------:|-------:|-------:|------:|------:|------:|--------:|----------:|--------:|--------:|--------:|\n");
+  std::printf(
+      "| seq     | frames |  boxes | moving | parked | prec  | rec   | F1    | mov->st | park->dyn | matched | med ms  "
+      "| mean ms |\n");
+  std::printf(
+      "|---------|-------:|-------:|-------:|-------:|------:|------:|------:|--------:|----------:|--------:|--------:"
+      "|--------:|\n");
 }
 
 }  // namespace
@@ -142,21 +166,27 @@ int main(int argc, char** argv) {
         if (a + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
         return argv[++a];
       };
-      if (arg == "--root") o.root = next();
-      else if (arg == "--sequences") sequences = next();
-      else if (arg == "--min-score") o.min_score = std::stod(next());
-      else if (arg == "--max-range") o.max_range = std::stod(next());
-      else if (arg == "--set") setParam(o.params, next());
-      else if (arg == "--trace") o.trace = &std::cerr;
-      else if (arg == "--loo") loo = true;
+      if (arg == "--root")
+        o.root = next();
+      else if (arg == "--sequences")
+        sequences = next();
+      else if (arg == "--min-score")
+        o.min_score = std::stod(next());
+      else if (arg == "--max-range")
+        o.max_range = std::stod(next());
+      else if (arg == "--set")
+        setParam(o.params, next());
+      else if (arg == "--trace")
+        o.trace = &std::cerr;
+      else if (arg == "--loo")
+        loo = true;
       else if (arg == "--grid") {
         const std::string kv = next();
         const auto eq = kv.find('=');
         if (eq == std::string::npos) throw std::invalid_argument("--grid expects key=v1,v2,..., got " + kv);
         grid.emplace_back(kv.substr(0, eq), split(kv.substr(eq + 1), ','));
         if (grid.back().second.empty()) throw std::invalid_argument("--grid " + kv + " has no values");
-      }
-      else if (arg == "-h" || arg == "--help") {
+      } else if (arg == "-h" || arg == "--help") {
         std::cout << "usage: motion_bench [--root DIR] [--sequences 0000,0001] [--min-score S] [--max-range M] "
                      "[--set key=value]... [--trace] [--loo [--grid key=v1,v2,...]...]\n";
         return 0;
@@ -216,10 +246,11 @@ int main(int argc, char** argv) {
       header();
       for (const auto& [seq, c] : rows) row(seq, c);
       row("LOO", held_out);
-      std::printf("LOO pooled: F1 %.3f, moving called static %.2f%%, parked called dynamic %.2f%% "
-                  "(moving called unknown %lld, parked called unknown %lld)\n",
-                  held_out.f1(), 100 * held_out.movingCalledStatic(), 100 * held_out.parkedCalledDynamic(),
-                  static_cast<long long>(held_out.moving_unknown), static_cast<long long>(held_out.parked_unknown));
+      std::printf(
+          "LOO pooled: F1 %.3f, moving called static %.2f%%, parked called dynamic %.2f%% "
+          "(moving called unknown %lld, parked called unknown %lld)\n",
+          held_out.f1(), 100 * held_out.movingCalledStatic(), 100 * held_out.parkedCalledDynamic(),
+          static_cast<long long>(held_out.moving_unknown), static_cast<long long>(held_out.parked_unknown));
       const size_t on_all = choose(counts, std::vector<bool>(seqs.size(), true));
       size_t shipped = on_all;
       for (size_t g = 0; g < points.size(); ++g)
@@ -246,8 +277,8 @@ int main(int argc, char** argv) {
       all.add(c);
     }
     row("overall", all);
-    std::printf("moving called unknown: %lld, parked called unknown: %lld\n", static_cast<long long>(all.moving_unknown),
-                static_cast<long long>(all.parked_unknown));
+    std::printf("moving called unknown: %lld, parked called unknown: %lld\n",
+                static_cast<long long>(all.moving_unknown), static_cast<long long>(all.parked_unknown));
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "motion_bench: " << e.what() << "\n";

@@ -1,9 +1,9 @@
 // Google Benchmark: one tracker frame with N boxes (parked and moving cars seen from a moving camera),
 // after 20 frames of warm-up. Target: under 1 ms per frame for 50 boxes.
+#include <benchmark/benchmark.h>
+
 #include <cmath>
 #include <random>
-
-#include <benchmark/benchmark.h>
 
 #include "beslam/motion/bev_tracker.hpp"
 
@@ -18,7 +18,8 @@ std::vector<beslam_box3d> scene(int n, int k, std::mt19937_64& rng) {
     const bool moving = i % 3 == 0;
     const double x = (i % 2 ? -1.0 : 1.0) * (3.0 + 3.0 * (i % 5));
     const double z0 = 5.0 + 60.0 * i / n;
-    const double z_world = moving ? 0.8 * k + z0 + 10.0 * std::sin(0.08 * k) : z0 + 60.0 * std::floor((0.8 * k - z0 + 60.0) / 60.0);
+    const double z_world =
+        moving ? 0.8 * k + z0 + 10.0 * std::sin(0.08 * k) : z0 + 60.0 * std::floor((0.8 * k - z0 + 60.0) / 60.0);
     beslam_box3d b{};
     b.class_id = BESLAM_CLASS_CAR;
     b.track_id = -1;

@@ -155,8 +155,7 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
         bool consistent = true;
         if (n > 2) {
           double rss = 0;
-          for (size_t i = first; i < h.size(); ++i)
-            rss += (h[i].p - p_mean - v_fit * (h[i].t - t_mean)).squaredNorm();
+          for (size_t i = first; i < h.size(); ++i) rss += (h[i].p - p_mean - v_fit * (h[i].t - t_mean)).squaredNorm();
           const double var_residual = rss / (2.0 * static_cast<double>(n - 2));
           // Positions that no straight line explains (a track that jumped between objects) give no evidence.
           consistent = var_residual <= params_.max_residual * params_.max_residual * var_model;
@@ -187,8 +186,7 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
   return s;
 }
 
-void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_velocity,
-                        Decision& out) {
+void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_velocity, Decision& out) {
   const Speed dyn = fitSpeed(track, params_.window_dynamic, det_velocity, params_.velocity_sigma);
   const Speed sta = fitSpeed(track, params_.window_static, det_velocity, params_.velocity_sigma);
   // A static track also moves when its latest positions leave the place it was parked at.
@@ -204,17 +202,16 @@ void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_
     recent /= static_cast<double>(k);
     var /= static_cast<double>(k * k);
     // Pose drift since the parked position was measured: the ego-motion velocity error over that time.
-    const double drift = v_sigma / static_cast<double>(k) * std::max(0.0, t_recent / static_cast<double>(k) - track.anchor_t);
+    const double drift =
+        v_sigma / static_cast<double>(k) * std::max(0.0, t_recent / static_cast<double>(k) - track.anchor_t);
     var += drift * drift;
     const double d = (recent - track.anchor).norm();
     displaced = d > params_.z_dynamic * std::sqrt(var + track.anchor_var) + params_.displacement_margin;
   }
   const bool dynamic_evidence =
-      displaced ||
-      (dyn.valid && dyn.speed - params_.z_dynamic * dyn.sigma > params_.dynamic_speed);
+      displaced || (dyn.valid && dyn.speed - params_.z_dynamic * dyn.sigma > params_.dynamic_speed);
   const bool static_evidence =
-      !dynamic_evidence && sta.valid &&
-      sta.speed + params_.z_static * sta.sigma < params_.static_speed;
+      !dynamic_evidence && sta.valid && sta.speed + params_.z_static * sta.sigma < params_.static_speed;
   if (dynamic_evidence) {
     ++track.dynamic_run;
     track.static_run = 0;
@@ -224,8 +221,10 @@ void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_
   }  // no evidence either way: both runs continue (only contrary evidence breaks a run)
   switch (track.state) {
     case BESLAM_MOTION_UNKNOWN:
-      if (track.dynamic_run >= params_.start_frames) track.state = BESLAM_MOTION_DYNAMIC;
-      else if (static_evidence) track.state = BESLAM_MOTION_STATIC;
+      if (track.dynamic_run >= params_.start_frames)
+        track.state = BESLAM_MOTION_DYNAMIC;
+      else if (static_evidence)
+        track.state = BESLAM_MOTION_STATIC;
       break;
     case BESLAM_MOTION_STATIC:
       if (track.dynamic_run >= params_.start_frames) track.state = BESLAM_MOTION_DYNAMIC;
@@ -280,7 +279,8 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       const double span = poses_[1].first - poses_[0].first;
       const Eigen::Vector3d d = poses_[1].second.translation() - poses_[0].second.translation();
       ego_speed_ = std::hypot(d.x(), d.z()) / span;
-      ego_yaw_rate_ = Eigen::AngleAxisd(poses_[0].second.linear().transpose() * poses_[1].second.linear()).angle() / span;
+      ego_yaw_rate_ =
+          Eigen::AngleAxisd(poses_[0].second.linear().transpose() * poses_[1].second.linear()).angle() / span;
     }
   } else if (!poses_.empty() && now - poses_.back().first > params_.max_miss_time) {
     // The backend has given no pose for longer than a track may coast: an extrapolated ego pose would place
@@ -346,8 +346,8 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
         if (!compatible(boxes[i].class_id, t.class_id, params_.match_across_classes)) continue;
         const Eigen::Vector2d pred = t.x.head<2>();
         if (iou) {
-          const double o = rotatedRectIoU(p[i], yaw[i], boxes[i].size[0], boxes[i].size[1], pred, t.yaw_bev, t.length,
-                                          t.width);
+          const double o =
+              rotatedRectIoU(p[i], yaw[i], boxes[i].size[0], boxes[i].size[1], pred, t.yaw_bev, t.length, t.width);
           if (o >= params_.min_iou) cost[i * m + j] = 1.0 - o;
         } else {
           const double d = (p[i] - pred).norm();
@@ -393,7 +393,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       t->P = Eigen::Matrix4d::Zero();
       t->P(0, 0) = t->P(1, 1) = sigma[i] * sigma[i];
       t->P(2, 2) = t->P(3, 3) = vel[i] ? params_.velocity_sigma * params_.velocity_sigma
-                                        : params_.init_velocity_sigma * params_.init_velocity_sigma;
+                                       : params_.init_velocity_sigma * params_.init_velocity_sigma;
     }
     t->class_id = carLike(b.class_id) && carLike(t->class_id) ? t->class_id : b.class_id;
     t->last_t = now;
@@ -420,7 +420,8 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     const bool is_old = j < old_count;
     if (is_old && !matched[j]) {
       const double missing = now - t.last_t;
-      const double limit = t.hits < params_.min_observations ? std::min(params_.max_miss_time, 2.5 * dt) : params_.max_miss_time;
+      const double limit =
+          t.hits < params_.min_observations ? std::min(params_.max_miss_time, 2.5 * dt) : params_.max_miss_time;
       if (missing > limit + 1e-9) continue;
     }
     kept.push_back(std::move(t));

@@ -11,7 +11,9 @@ namespace {
 // with column 0 as the virtual start of each augmentation.
 std::vector<int> solveWide(const std::vector<double>& a, int n, int m, bool transposed) {
   const double inf = std::numeric_limits<double>::infinity();
-  auto at = [&](int i, int j) { return transposed ? a[static_cast<size_t>(j) * n + i] : a[static_cast<size_t>(i) * m + j]; };
+  auto at = [&](int i, int j) {
+    return transposed ? a[static_cast<size_t>(j) * n + i] : a[static_cast<size_t>(i) * m + j];
+  };
   std::vector<double> u(n + 1, 0.0), v(m + 1, 0.0), minv(m + 1);
   std::vector<int> owner(m + 1, 0), prev(m + 1, 0);
   std::vector<char> done(m + 1);

@@ -1,10 +1,10 @@
-#include <algorithm>
-#include <numeric>
-#include <random>
+#include "beslam/motion/hungarian.hpp"
 
 #include <gtest/gtest.h>
 
-#include "beslam/motion/hungarian.hpp"
+#include <algorithm>
+#include <numeric>
+#include <random>
 
 using beslam::motion::solveAssignment;
 

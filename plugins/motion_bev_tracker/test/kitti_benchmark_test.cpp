@@ -1,10 +1,10 @@
 // The motion benchmark on real data (KITTI tracking with PointRCNN detections and ORB-SLAM3 ego poses),
 // its figures asserted as floors; skipped when ../shared/data is absent. Also the benchmark's own
 // handling of malformed inputs.
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "kitti_motion_eval.hpp"
 
@@ -55,7 +55,8 @@ TEST(MotionBenchmark, AllSequencesMeetTheOverallFloors) {
   o.root = trackingRoot();
   beslam::motion::EvalCounts all;
   for (const char* seq : {"0000", "0001", "0002", "0003", "0004", "0005", "0006", "0007", "0008", "0009", "0010"}) {
-    if (!haveData(seq)) GTEST_SKIP() << "shared KITTI tracking sequence " << seq << " not found under " << trackingRoot();
+    if (!haveData(seq))
+      GTEST_SKIP() << "shared KITTI tracking sequence " << seq << " not found under " << trackingRoot();
     all.add(beslam::motion::evaluateSequence(o, seq));
   }
   expectFloors(all);
@@ -67,8 +68,7 @@ TEST(MotionBenchmark, MalformedInputsNameTheFile) {
   fs::create_directories(root / "ego_poses_orbslam3");
   fs::create_directories(root / "label_02");
   std::ofstream(root / "det_pointrcnn" / "Car" / "0000.txt") << "0,2,1,1,50,50,5.0,1.5,1.6,4.0,1.0,1.6,10.0,0.0,0.0\n";
-  std::ofstream(root / "label_02" / "0000.txt")
-      << "0 0 Car 0 0 0.0 1 1 50 50 1.5 1.6 4.0 1.0 1.6 10.0 0.0\n";
+  std::ofstream(root / "label_02" / "0000.txt") << "0 0 Car 0 0 0.0 1 1 50 50 1.5 1.6 4.0 1.0 1.6 10.0 0.0\n";
   beslam::motion::EvalOptions o;
   o.root = root.string();
   // Malformed pose file: a short row.

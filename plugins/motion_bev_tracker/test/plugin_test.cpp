@@ -1,10 +1,10 @@
 // The motion_bev_tracker plugin through the host's registry (schema, configuration errors, in-place
 // classification), and backend_pose_replay's handling of malformed pose files, as the motion pipeline
 // (configs/kitti_tracking_motion.yaml) uses both.
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "beslam/common/error.hpp"
 #include "beslam/test/plugin_harness.hpp"
@@ -115,6 +115,7 @@ TEST(MotionPoseFiles, MalformedPoseFilesAreReportedWithFileAndLine) {
     }
   }
   const auto& missing = h.config("backend_pose_replay", {{"poses", (dir / "absent.txt").string()}});
-  EXPECT_THROW(beslam::registry::BackendInstance(h.plugin("backend_pose_replay"), h.info(missing), h.log), beslam::Error);
+  EXPECT_THROW(beslam::registry::BackendInstance(h.plugin("backend_pose_replay"), h.info(missing), h.log),
+               beslam::Error);
   fs::remove_all(dir);
 }

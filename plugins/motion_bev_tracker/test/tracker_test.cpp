@@ -1,5 +1,7 @@
 // The tracker and classifier on simulated scenes: an ego camera driving through a world of parked and
 // moving cars, detections with seeded noise that grows with range (monocular-like depth error).
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <functional>
 #include <iostream>
@@ -7,8 +9,6 @@
 #include <random>
 #include <set>
 #include <tuple>
-
-#include <gtest/gtest.h>
 
 #include "beslam/motion/bev_tracker.hpp"
 
@@ -130,10 +130,10 @@ TEST(BevTracker, ParkedCarsAreStaticAndNeverDynamic) {
 
 TEST(BevTracker, DrivingCarsAreDynamicAndNeverStatic) {
   Sim sim;
-  sim.objects.push_back(driving(-3.5, 20.0, 0.0, 14.0));   // overtaking-speed car ahead, same direction
-  sim.objects.push_back(driving(3.5, 80.0, 0.0, -10.0));   // oncoming
-  sim.objects.push_back(driving(-15.0, 30.0, 6.0, 8.0));   // merging diagonally
-  sim.objects.push_back(driving(-2.0, 15.0, 0.0, 9.5));    // slow relative to ego: 1.5 m/s over ground
+  sim.objects.push_back(driving(-3.5, 20.0, 0.0, 14.0));  // overtaking-speed car ahead, same direction
+  sim.objects.push_back(driving(3.5, 80.0, 0.0, -10.0));  // oncoming
+  sim.objects.push_back(driving(-15.0, 30.0, 6.0, 8.0));  // merging diagonally
+  sim.objects.push_back(driving(-2.0, 15.0, 0.0, 9.5));   // slow relative to ego: 1.5 m/s over ground
   BevTracker tracker;
   const auto d = run(sim, tracker, 50);
   for (size_t i = 0; i < d.size(); ++i) {
@@ -182,8 +182,8 @@ TEST(BevTracker, StopAndGoFollowsTheCarWithHysteresis) {
   ASSERT_GE(dynamic_from, 90) << "car pulling out never became dynamic";
   EXPECT_LE(dynamic_from, 95 + 10) << "car pulling out became dynamic too late";
   EXPECT_EQ(countState(car, BESLAM_MOTION_STATIC, dynamic_from, 120), 0);
-  std::cout << "stop-and-go: stopped at frame 50, static from " << static_from << "; pulls out at 90 (1 m/s at 95), dynamic from "
-            << dynamic_from << "\n";
+  std::cout << "stop-and-go: stopped at frame 50, static from " << static_from
+            << "; pulls out at 90 (1 m/s at 95), dynamic from " << dynamic_from << "\n";
 }
 
 TEST(BevTracker, KeepsTracksThroughShortOcclusion) {
@@ -232,9 +232,9 @@ TEST(BevTracker, DepthNoiseGrowingWithRangeDoesNotMakeParkedCarsDynamic) {
   Params p;
   p.pos_sigma = 0.1;
   p.pos_sigma_per_m = 0.03;
-  p.z_dynamic = 3.0;       // the monocular profile (docs/motion.md): 2D-radial 3 sigma, longer static window,
-  p.window_static = 3.0;   // 3 frames of dynamic evidence (the thresholds no longer grow with range: the
-  p.start_frames = 3;      // noise model does, and white metre-scale depth noise needs one frame more)
+  p.z_dynamic = 3.0;      // the monocular profile (docs/motion.md): 2D-radial 3 sigma, longer static window,
+  p.window_static = 3.0;  // 3 frames of dynamic evidence (the thresholds no longer grow with range: the
+  p.start_frames = 3;     // noise model does, and white metre-scale depth noise needs one frame more)
   int parked_dynamic = 0, parked_static = 0, near_static = 0, near_frames = 0;
   int moving_static = 0, moving_dynamic = 0, moving_frames = 0;
   for (uint64_t seed = 1; seed <= 5; ++seed) {
@@ -316,7 +316,7 @@ TEST(BevTracker, MeasuresTheEgoMotionFromItsPoses) {
   for (int k = 0; k < 3; ++k) tracker.update(k * kDt, turningEgo(k * kDt), {});
   EXPECT_NEAR(tracker.egoSpeed(), 6.0, 0.01);  // chord of a 0.6 m arc
   EXPECT_NEAR(tracker.egoYawRate(), 0.3, 1e-9);
-  tracker.update(0.3, std::nullopt, {});       // no pose: the last ego motion is kept
+  tracker.update(0.3, std::nullopt, {});  // no pose: the last ego motion is kept
   EXPECT_NEAR(tracker.egoYawRate(), 0.3, 1e-9);
 }
 
@@ -347,7 +347,8 @@ TEST(BevTracker, EgoMotionWidensTheSpeedErrorWithTurnRateAndRange) {
   const double turning_near = sigmaAt(true, 10.0), turning_far = sigmaAt(true, 30.0);
   EXPECT_GT(straight_near, 0.0);
   EXPECT_GT(straight_far, straight_near);  // pos_sigma_per_m
-  for (auto [range, straight, turning] : {std::tuple{10.0, straight_near, turning_near}, {30.0, straight_far, turning_far}})
+  for (auto [range, straight, turning] :
+       {std::tuple{10.0, straight_near, turning_near}, {30.0, straight_far, turning_far}})
     EXPECT_NEAR(turning * turning - straight * straight, std::pow(0.05 * yaw_rate * range, 2), 1e-9) << range;
 }
 
@@ -362,7 +363,8 @@ TEST(BevTracker, ParkedCarsStayStaticSeenFromATurningEgoWithDrift) {
     for (const auto& [k, dec] : obj)
       if (dec.range < 20 && k >= 15) ++near_frames, near_static += dec.motion_state == BESLAM_MOTION_STATIC;
   }
-  std::cout << "turning ego with drift: " << frames << " parked-car frames, " << dynamic << " dynamic; within 20 m after "
+  std::cout << "turning ego with drift: " << frames << " parked-car frames, " << dynamic
+            << " dynamic; within 20 m after "
             << "1.5 s: " << near_static << " of " << near_frames << " static\n";
   EXPECT_EQ(dynamic, 0) << "parked cars called dynamic from a turning ego";
   ASSERT_GE(near_frames, 20);
@@ -430,7 +432,8 @@ TEST(BevTracker, LongPoseGapsGiveUnknownNotExtrapolation) {
     for (size_t i = 0; i < d.size(); ++i) {
       if (ids[i] == 0) EXPECT_NE(d[i].motion_state, BESLAM_MOTION_DYNAMIC) << "frame " << k;
       if (k >= 31 && k < 45) unknown_in_gap += d[i].motion_state == BESLAM_MOTION_UNKNOWN, ++boxes_in_gap;
-      if (k >= 55) EXPECT_EQ(d[i].motion_state, ids[i] == 0 ? BESLAM_MOTION_STATIC : BESLAM_MOTION_DYNAMIC) << "frame " << k;
+      if (k >= 55)
+        EXPECT_EQ(d[i].motion_state, ids[i] == 0 ? BESLAM_MOTION_STATIC : BESLAM_MOTION_DYNAMIC) << "frame " << k;
     }
   }
   ASSERT_GT(boxes_in_gap, 0);
@@ -502,6 +505,7 @@ TEST(BevGeometry, RotatedRectangleIoU) {
   const Eigen::Vector2d o(0, 0);
   EXPECT_NEAR(rotatedRectIoU(o, 0.3, 4, 2, o, 0.3, 4, 2), 1.0, 1e-12);
   EXPECT_NEAR(rotatedRectIoU(o, 0, 4, 2, Eigen::Vector2d(2, 0), 0, 4, 2), 4.0 / 12.0, 1e-12);
-  EXPECT_NEAR(rotatedRectIoU(o, 0, 2, 2, o, M_PI / 4, 2, 2), (8 * (std::sqrt(2) - 1)) / (8 - 8 * (std::sqrt(2) - 1)), 1e-9);
+  EXPECT_NEAR(rotatedRectIoU(o, 0, 2, 2, o, M_PI / 4, 2, 2), (8 * (std::sqrt(2) - 1)) / (8 - 8 * (std::sqrt(2) - 1)),
+              1e-9);
   EXPECT_EQ(rotatedRectIoU(o, 0, 4, 2, Eigen::Vector2d(10, 0), 0, 4, 2), 0.0);
 }

@@ -52,12 +52,13 @@ void AbiHarness::destroyInstance() {
 
 void AbiHarness::log(void* user, int32_t level, const char*, const char* message) {
   auto* self = static_cast<AbiHarness*>(user);
-  if (level >= BESLAM_LOG_ERROR) self->last_error_ = message;
-  else if (level == BESLAM_LOG_WARNING) self->warnings_.push_back(message);
+  if (level >= BESLAM_LOG_ERROR)
+    self->last_error_ = message;
+  else if (level == BESLAM_LOG_WARNING)
+    self->warnings_.push_back(message);
 }
 
-beslam_status AbiHarness::create(const std::map<std::string, std::string>& overrides,
-                                    const beslam_create_info& base) {
+beslam_status AbiHarness::create(const std::map<std::string, std::string>& overrides, const beslam_create_info& base) {
   destroyInstance();
   texts_.clear(), lists_.clear(), values_.clear(), last_error_.clear();
   const uint32_t n = descriptor_->config_field_count;
@@ -72,11 +73,18 @@ beslam_status AbiHarness::create(const std::map<std::string, std::string>& overr
     texts_.push_back(trimQuotes(text));
     lists_.push_back({});
     switch (f.type) {
-      case BESLAM_CONFIG_BOOL: v.number = text == "true" ? 1 : 0; break;
+      case BESLAM_CONFIG_BOOL:
+        v.number = text == "true" ? 1 : 0;
+        break;
       case BESLAM_CONFIG_INT:
-      case BESLAM_CONFIG_DOUBLE: v.number = std::stod(text); break;
-      case BESLAM_CONFIG_DOUBLE_LIST: lists_.back() = parseList(text); break;
-      default: break;
+      case BESLAM_CONFIG_DOUBLE:
+        v.number = std::stod(text);
+        break;
+      case BESLAM_CONFIG_DOUBLE_LIST:
+        lists_.back() = parseList(text);
+        break;
+      default:
+        break;
     }
     v.text = texts_.back().c_str();
     v.list = lists_.back().data();

@@ -2,9 +2,9 @@
  * Per frame the host calls predict_pose (so the motion checker can place boxes in the world frame),
  * then track with the frame's label mask and boxes. track() says in world_scale whether the world is in
  * metres (then and for every later prediction, until a track() says otherwise: a backend that resets its
- * map starts an unknown world again); while it is not, the host gives the motion checker no pose; after a keyframe the reconstructor's landmarks come
- * back through add_landmarks. finish() ends the run (final optimisation); then the host reads the
- * trajectories and map points. Frames a backend did not track are absent from its trajectories. */
+ * map starts an unknown world again); while it is not, the host gives the motion checker no pose; after a keyframe the
+ * reconstructor's landmarks come back through add_landmarks. finish() ends the run (final optimisation); then the host
+ * reads the trajectories and map points. Frames a backend did not track are absent from its trajectories. */
 #ifndef BESLAM_KINDS_BACKEND_H
 #define BESLAM_KINDS_BACKEND_H
 
@@ -22,24 +22,24 @@ extern "C" {
 #define BESLAM_KEYPOINT_MATCHED 0x1u /* matched to a map point and an inlier of the frame's pose */
 
 typedef struct beslam_keypoint {
-  float x, y;      /* pixels of the full-resolution image */
-  uint16_t label;  /* the mask label under it (BESLAM_LABEL_*; 0 without a mask) */
-  uint8_t flags;   /* BESLAM_KEYPOINT_* */
-  uint8_t octave;  /* pyramid level it was detected at */
+  float x, y;     /* pixels of the full-resolution image */
+  uint16_t label; /* the mask label under it (BESLAM_LABEL_*; 0 without a mask) */
+  uint8_t flags;  /* BESLAM_KEYPOINT_* */
+  uint8_t octave; /* pyramid level it was detected at */
 } beslam_keypoint;
 
 typedef struct beslam_track_result {
   uint32_t struct_size;
-  int32_t state;                   /* BESLAM_TRACKING_* */
-  int32_t is_keyframe;             /* 1: this frame became keyframe keyframe_id */
-  int32_t tracked_points;          /* map points matched (inliers) in this frame */
+  int32_t state;          /* BESLAM_TRACKING_* */
+  int32_t is_keyframe;    /* 1: this frame became keyframe keyframe_id */
+  int32_t tracked_points; /* map points matched (inliers) in this frame */
   int64_t keyframe_id;
-  beslam_pose T_world_cam;         /* valid when state == OK */
+  beslam_pose T_world_cam;              /* valid when state == OK */
   const beslam_stage_time* stage_times; /* instance-owned until its next call; may be NULL */
   uint32_t stage_count;
   uint32_t reserved;
   /* ABI 1.1. */
-  int32_t world_scale;             /* BESLAM_WORLD_SCALE_* of T_world_cam and of every later prediction */
+  int32_t world_scale; /* BESLAM_WORLD_SCALE_* of T_world_cam and of every later prediction */
   uint32_t counter_count;
   /* Per-frame counts the host sums into the run summary; names the host knows: "features",
    * "features_static" (keypoints on static-object labels), "tracked_static" (map points on static objects
@@ -72,8 +72,8 @@ typedef struct beslam_trajectory_list {
 
 typedef struct beslam_map_point {
   double p_world[3];
-  uint8_t color[3];   /* RGB */
-  uint8_t flags;      /* BESLAM_MAP_POINT_* (ABI 1.0 plugins leave 0) */
+  uint8_t color[3]; /* RGB */
+  uint8_t flags;    /* BESLAM_MAP_POINT_* (ABI 1.0 plugins leave 0) */
   int32_t observations;
 } beslam_map_point;
 
@@ -88,8 +88,7 @@ typedef struct beslam_backend_v1 {
   uint32_t struct_size;
   uint32_t reserved;
   /* *valid = 0 when the backend has no prediction (not initialised). */
-  beslam_status (*predict_pose)(void* instance, const beslam_frame* frame, beslam_pose* T_world_cam,
-                                int32_t* valid);
+  beslam_status (*predict_pose)(void* instance, const beslam_frame* frame, beslam_pose* T_world_cam, int32_t* valid);
   /* mask: LABEL16 view (data NULL when the pipeline has no mask generator). */
   beslam_status (*track)(void* instance, const beslam_frame* frame, const beslam_image_view* mask,
                          const beslam_box_list* boxes, beslam_track_result* result);

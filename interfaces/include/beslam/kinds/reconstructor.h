@@ -16,8 +16,7 @@ typedef struct beslam_reconstructor_v1 {
   /* keyframe: the backend's new keyframe (this frame); mask: the frame's label mask (data may be NULL).
    * *out: landmarks created or updated by this call, the instance's memory until its next call. */
   beslam_status (*reconstruct)(void* instance, const beslam_keyframe* keyframe, const beslam_frame* frame,
-                               const beslam_box_list* boxes, const beslam_image_view* mask,
-                               beslam_landmark_list* out);
+                               const beslam_box_list* boxes, const beslam_image_view* mask, beslam_landmark_list* out);
 } beslam_reconstructor_v1;
 
 #ifdef __cplusplus

@@ -14,15 +14,14 @@
 // frame waits for it. Results are the same as in the default single-threaded mode.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <opencv2/core.hpp>
 
 namespace beslam::orb {
 
@@ -35,49 +34,49 @@ struct Camera {
 // Every tunable with its default. validate() names the first violated constraint.
 struct Options {
   // Features (features/).
-  int features = 2000;                       // keypoints per frame
-  int init_features_factor = 2;              // x features while initialising
-  double scale_factor = 1.2;                 // pyramid scale step
-  int levels = 8;                            // pyramid levels
-  int fast_initial = 20;                     // FAST threshold per cell
-  int fast_fallback = 7;                     // FAST threshold of a cell that found nothing
-  int static_object_fast = 7;                // FAST threshold on static objects (label >= 1000)
-  double static_object_budget_share = 0.3;   // share of each level's budget reserved for static objects
-  double static_object_weight = 1.0;         // information multiplier of trusted (static object) points
+  int features = 2000;                      // keypoints per frame
+  int init_features_factor = 2;             // x features while initialising
+  double scale_factor = 1.2;                // pyramid scale step
+  int levels = 8;                           // pyramid levels
+  int fast_initial = 20;                    // FAST threshold per cell
+  int fast_fallback = 7;                    // FAST threshold of a cell that found nothing
+  int static_object_fast = 7;               // FAST threshold on static objects (label >= 1000)
+  double static_object_budget_share = 0.3;  // share of each level's budget reserved for static objects
+  double static_object_weight = 1.0;        // information multiplier of trusted (static object) points
   // Matching / tracking.
-  double fps = 10.0;                         // frame rate: max frames between keyframes
-  int min_tracked_inliers = 30;              // local-map inliers for tracking to be OK
-  double keyframe_ref_ratio = 0.9;           // new keyframe when tracking < ratio x reference's points
-  int keyframe_min_gap = 2;                  // frames between keyframes at least (ORB-SLAM's "mapper busy")
-  int lost_reset_max_keyframes = 5;          // lost with at most this many keyframes -> reset and re-init
+  double fps = 10.0;                 // frame rate: max frames between keyframes
+  int min_tracked_inliers = 30;      // local-map inliers for tracking to be OK
+  double keyframe_ref_ratio = 0.9;   // new keyframe when tracking < ratio x reference's points
+  int keyframe_min_gap = 2;          // frames between keyframes at least (ORB-SLAM's "mapper busy")
+  int lost_reset_max_keyframes = 5;  // lost with at most this many keyframes -> reset and re-init
   // Local mapping.
-  int triangulation_neighbours = 20;         // covisible keyframes to triangulate with
+  int triangulation_neighbours = 20;  // covisible keyframes to triangulate with
   // Epipolar matching for new points as ORB-SLAM2 does it: best under the strict threshold, no ratio
   // test (1.0), no rotation check. Measured over 4 seeds: KITTI 00 APE 0.98 m mean (ratio 0.8 with the
   // rotation check: 1.12 m), KITTI 06 0.040 m (0.022 m).
-  double triangulation_ratio = 1.0;          // nearest-neighbour ratio along the epipolar line (1 = off)
+  double triangulation_ratio = 1.0;                // nearest-neighbour ratio along the epipolar line (1 = off)
   double triangulation_max_cos_parallax = 0.9998;  // new points need more parallax than this (cosine)
-  bool triangulation_check_orientation = false;  // rotation-consistency histogram on epipolar matches
-  int local_ba_iterations_robust = 5;        // Huber round
-  int local_ba_iterations_refine = 10;       // round without robust loss, outliers removed
-  int local_ba_max_keyframes = 0;            // 0 = all covisible keyframes move
+  bool triangulation_check_orientation = false;    // rotation-consistency histogram on epipolar matches
+  int local_ba_iterations_robust = 5;              // Huber round
+  int local_ba_iterations_refine = 10;             // round without robust loss, outliers removed
+  int local_ba_max_keyframes = 0;                  // 0 = all covisible keyframes move
   bool keyframe_culling = true;
   // Ground-height prior (beyond ORB-SLAM2; for a camera on a vehicle over a road): local BA holds the
   // camera's height above the plane fitted to each keyframe's low points at the height seen over the
   // first keyframes, which ties the monocular scale along the run to its start. Off by default.
   bool ground_prior = false;
-  double ground_prior_sigma = 0.2;           // std-dev of one ground point's height, share of the height
-  int ground_reference_keyframes = 5;        // keyframes whose median camera height is the reference
-  int ground_min_inliers = 25;               // a keyframe's ground plane needs this many points
+  double ground_prior_sigma = 0.2;     // std-dev of one ground point's height, share of the height
+  int ground_reference_keyframes = 5;  // keyframes whose median camera height is the reference
+  int ground_min_inliers = 25;         // a keyframe's ground plane needs this many points
   // Metric scale (beyond ORB-SLAM2; docs/metric-scale.md): once the ground planes of the first keyframes
   // agree, the map is rescaled so the camera sits camera_height metres over them, and the ground prior
   // (switched on with it) holds that height: poses and points are in metres from then on.
   bool metric_scale = false;
-  double camera_height = 0;                  // the rig's camera height over the road, metres
-  double metric_max_spread = 0.1;            // the reference fits' heights must agree this well (rel. MAD)
+  double camera_height = 0;        // the rig's camera height over the road, metres
+  double metric_max_spread = 0.1;  // the reference fits' heights must agree this well (rel. MAD)
   // Once metric: the last ground_reference_keyframes fits that say the camera height is off by more than
   // this share (and more than twice their standard error) scale the map back from the oldest of them on.
-  double metric_correction_min = 0.02;       // 0: no correction, the ground prior alone holds the scale
+  double metric_correction_min = 0.02;  // 0: no correction, the ground prior alone holds the scale
   // Static objects' boxes as a metric source (ObjectBox): range prior std-dev, metres and per metre.
   bool object_scale = true;
   double object_range_sigma = 0.15;
@@ -85,9 +84,9 @@ struct Options {
   bool threaded_mapping = false;
   // Initialisation.
   int ransac_iterations = 200;
-  double init_min_parallax_deg = 1.0;        // two-view reconstruction needs this much parallax
-  int init_match_max_level = 0;              // initial matching uses keypoints up to this pyramid level
-  uint64_t seed = 42;                        // seeds every random choice (RANSAC)
+  double init_min_parallax_deg = 1.0;  // two-view reconstruction needs this much parallax
+  int init_match_max_level = 0;        // initial matching uses keypoints up to this pyramid level
+  uint64_t seed = 42;                  // seeds every random choice (RANSAC)
 
   bool validate(std::string* error) const;
 };
@@ -108,13 +107,13 @@ struct ObjectBox {
 struct TrackResult {
   TrackingState state = TrackingState::NotInitialized;
   bool is_keyframe = false;
-  int64_t keyframe_id = -1;                                        // when is_keyframe
+  int64_t keyframe_id = -1;                                       // when is_keyframe
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // valid when state == Ok
-  int tracked_points = 0;                                          // pose inliers
-  bool world_is_metric = false;                                    // T_world_cam (and the map) in metres
-  int features = 0, features_static = 0;                           // keypoints; on static-object labels
-  int tracked_static = 0;                                          // inliers on static-object map points
-  std::vector<std::pair<std::string, double>> stage_ms;            // extract, track, local_map, mapping...
+  int tracked_points = 0;                                         // pose inliers
+  bool world_is_metric = false;                                   // T_world_cam (and the map) in metres
+  int features = 0, features_static = 0;                          // keypoints; on static-object labels
+  int tracked_static = 0;                                         // inliers on static-object map points
+  std::vector<std::pair<std::string, double>> stage_ms;           // extract, track, local_map, mapping...
   // The frame's keypoints: pixel, mask label under it, matched to a map point (pose inlier), octave.
   struct Keypoint {
     float x = 0, y = 0;
@@ -142,23 +141,23 @@ struct CloudPoint {
 
 // An object reconstructed by another module (a parked car), in world coordinates.
 struct ObjectLandmark {
-  int64_t id = 0;                                   // label value on the mask is 1000 + id
+  int64_t id = 0;  // label value on the mask is 1000 + id
   Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();
   Eigen::Vector3d dimensions = Eigen::Vector3d::Zero();
-  std::vector<Eigen::Vector3d> points_object;       // surface samples in the object frame
+  std::vector<Eigen::Vector3d> points_object;  // surface samples in the object frame
 };
 
 struct Statistics {
   int frames = 0, frames_tracked = 0, keyframes = 0, keyframes_culled = 0, map_points = 0;
   int resets = 0, relocalisations = 0;
   int64_t initialised_at_frame = -1;
-  int64_t metric_from_frame = -1;      // first frame tracked in metres (-1: never)
-  double metric_scale_factor = 0;      // the factor the map was multiplied by then
-  int object_points_dropped = 0;       // map points of static objects that started to move
-  int scale_corrections = 0;           // local scale corrections from the ground fits
-  int64_t object_scale_frame = -1;     // frame at which the parked cars' boxes set the scale (-1: never)
-  double object_scale_factor = 0;      // the factor they applied
-  int object_scale_tracks = 0;         // cars in the agreeing cluster
+  int64_t metric_from_frame = -1;   // first frame tracked in metres (-1: never)
+  double metric_scale_factor = 0;   // the factor the map was multiplied by then
+  int object_points_dropped = 0;    // map points of static objects that started to move
+  int scale_corrections = 0;        // local scale corrections from the ground fits
+  int64_t object_scale_frame = -1;  // frame at which the parked cars' boxes set the scale (-1: never)
+  double object_scale_factor = 0;   // the factor they applied
+  int object_scale_tracks = 0;      // cars in the agreeing cluster
 };
 
 class OrbSlam {

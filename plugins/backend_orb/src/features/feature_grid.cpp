@@ -1,7 +1,7 @@
-#include "features/feature_set.hpp"
-
 #include <algorithm>
 #include <cmath>
+
+#include "features/feature_set.hpp"
 
 namespace beslam::orb {
 

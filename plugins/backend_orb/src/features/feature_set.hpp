@@ -3,9 +3,8 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace beslam::orb {
 
@@ -16,23 +15,23 @@ class FeatureGrid {
   FeatureGrid(const std::vector<cv::KeyPoint>& keypoints, int width, int height);
   // Indices of keypoints within radius r (square window) of (u, v), with min_level <= octave <= max_level
   // (a negative bound means unbounded).
-  std::vector<int> query(const std::vector<cv::KeyPoint>& keypoints, float u, float v, float r,
-                         int min_level = -1, int max_level = -1) const;
+  std::vector<int> query(const std::vector<cv::KeyPoint>& keypoints, float u, float v, float r, int min_level = -1,
+                         int max_level = -1) const;
   // Indices in the grid cells that intersect the window [x0,x1] x [y0,y1] (no distance test).
   void cellsInWindow(float x0, float y0, float x1, float y1, std::vector<int>& out) const;
 
  private:
   float inv_cell_w_ = 0, inv_cell_h_ = 0;
-  std::vector<int> start_;   // kCols*kRows+1 offsets into index_
+  std::vector<int> start_;  // kCols*kRows+1 offsets into index_
   std::vector<int> index_;
 };
 
 struct FeatureSet {
   int width = 0, height = 0;
   std::vector<cv::KeyPoint> keypoints;
-  cv::Mat descriptors;                 // N x 32, CV_8U
-  std::vector<uint16_t> labels;        // mask value under each keypoint (0 without a mask)
-  std::vector<cv::Vec3b> colours;      // BGR (grey repeated for grey input)
+  cv::Mat descriptors;             // N x 32, CV_8U
+  std::vector<uint16_t> labels;    // mask value under each keypoint (0 without a mask)
+  std::vector<cv::Vec3b> colours;  // BGR (grey repeated for grey input)
   // Metres from the camera to where the keypoint's ray enters the metric 3D box of the static object it
   // lies on (OrbSlam::ObjectBox), 0 where there is none. Empty when the frame had no boxes.
   std::vector<float> object_range;

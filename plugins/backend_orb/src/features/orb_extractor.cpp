@@ -3,9 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <list>
-#include <stdexcept>
-
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 namespace beslam::orb {
 namespace {
@@ -67,8 +66,10 @@ std::vector<int> OrbExtractor::distributeQuadtree(const std::vector<cv::KeyPoint
 
   auto split = [&](const QuadNode& node, std::vector<QuadNode>& children) {
     const float mx = 0.5f * (node.x0 + node.x1), my = 0.5f * (node.y0 + node.y1);
-    children = {{node.x0, node.y0, mx, my, {}}, {mx, node.y0, node.x1, my, {}},
-                {node.x0, my, mx, node.y1, {}}, {mx, my, node.x1, node.y1, {}}};
+    children = {{node.x0, node.y0, mx, my, {}},
+                {mx, node.y0, node.x1, my, {}},
+                {node.x0, my, mx, node.y1, {}},
+                {mx, my, node.x1, node.y1, {}}};
     for (int i : node.idx) {
       const cv::Point2f& p = candidates[i].pt;
       children[(p.x < mx ? 0 : 1) + (p.y < my ? 0 : 2)].idx.push_back(i);

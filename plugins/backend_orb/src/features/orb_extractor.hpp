@@ -8,10 +8,9 @@
 #pragma once
 
 #include <memory>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
+#include <vector>
 
 #include "features/feature_set.hpp"
 #include "features/scale_pyramid.hpp"
@@ -26,8 +25,8 @@ struct ExtractorOptions {
   int fast_fallback = 7;
   int static_object_fast = 7;
   double static_object_budget_share = 0.3;
-  int cell_size = 30;   // FAST cell (px)
-  int border = 19;      // keypoints keep this far from every level's border
+  int cell_size = 30;  // FAST cell (px)
+  int border = 19;     // keypoints keep this far from every level's border
 };
 
 class OrbExtractor {
@@ -46,15 +45,15 @@ class OrbExtractor {
 
   // Keep at most n of the candidates, spread by a quadtree over [x0,x1) x [y0,y1): the strongest
   // response per leaf. Returns indices into candidates.
-  static std::vector<int> distributeQuadtree(const std::vector<cv::KeyPoint>& candidates, float x0, float y0,
-                                             float x1, float y1, int n);
+  static std::vector<int> distributeQuadtree(const std::vector<cv::KeyPoint>& candidates, float x0, float y0, float x1,
+                                             float y1, int n);
 
  private:
   float icAngle(const cv::Mat& image, const cv::Point2f& pt) const;
 
   ExtractorOptions options_;
   ScalePyramid pyramid_;
-  std::vector<int> umax_;      // half-widths of the circular orientation patch
+  std::vector<int> umax_;  // half-widths of the circular orientation patch
   cv::Ptr<cv::ORB> describer_;
 };
 

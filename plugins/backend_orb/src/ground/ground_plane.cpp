@@ -1,11 +1,10 @@
 #include "ground/ground_plane.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <random>
-
-#include <Eigen/Eigenvalues>
-#include <Eigen/Geometry>
 
 #include "map/keyframe.hpp"
 #include "map/map_point.hpp"

@@ -13,10 +13,9 @@
 // (optimize::GroundPrior), which ties the scale of the map along the whole run to its start.
 #pragma once
 
+#include <Eigen/Core>
 #include <optional>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace beslam::orb {
 
@@ -24,16 +23,16 @@ class KeyFrame;
 class MapPoint;
 
 struct GroundPlaneOptions {
-  bool enabled = false;                 // off: the ORB-SLAM2 rules alone
-  double min_ray_below_horizon = 0.04;  // candidate points: y/z in the camera frame at least this
-  double max_tilt_deg = 20.0;           // first fits: normal within this angle of the camera's +y axis
+  bool enabled = false;                      // off: the ORB-SLAM2 rules alone
+  double min_ray_below_horizon = 0.04;       // candidate points: y/z in the camera frame at least this
+  double max_tilt_deg = 20.0;                // first fits: normal within this angle of the camera's +y axis
   double max_tilt_from_reference_deg = 4.0;  // later fits: within this angle of the reference normal
-  double max_height_deviation = 0.2;    // later fits: |h / h_ref - 1| at most this, or not used
-  double inlier_ratio = 0.03;           // inlier: |n . p - h| < ratio * h
-  int min_inliers = 25;                 // fewer: no plane
+  double max_height_deviation = 0.2;         // later fits: |h / h_ref - 1| at most this, or not used
+  double inlier_ratio = 0.03;                // inlier: |n . p - h| < ratio * h
+  int min_inliers = 25;                      // fewer: no plane
   int ransac_iterations = 150;
-  int reference_keyframes = 5;          // reference height: median over the first fits
-  double sigma_ratio = 0.2;             // prior std-dev of one ground point's height, as a share of h
+  int reference_keyframes = 5;  // reference height: median over the first fits
+  double sigma_ratio = 0.2;     // prior std-dev of one ground point's height, as a share of h
 };
 
 struct GroundPlane {

@@ -1,14 +1,13 @@
 #include "init/two_view.hpp"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <future>
 #include <numeric>
-#include <random>
-
-#include <Eigen/SVD>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
+#include <random>
 
 namespace beslam::orb {
 namespace {
@@ -163,8 +162,8 @@ void TwoViewInitializer::findHomography(std::vector<bool>& inliers, double& scor
   Eigen::Matrix3d T1, T2;
   normaliseMatches(n1, T1, n2, T2);
   const Eigen::Matrix3d T2inv = T2.inverse();
-  auto fit = [&](const std::vector<Eigen::Vector2d>& s1, const std::vector<Eigen::Vector2d>& s2,
-                 std::vector<bool>& cur, Eigen::Matrix3d& h21) {
+  auto fit = [&](const std::vector<Eigen::Vector2d>& s1, const std::vector<Eigen::Vector2d>& s2, std::vector<bool>& cur,
+                 Eigen::Matrix3d& h21) {
     h21 = T2inv * homographyDLT(s1, s2) * T1;
     if (std::abs(h21.determinant()) < 1e-15) return -1.0;  // degenerate sample: never the best
     return checkHomography(h21, h21.inverse(), cur);
@@ -176,8 +175,8 @@ void TwoViewInitializer::findFundamental(std::vector<bool>& inliers, double& sco
   std::vector<Eigen::Vector2d> n1, n2;
   Eigen::Matrix3d T1, T2;
   normaliseMatches(n1, T1, n2, T2);
-  auto fit = [&](const std::vector<Eigen::Vector2d>& s1, const std::vector<Eigen::Vector2d>& s2,
-                 std::vector<bool>& cur, Eigen::Matrix3d& f21) {
+  auto fit = [&](const std::vector<Eigen::Vector2d>& s1, const std::vector<Eigen::Vector2d>& s2, std::vector<bool>& cur,
+                 Eigen::Matrix3d& f21) {
     f21 = T2.transpose() * fundamental8(s1, s2) * T1;
     return checkFundamental(f21, cur);
   };
@@ -203,10 +202,16 @@ double TwoViewInitializer::checkHomography(const Eigen::Matrix3d& H21, const Eig
     bool in = true;
     const Eigen::Vector3d x1p = H12 * x2;  // transfer 2 -> 1
     const double e1 = (x1.head<2>() - x1p.head<2>() / x1p.z()).squaredNorm() * inv_s2;
-    if (e1 > th) in = false; else score += th - e1;
+    if (e1 > th)
+      in = false;
+    else
+      score += th - e1;
     const Eigen::Vector3d x2p = H21 * x1;
     const double e2 = (x2.head<2>() - x2p.head<2>() / x2p.z()).squaredNorm() * inv_s2;
-    if (e2 > th) in = false; else score += th - e2;
+    if (e2 > th)
+      in = false;
+    else
+      score += th - e2;
     return in;
   });
 }
@@ -218,11 +223,17 @@ double TwoViewInitializer::checkFundamental(const Eigen::Matrix3d& F21, std::vec
     const Eigen::Vector3d l2 = F21 * x1;  // line in image 2
     const double d2 = l2.dot(x2);
     const double e2 = d2 * d2 / (l2.x() * l2.x() + l2.y() * l2.y()) * inv_s2;
-    if (e2 > th) in = false; else score += th_score - e2;
+    if (e2 > th)
+      in = false;
+    else
+      score += th_score - e2;
     const Eigen::Vector3d l1 = F21.transpose() * x2;  // line in image 1
     const double d1 = l1.dot(x1);
     const double e1 = d1 * d1 / (l1.x() * l1.x() + l1.y() * l1.y()) * inv_s2;
-    if (e1 > th) in = false; else score += th_score - e1;
+    if (e1 > th)
+      in = false;
+    else
+      score += th_score - e1;
     return in;
   });
 }

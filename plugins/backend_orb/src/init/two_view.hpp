@@ -5,11 +5,10 @@
 // (cheirality, reprojection, parallax); one hypothesis must be clearly ahead of the others.
 #pragma once
 
-#include <cstdint>
-#include <vector>
-
 #include <Eigen/Core>
+#include <cstdint>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "beslam_orb/orb_slam.hpp"
 
@@ -48,7 +47,9 @@ class TwoViewInitializer {
                                      const Eigen::Matrix<double, 3, 4>& P1, const Eigen::Matrix<double, 3, 4>& P2);
 
  private:
-  struct Match { int i1, i2; };
+  struct Match {
+    int i1, i2;
+  };
   // Fits a model to each RANSAC set of the normalised matches (fit returns its score, < 0 to skip) and keeps
   // the best-scoring model and its inliers.
   template <typename Fit>

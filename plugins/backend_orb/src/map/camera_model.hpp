@@ -16,9 +16,7 @@ inline Eigen::Vector3d unproject(const Camera& c, double u, double v) {  // ray 
   return {(u - c.cx) / c.fx, (v - c.cy) / c.fy, 1.0};
 }
 
-inline bool inImage(const Camera& c, double u, double v) {
-  return u >= 0 && v >= 0 && u < c.width && v < c.height;
-}
+inline bool inImage(const Camera& c, double u, double v) { return u >= 0 && v >= 0 && u < c.width && v < c.height; }
 
 inline Eigen::Matrix3d intrinsics(const Camera& c) {
   Eigen::Matrix3d K;

@@ -1,11 +1,10 @@
 // The frame being tracked: its features, matched map points, outlier flags and pose T_cw.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <memory>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "features/feature_set.hpp"
 
@@ -26,7 +25,10 @@ struct Frame {
 
   Frame() = default;
   Frame(int64_t idx, double ts, std::shared_ptr<const FeatureSet> f)
-      : index(idx), timestamp(ts), features(std::move(f)), points(features->size(), nullptr),
+      : index(idx),
+        timestamp(ts),
+        features(std::move(f)),
+        points(features->size(), nullptr),
         outlier(features->size(), false) {}
   size_t size() const { return points.size(); }
   Eigen::Vector3d centre() const { return T_cw.inverse().translation(); }

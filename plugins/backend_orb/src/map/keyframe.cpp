@@ -9,8 +9,15 @@
 namespace beslam::orb {
 
 KeyFrame::KeyFrame(long id_, const Frame& frame, const Camera& cam, const ScalePyramid& pyr, Map* map)
-    : id(id_), frame_index(frame.index), timestamp(frame.timestamp), features(frame.features), camera(cam),
-      pyramid(pyr), T_cw(frame.T_cw), points(frame.points), map_(map) {
+    : id(id_),
+      frame_index(frame.index),
+      timestamp(frame.timestamp),
+      features(frame.features),
+      camera(cam),
+      pyramid(pyr),
+      T_cw(frame.T_cw),
+      points(frame.points),
+      map_(map) {
   // Tracking outliers stay out (ORB-SLAM2 passes them on for BA to judge; measured worse here).
   for (size_t i = 0; i < points.size(); ++i)
     if (points[i] && (frame.outlier[i] || points[i]->bad)) points[i] = nullptr;

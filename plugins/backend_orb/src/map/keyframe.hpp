@@ -2,13 +2,12 @@
 // covisibility links (shared map points) and its place in the spanning tree.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <map>
 #include <memory>
 #include <set>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "beslam_orb/orb_slam.hpp"
 #include "features/feature_set.hpp"
@@ -32,7 +31,7 @@ class KeyFrame {
   const Camera camera;
   const ScalePyramid& pyramid;
   Eigen::Isometry3d T_cw;
-  std::vector<MapPoint*> points;   // per keypoint, may be null
+  std::vector<MapPoint*> points;  // per keypoint, may be null
   bool bad = false;
   Eigen::Isometry3d T_cp = Eigen::Isometry3d::Identity();  // to parent, set when culled
 
@@ -53,7 +52,7 @@ class KeyFrame {
   void erasePoint(MapPoint* mp);
   std::vector<MapPoint*> validPoints() const;  // non-null, not bad, each once
   int trackedPoints(int min_observations) const;
-  double medianDepth(int q = 2) const;         // the 1/q quantile of point depths (2 = median)
+  double medianDepth(int q = 2) const;  // the 1/q quantile of point depths (2 = median)
 
   // Covisibility.
   void updateConnections();

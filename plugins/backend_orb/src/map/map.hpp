@@ -16,7 +16,10 @@ class Map {
  public:
   KeyFrame* createKeyFrame(const Frame& frame, const Camera& camera, const ScalePyramid& pyramid);
   MapPoint* createMapPoint(const Eigen::Vector3d& position, KeyFrame* reference);
-  void eraseKeyFrame(KeyFrame* kf) { keyframes_.erase(kf); ++culled_; }
+  void eraseKeyFrame(KeyFrame* kf) {
+    keyframes_.erase(kf);
+    ++culled_;
+  }
   void eraseMapPoint(MapPoint* mp) { points_.erase(mp); }
   void clear();
   // Multiplies every length by s (keyframe and parent translations, point positions and their distance

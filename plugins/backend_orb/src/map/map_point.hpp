@@ -2,11 +2,10 @@
 // which its scale makes it detectable, and the keyframes that observe it (keypoint index in each).
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <map>
-
-#include <Eigen/Core>
 
 #include "map/id_less.hpp"
 
@@ -30,11 +29,11 @@ class MapPoint {
   std::map<KeyFrame*, size_t, IdLess<KeyFrame>> observations;
   KeyFrame* reference;
   const long first_keyframe_id;
-  int visible = 1, found = 1;          // frames where predicted visible / actually matched
+  int visible = 1, found = 1;  // frames where predicted visible / actually matched
   bool bad = false;
   MapPoint* replaced_by = nullptr;
-  bool trusted = false;                // created on a static object
-  int32_t object_id = -1;              // that object's track id (mask label - 1000), -1 if none
+  bool trusted = false;    // created on a static object
+  int32_t object_id = -1;  // that object's track id (mask label - 1000), -1 if none
   uint8_t grey = 0, r = 0, g = 0, b = 0;
 
   // Tracking scratch (per frame).
@@ -46,13 +45,13 @@ class MapPoint {
   long fuse_candidate_for_kf = -1, ba_local_for_kf = -1;
 
   void addObservation(KeyFrame* kf, size_t idx);
-  void eraseObservation(KeyFrame* kf);   // sets bad when 2 or fewer remain
+  void eraseObservation(KeyFrame* kf);  // sets bad when 2 or fewer remain
   bool isIn(const KeyFrame* kf) const;
-  int index(const KeyFrame* kf) const;   // -1 if not observed
+  int index(const KeyFrame* kf) const;  // -1 if not observed
   int numObservations() const { return static_cast<int>(observations.size()); }
   void setBad();
   void replaceWith(MapPoint* other);
-  MapPoint* latest();                    // follow the replacement chain
+  MapPoint* latest();  // follow the replacement chain
   double foundRatio() const { return static_cast<double>(found) / visible; }
 
   void computeDistinctiveDescriptor();

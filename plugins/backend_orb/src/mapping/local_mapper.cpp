@@ -17,9 +17,7 @@ namespace beslam::orb {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d S;
@@ -29,9 +27,11 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 
 }  // namespace
 
-LocalMapper::LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyramid,
-                         const LocalMapperOptions& options)
-    : map_(map), camera_(camera), pyramid_(pyramid), options_(options),
+LocalMapper::LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyramid, const LocalMapperOptions& options)
+    : map_(map),
+      camera_(camera),
+      pyramid_(pyramid),
+      options_(options),
       ground_reference_(makeGroundReference()),
       object_reference_(options.ground.reference_keyframes, options.metric_max_spread) {}
 
@@ -67,7 +67,8 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
       if (object_reference_.ready()) pending_scale_ = currentObjectScale(kf).value_or(object_reference_.height());
     }
     if (options_.ground.enabled && !ground_reference_.ready()) {
-      if (const auto plane = fitGroundPlane(*kf, options_.ground, Eigen::Vector3d::UnitY(), options_.ground.max_tilt_deg))
+      if (const auto plane =
+              fitGroundPlane(*kf, options_.ground, Eigen::Vector3d::UnitY(), options_.ground.max_tilt_deg))
         ground_reference_.add(*plane);
       if (metric_) ground_reference_.setHeight(options_.metric_camera_height);  // metric by the objects first
       if (ground_reference_.ready() && options_.metric_camera_height > 0 && !metric_ && !pending_scale_)
@@ -98,8 +99,8 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
 
 void LocalMapper::keepScale(KeyFrame* kf) {
   const double H = options_.metric_camera_height;
-  const auto plane = fitGroundPlane(*kf, options_.ground, ground_reference_.normal(),
-                                    options_.ground.max_tilt_from_reference_deg);
+  const auto plane =
+      fitGroundPlane(*kf, options_.ground, ground_reference_.normal(), options_.ground.max_tilt_from_reference_deg);
   if (!plane || std::abs(plane->height / H - 1.0) > options_.ground.max_height_deviation) return;
   scale_fits_.emplace_back(kf->id, plane->height);
   const size_t K = static_cast<size_t>(options_.ground.reference_keyframes);
@@ -157,8 +158,8 @@ double LocalMapper::currentGroundHeight(KeyFrame* kf) const {
                                           options_.ground.max_tilt_from_reference_deg))
       heights.push_back(plane->height);
   }
-  if (const auto plane = fitGroundPlane(*kf, options_.ground, ground_reference_.normal(),
-                                        options_.ground.max_tilt_from_reference_deg))
+  if (const auto plane =
+          fitGroundPlane(*kf, options_.ground, ground_reference_.normal(), options_.ground.max_tilt_from_reference_deg))
     heights.push_back(plane->height);
   if (static_cast<int>(heights.size()) < options_.ground.reference_keyframes) return ground_reference_.height();
   return median(std::move(heights));
@@ -235,8 +236,7 @@ int LocalMapper::createNewPoints(KeyFrame* kf) {
       const Eigen::Vector3d ray1 = R1wc * xn1, ray2 = R2wc * xn2;
       const double cos_rays = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
       if (cos_rays <= 0 || cos_rays >= options_.max_cos_parallax) continue;
-      const Eigen::Vector3d X =
-          TwoViewInitializer::triangulate(xn1.head<2>(), xn2.head<2>(), P1, P2);
+      const Eigen::Vector3d X = TwoViewInitializer::triangulate(xn1.head<2>(), xn2.head<2>(), P1, P2);
       if (!X.allFinite()) continue;
       const Eigen::Vector3d x1c = T1 * X, x2c = T2 * X;
       if (x1c.z() <= 0 || x2c.z() <= 0) continue;
@@ -257,7 +257,9 @@ int LocalMapper::createNewPoints(KeyFrame* kf) {
       mp->trusted = kf->features->onStaticObject(i1) || kf2->features->onStaticObject(i2);
       mp->object_id = kf->features->onStaticObject(i1) ? kf->features->objectId(i1) : kf2->features->objectId(i2);
       const cv::Vec3b c = kf->features->colours[i1];
-      mp->b = c[0]; mp->g = c[1]; mp->r = c[2];
+      mp->b = c[0];
+      mp->g = c[1];
+      mp->r = c[2];
       mp->grey = static_cast<uint8_t>((c[0] + c[1] + c[2]) / 3);
       mp->computeDistinctiveDescriptor();
       mp->updateNormalAndDepth();

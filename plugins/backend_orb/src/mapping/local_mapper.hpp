@@ -132,7 +132,7 @@ class LocalMapper {
   bool metric_ = false;
   std::optional<double> pending_scale_;
   std::vector<std::pair<long, double>> scale_fits_;  // (keyframe id, camera height over its plane) once metric
-  GroundReference object_reference_;  // per-keyframe object scale observations, same agreement rule
+  GroundReference object_reference_;                 // per-keyframe object scale observations, same agreement rule
   std::optional<ScaleCorrection> pending_correction_;
   long metric_since_kf_ = 0;
   bool object_scaled_ = false;

@@ -48,18 +48,27 @@ std::vector<int> RotationHistogram::rejected() const {
   for (int i = 0; i < kHistogramBins; ++i) {
     const size_t s = bins_[i].size();
     if (s > c[0]) {
-      c[2] = c[1]; m[2] = m[1];
-      c[1] = c[0]; m[1] = m[0];
-      c[0] = s; m[0] = i;
+      c[2] = c[1];
+      m[2] = m[1];
+      c[1] = c[0];
+      m[1] = m[0];
+      c[0] = s;
+      m[0] = i;
     } else if (s > c[1]) {
-      c[2] = c[1]; m[2] = m[1];
-      c[1] = s; m[1] = i;
+      c[2] = c[1];
+      m[2] = m[1];
+      c[1] = s;
+      m[1] = i;
     } else if (s > c[2]) {
-      c[2] = s; m[2] = i;
+      c[2] = s;
+      m[2] = i;
     }
   }
   // Weak second and third bins (under a tenth of the first) are not kept.
-  if (c[1] < 0.1 * c[0]) { m[1] = -1; m[2] = -1; }
+  if (c[1] < 0.1 * c[0]) {
+    m[1] = -1;
+    m[2] = -1;
+  }
   if (c[2] < 0.1 * c[0]) m[2] = -1;
   std::vector<int> out;
   for (int i = 0; i < kHistogramBins; ++i) {
@@ -79,8 +88,8 @@ int searchForInitialization(const FeatureSet& f1, const FeatureSet& f2, std::vec
   for (size_t i1 = 0; i1 < f1.size(); ++i1) {
     const cv::KeyPoint& kp1 = f1.keypoints[i1];
     if (kp1.octave > max_level) continue;
-    const auto cand = f2.query(prev_matched[i1].x, prev_matched[i1].y, static_cast<float>(window), kp1.octave,
-                               kp1.octave);
+    const auto cand =
+        f2.query(prev_matched[i1].x, prev_matched[i1].y, static_cast<float>(window), kp1.octave, kp1.octave);
     NearestTwo nn;
     const uint8_t* d1 = f1.descriptor(i1);
     for (int i2 : cand) {
@@ -111,8 +120,7 @@ int searchForInitialization(const FeatureSet& f1, const FeatureSet& f2, std::vec
   return n;
 }
 
-int searchByProjection(Frame& cur, const Frame& last, const Camera& camera, const ScalePyramid& pyramid,
-                       float th) {
+int searchByProjection(Frame& cur, const Frame& last, const Camera& camera, const ScalePyramid& pyramid, float th) {
   const FeatureSet& f = *cur.features;
   RotationHistogram hist;
   int n = 0;
@@ -125,8 +133,8 @@ int searchByProjection(Frame& cur, const Frame& last, const Camera& camera, cons
     if (!inImage(camera, uv.x(), uv.y())) continue;
     const int octave = last.features->keypoints[i].octave;
     const float radius = th * static_cast<float>(pyramid.scale[octave]);
-    const auto cand = f.query(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius,
-                              std::max(octave - 1, 0), std::min(octave + 1, pyramid.levels - 1));
+    const auto cand = f.query(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius, std::max(octave - 1, 0),
+                              std::min(octave + 1, pyramid.levels - 1));
     NearestTwo nn;
     for (int j : cand) {
       if (cur.points[j] && cur.points[j]->numObservations() > 0) continue;

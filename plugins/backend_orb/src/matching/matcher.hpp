@@ -4,11 +4,10 @@
 // rotation-consistency histogram reject ambiguous and wrong matches.
 #pragma once
 
-#include <utility>
-#include <vector>
-
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+#include <utility>
+#include <vector>
 
 #include "beslam_orb/orb_slam.hpp"
 #include "features/feature_set.hpp"
@@ -41,8 +40,7 @@ int searchForInitialization(const FeatureSet& f1, const FeatureSet& f2, std::vec
                             std::vector<int>& matches12, int window, float ratio = 0.9f, int max_level = 0);
 
 // Constant-velocity tracking: last frame's points projected with cur.T_cw, radius th x level scale.
-int searchByProjection(Frame& cur, const Frame& last, const Camera& camera, const ScalePyramid& pyramid,
-                       float th);
+int searchByProjection(Frame& cur, const Frame& last, const Camera& camera, const ScalePyramid& pyramid, float th);
 
 // Local map: points already annotated (MapPoint::track_*) by the tracker's frustum test.
 int searchLocalPoints(Frame& cur, const std::vector<MapPoint*>& points, const ScalePyramid& pyramid, float th,

@@ -1,13 +1,13 @@
 #include "optimize/bundle_adjustment.hpp"
 
+#include <ceres/ceres.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
 #include <memory>
 #include <vector>
-
-#include <ceres/ceres.h>
 
 #include "map/keyframe.hpp"
 #include "map/map.hpp"
@@ -142,9 +142,9 @@ void addEdges(Problem& P, double chi2_threshold, double trusted_weight) {
       e.idx = idx;
       e.pose = it->second;
       e.point = x;
-      e.cost = std::make_unique<ReprojectionCost>(Eigen::Vector2d(kp.pt.x, kp.pt.y), inv_sigma,
-                                                  Intrinsics{kf->camera.fx, kf->camera.fy, kf->camera.cx,
-                                                             kf->camera.cy});
+      e.cost =
+          std::make_unique<ReprojectionCost>(Eigen::Vector2d(kp.pt.x, kp.pt.y), inv_sigma,
+                                             Intrinsics{kf->camera.fx, kf->camera.fy, kf->camera.cx, kf->camera.cy});
       P.edges.push_back(std::move(e));
     }
   }
@@ -171,8 +171,8 @@ void addGroundEdges(Problem& P, const GroundPrior& ground, BundleAdjustmentRepor
     for (MapPoint* mp : plane->inliers) {
       auto it = P.positions.find(mp);
       if (it == P.positions.end()) continue;
-      P.ground_edges.push_back({pose, it->second,
-                                std::make_unique<GroundHeightCost>(plane->normal_cam, ref.height(), sigma)});
+      P.ground_edges.push_back(
+          {pose, it->second, std::make_unique<GroundHeightCost>(plane->normal_cam, ref.height(), sigma)});
       ++report->ground_residuals;
     }
   }

@@ -19,8 +19,8 @@ struct BundleAdjustmentOptions {
   int robust_iterations = 5;
   int refine_iterations = 10;
   double chi2_threshold = 5.991;
-  int max_local_keyframes = 0;   // 0 = every covisible keyframe
-  double trusted_weight = 1.0;   // information multiplier for points on static objects
+  int max_local_keyframes = 0;  // 0 = every covisible keyframe
+  double trusted_weight = 1.0;  // information multiplier for points on static objects
   // Metric range priors from static objects' 3D boxes (FeatureSet::object_range), once the map is metric:
   // sigma = object_range_sigma + object_range_sigma_per_m * range. Off while object_range_sigma is 0.
   double object_range_sigma = 0;

@@ -2,9 +2,10 @@
 // (residual = (projection - observation) / sigma, so the squared norm is the chi-square statistic).
 #pragma once
 
+#include <ceres/sized_cost_function.h>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <ceres/sized_cost_function.h>
 
 namespace beslam::orb::optimize {
 

@@ -1,9 +1,9 @@
 #include "optimize/pose_optimizer.hpp"
 
+#include <ceres/ceres.h>
+
 #include <cmath>
 #include <memory>
-
-#include <ceres/ceres.h>
 
 #include "optimize/cost_functions.hpp"
 #include "optimize/se3.hpp"

@@ -4,9 +4,8 @@
 // round (they may come back).
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Geometry>
+#include <vector>
 
 #include "beslam_orb/orb_slam.hpp"
 

@@ -4,17 +4,22 @@
 // the tangent Jacobian.
 #pragma once
 
-#include <cmath>
+#include <ceres/manifold.h>
 
 #include <Eigen/Geometry>
-#include <ceres/manifold.h>
+#include <cmath>
 
 namespace beslam::orb::optimize {
 
 inline void poseToParams(const Eigen::Isometry3d& T, double* p) {
   const Eigen::Quaterniond q(T.linear());
-  p[0] = q.x(); p[1] = q.y(); p[2] = q.z(); p[3] = q.w();
-  p[4] = T.translation().x(); p[5] = T.translation().y(); p[6] = T.translation().z();
+  p[0] = q.x();
+  p[1] = q.y();
+  p[2] = q.z();
+  p[3] = q.w();
+  p[4] = T.translation().x();
+  p[5] = T.translation().y();
+  p[6] = T.translation().z();
 }
 
 inline Eigen::Isometry3d paramsToPose(const double* p) {
@@ -41,8 +46,13 @@ class SE3LeftManifold : public ceres::Manifold {
     const Eigen::Quaterniond dq = expSO3(phi);
     const Eigen::Quaterniond q2 = (dq * q).normalized();
     const Eigen::Vector3d t2 = dq * t + rho;
-    x_plus[0] = q2.x(); x_plus[1] = q2.y(); x_plus[2] = q2.z(); x_plus[3] = q2.w();
-    x_plus[4] = t2.x(); x_plus[5] = t2.y(); x_plus[6] = t2.z();
+    x_plus[0] = q2.x();
+    x_plus[1] = q2.y();
+    x_plus[2] = q2.z();
+    x_plus[3] = q2.w();
+    x_plus[4] = t2.x();
+    x_plus[5] = t2.y();
+    x_plus[6] = t2.z();
     return true;
   }
   bool PlusJacobian(const double*, double* jacobian) const override {

@@ -3,9 +3,8 @@
 // (optimize::ObjectRangeCost in local BA). docs/metric-scale.md.
 #pragma once
 
-#include <optional>
-
 #include <Eigen/Geometry>
+#include <optional>
 
 #include "beslam_orb/orb_slam.hpp"
 

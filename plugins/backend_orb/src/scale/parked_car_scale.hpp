@@ -9,37 +9,37 @@
 // needs `min_tracks` of them and no rival cluster as large. Deterministic; no randomness.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <map>
 #include <optional>
 #include <vector>
 
-#include <Eigen/Geometry>
-
 namespace beslam::orb {
 
 struct ParkedCarScaleOptions {
-  int min_observations = 8;      // frames a track needs
-  double sigma0 = 0.1;           // m: box centre noise at range 0
-  double sigma_per_m = 0.02;     // m per metre of range
-  double max_chi2 = 4.0;         // per degree of freedom: a worse fit is not a parked car
+  int min_observations = 8;          // frames a track needs
+  double sigma0 = 0.1;               // m: box centre noise at range 0
+  double sigma_per_m = 0.02;         // m per metre of range
+  double max_chi2 = 4.0;             // per degree of freedom: a worse fit is not a parked car
   double max_relative_error = 0.03;  // standard error of s_j / s_j at most this
-  double agreement = 0.03;       // tracks within this share of each other count as one cluster
+  double agreement = 0.03;           // tracks within this share of each other count as one cluster
   int min_tracks = 3;
-  double max_range = 40.0;       // m: farther boxes are too noisy
+  double max_range = 40.0;  // m: farther boxes are too noisy
 };
 
 struct ParkedCarScaleEstimate {
-  double scale = 1;   // metres per map unit
-  int tracks = 0;     // in the winning cluster
-  int candidates = 0; // well-determined, well-fitting tracks
+  double scale = 1;    // metres per map unit
+  int tracks = 0;      // in the winning cluster
+  int candidates = 0;  // well-determined, well-fitting tracks
 };
 
 class ParkedCarScale {
  public:
   explicit ParkedCarScale(const ParkedCarScaleOptions& options = {}) : options_(options) {}
   // One frame: its pose (map units) and the metric centres of the car boxes that carry a track id.
-  void addFrame(const Eigen::Isometry3d& T_world_cam, const std::vector<std::pair<int32_t, Eigen::Vector3d>>& centres_cam);
+  void addFrame(const Eigen::Isometry3d& T_world_cam,
+                const std::vector<std::pair<int32_t, Eigen::Vector3d>>& centres_cam);
   std::optional<ParkedCarScaleEstimate> estimate() const;
   // The map's unit changed by s (Map::rescale): stored camera positions follow.
   void rescale(double s);

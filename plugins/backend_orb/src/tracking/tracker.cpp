@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cmath>
 #include <map>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
@@ -22,9 +21,7 @@ namespace beslam::orb {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // The map point of slot i, or null; a bad point is dropped from the slot first.
 MapPoint* goodPoint(std::vector<MapPoint*>& points, size_t i) {
@@ -34,9 +31,13 @@ MapPoint* goodPoint(std::vector<MapPoint*>& points, size_t i) {
 
 }  // namespace
 
-Tracker::Tracker(const Camera& camera, const Options& options, const ScalePyramid& pyramid, Map& map,
-                 KeyFrameSink sink, std::function<void()> on_reset)
-    : camera_(camera), options_(options), pyramid_(pyramid), map_(map), sink_(std::move(sink)),
+Tracker::Tracker(const Camera& camera, const Options& options, const ScalePyramid& pyramid, Map& map, KeyFrameSink sink,
+                 std::function<void()> on_reset)
+    : camera_(camera),
+      options_(options),
+      pyramid_(pyramid),
+      map_(map),
+      sink_(std::move(sink)),
       on_reset_(std::move(on_reset)) {}
 
 std::optional<Eigen::Isometry3d> Tracker::predictPose() const {
@@ -95,8 +96,7 @@ TrackResult Tracker::track(std::shared_ptr<const FeatureSet> features, double ti
 
   if (ok) {
     state_ = TrackingState::Ok;
-    velocity_ = last_.has_pose ? std::optional<Eigen::Isometry3d>(current_.T_cw * last_.T_cw.inverse())
-                               : std::nullopt;
+    velocity_ = last_.has_pose ? std::optional<Eigen::Isometry3d>(current_.T_cw * last_.T_cw.inverse()) : std::nullopt;
     last_good_pose_ = current_.T_cw;
     t0 = Clock::now();
     if (needNewKeyFrame()) {
@@ -117,8 +117,8 @@ TrackResult Tracker::track(std::shared_ptr<const FeatureSet> features, double ti
     result.tracked_points = inliers_;
   } else {
     if (std::getenv("BESLAM_ORB_DEBUG"))  // developers: why a frame was lost
-      std::fprintf(stderr, "frame %ld: lost (local-map inliers %d, keyframes %zu)\n", static_cast<long>(index), inliers_,
-                   map_.numKeyFrames());
+      std::fprintf(stderr, "frame %ld: lost (local-map inliers %d, keyframes %zu)\n", static_cast<long>(index),
+                   inliers_, map_.numKeyFrames());
     state_ = TrackingState::Lost;
     velocity_.reset();
     current_.has_pose = false;
@@ -205,7 +205,9 @@ bool Tracker::createInitialMap(const std::vector<int>& matches12, const TwoViewR
     mp->trusted = kf_ini->features->onStaticObject(i);
     mp->object_id = kf_ini->features->objectId(i);
     const cv::Vec3b c = kf_ini->features->colours[i];
-    mp->b = c[0]; mp->g = c[1]; mp->r = c[2];
+    mp->b = c[0];
+    mp->g = c[1];
+    mp->r = c[2];
     mp->grey = static_cast<uint8_t>((c[0] + c[1] + c[2]) / 3);
     mp->computeDistinctiveDescriptor();
     mp->updateNormalAndDepth();
@@ -238,8 +240,8 @@ bool Tracker::createInitialMap(const std::vector<int>& matches12, const TwoViewR
   state_ = TrackingState::Ok;
   initialised_at_ = current_.index;
   inliers_ = kf_cur->trackedPoints(1);
-  records_.push_back({init_frame_.index, init_frame_.timestamp, kf_ini, Eigen::Isometry3d::Identity(),
-                      Eigen::Isometry3d::Identity()});
+  records_.push_back(
+      {init_frame_.index, init_frame_.timestamp, kf_ini, Eigen::Isometry3d::Identity(), Eigen::Isometry3d::Identity()});
   backfillInitialFrames(kf_ini, kf_cur);
   records_.push_back({current_.index, current_.timestamp, kf_cur, Eigen::Isometry3d::Identity(), current_.T_cw});
   last_ = current_;
@@ -392,8 +394,8 @@ bool Tracker::trackReferenceKeyFrame() {
   for (float radius : {20.f, 50.f}) {
     current_.clearMatches();
     current_.T_cw = guess;
-    const int n = matching::searchByProjectionWide(current_, ref->validPoints(), guess, camera_, pyramid_, radius,
-                                                   0.7f, matching::kThHigh);
+    const int n = matching::searchByProjectionWide(current_, ref->validPoints(), guess, camera_, pyramid_, radius, 0.7f,
+                                                   matching::kThHigh);
     if (n < 15) continue;
     optimizeFramePose();
     if (discardOutliers() >= 10) return true;
@@ -435,8 +437,7 @@ bool Tracker::relocalise() {
   cv::eigen2cv(intrinsics(camera_), K);
   cv::Mat rvec, tvec, inliers;
   cv::setRNGSeed(static_cast<int>(options_.seed));
-  if (!cv::solvePnPRansac(obj, img, K, cv::Mat(), rvec, tvec, false, 300, 4.0f, 0.99, inliers) ||
-      inliers.rows < 30)
+  if (!cv::solvePnPRansac(obj, img, K, cv::Mat(), rvec, tvec, false, 300, 4.0f, 0.99, inliers) || inliers.rows < 30)
     return false;
   std::vector<bool> keep(idx.size(), false);
   for (int r = 0; r < inliers.rows; ++r) keep[inliers.at<int>(r)] = true;

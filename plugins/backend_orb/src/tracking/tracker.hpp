@@ -28,7 +28,7 @@ struct FrameRecord {
   int64_t index;
   double timestamp;
   KeyFrame* reference;
-  Eigen::Isometry3d T_c_ref;     // camera from reference keyframe
+  Eigen::Isometry3d T_c_ref;  // camera from reference keyframe
   Eigen::Isometry3d T_cw_online;
 };
 

@@ -8,7 +8,8 @@
 // - Cells are ordered seed, pipeline, sequence (outermost first): a partial bench still compares every
 //   pipeline, and the first parallel cells render different synthetic sequences.
 // - A cell's folder is OUT/runs/<pipeline>/<sequence>/seed<N>; it is finished when its summary.json parses
-//   as a run summary not marked interrupted. Finished cells are skipped; the child's output goes to the folder's beslam.log.
+//   as a run summary not marked interrupted. Finished cells are skipped; the child's output goes to the folder's
+//   beslam.log.
 // - OUT/bench.json (written before any cell starts) freezes the cell list and the command of each cell, so
 //   `--cell K OUT`, `--merge OUT` and the emitted Slurm script need only the folder.
 // - Tables are computed from finished cells only (medians over seeds, even counts: mean of the middle
@@ -18,11 +19,10 @@
 
 #include <cstdint>
 #include <iosfwd>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 namespace beslam::bench {
 
@@ -33,13 +33,13 @@ struct SequenceEntry {
 
 struct PipelineEntry {
   std::string label;
-  std::string file;                       // absolute
+  std::string file;  // absolute
   std::vector<std::string> sets;
-  std::vector<std::string> sequences;     // labels; empty = every sequence
+  std::vector<std::string> sequences;  // labels; empty = every sequence
 };
 
 struct Matrix {
-  std::string path;                       // the matrix file as given
+  std::string path;  // the matrix file as given
   std::string name;
   std::string seed_key = "backend.seed";
   std::vector<int64_t> seeds;
@@ -51,8 +51,8 @@ struct Cell {
   int index = 0;
   std::string pipeline, sequence;
   int64_t seed = 0;
-  std::string dir;                        // relative to the bench folder
-  std::vector<std::string> args;          // arguments after the binary: run FILE --out DIR --quiet --set ...
+  std::string dir;                // relative to the bench folder
+  std::vector<std::string> args;  // arguments after the binary: run FILE --out DIR --quiet --set ...
 };
 
 Matrix loadMatrix(const std::string& path);

@@ -2,9 +2,9 @@
 // The value is parsed as YAML, so numbers, booleans, strings and flow lists ("[1, 2]") all work.
 #pragma once
 
-#include <string>
-
 #include <yaml-cpp/yaml.h>
+
+#include <string>
 
 namespace beslam {
 

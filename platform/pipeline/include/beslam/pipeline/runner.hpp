@@ -23,35 +23,35 @@
 namespace beslam::pipeline {
 
 struct RunOptions {
-  std::string output_dir;             // overrides spec.output.dir when not empty
-  bool progress = false;              // a progress line on stderr
+  std::string output_dir;  // overrides spec.output.dir when not empty
+  bool progress = false;   // a progress line on stderr
   int32_t log_level = BESLAM_LOG_WARNING;
   // Asked after every frame: true ends the loop there (the outputs of the frames done are written).
   std::function<bool()> stop_requested;
-  std::function<std::string()> stop_reason;      // e.g. "SIGTERM", for summary.json
-  std::function<void(int64_t)> after_frame;       // called with each finished frame's index
+  std::function<std::string()> stop_reason;  // e.g. "SIGTERM", for summary.json
+  std::function<void(int64_t)> after_frame;  // called with each finished frame's index
 };
 
 struct RunSummary {
   std::string output_dir;
-  int64_t frames = 0;                 // frames processed (all of the range unless interrupted)
-  int64_t last_frame = -1;            // index of the last frame processed
-  bool interrupted = false;           // the loop ended early on options.stop_requested
+  int64_t frames = 0;        // frames processed (all of the range unless interrupted)
+  int64_t last_frame = -1;   // index of the last frame processed
+  bool interrupted = false;  // the loop ended early on options.stop_requested
   std::string interrupted_by;
-  int64_t tracked = 0;                // frames in the backend's final trajectory
-  int64_t tracked_online = 0;         // frames the backend reported OK when it tracked them
+  int64_t tracked = 0;         // frames in the backend's final trajectory
+  int64_t tracked_online = 0;  // frames the backend reported OK when it tracked them
   int64_t keyframes = 0;
-  std::vector<int64_t> untracked;     // frame indices absent from the final trajectory
+  std::vector<int64_t> untracked;  // frame indices absent from the final trajectory
   bool has_ape = false;
-  double ape_trans_rmse = 0;          // metres, with spec.evaluation.alignment
+  double ape_trans_rmse = 0;  // metres, with spec.evaluation.alignment
   double rpe_trans_rmse = 0;
   double ape_alignment_scale = 1;
-  std::string evaluation_error;       // why APE could not be computed, when it could not
+  std::string evaluation_error;                // why APE could not be computed, when it could not
   double ape_sim3_rmse = 0, ape_se3_rmse = 0;  // both alignments, whatever spec.evaluation.alignment says
   double median_frame_ms = 0;
   // The world unit: the first frame the backend said its world was in metres (-1: never).
   int64_t metric_from_frame = -1;
-  double camera_height = 0;           // the rig value handed to the plugins (0: unknown)
+  double camera_height = 0;  // the rig value handed to the plugins (0: unknown)
   // Detections after the motion checker, by motion state; frames whose mask marks any pixel.
   int64_t detections_static = 0, detections_dynamic = 0, detections_unknown = 0;
   int64_t frames_with_masks = 0;

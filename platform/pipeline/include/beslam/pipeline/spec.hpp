@@ -15,12 +15,12 @@
 // filled in) is what a run writes as pipeline.resolved.yaml.
 #pragma once
 
+#include <yaml-cpp/yaml.h>
+
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <yaml-cpp/yaml.h>
 
 #include "beslam/plugin.h"
 #include "beslam/registry/registry.hpp"
@@ -49,9 +49,9 @@ class PluginConfig {
 };
 
 struct SlotSpec {
-  std::string slot;            // "detector", ...
-  std::string plugin_id;       // empty: slot unused
-  YAML::Node settings;         // the slot's map without `plugin`
+  std::string slot;                          // "detector", ...
+  std::string plugin_id;                     // empty: slot unused
+  YAML::Node settings;                       // the slot's map without `plugin`
   const registry::Plugin* plugin = nullptr;  // set by resolvePlugins
   PluginConfig config;                       // set by resolvePlugins
 };
@@ -75,20 +75,20 @@ struct OutputSpec {
 };
 
 struct EvaluationSpec {
-  bool enabled = true;        // APE/RPE against the dataset's ground truth when it has one
-  std::string alignment;      // none | se3 | sim3
+  bool enabled = true;    // APE/RPE against the dataset's ground truth when it has one
+  std::string alignment;  // none | se3 | sim3
   int64_t rpe_delta = 1;
 };
 
 struct PipelineSpec {
-  std::string path;           // the pipeline file
-  std::string base_dir;       // its folder: relative paths resolve here
+  std::string path;      // the pipeline file
+  std::string base_dir;  // its folder: relative paths resolve here
   DatasetSpec dataset;
   std::vector<std::string> plugin_paths;
   std::map<std::string, SlotSpec> slots;  // all five, possibly unused
   OutputSpec output;
   EvaluationSpec evaluation;
-  YAML::Node document;        // after overrides, host defaults filled in
+  YAML::Node document;  // after overrides, host defaults filled in
 };
 
 // Reads, overrides and validates a pipeline file. Throws beslam::Error naming file, line and key.

@@ -3,12 +3,11 @@
 // plugin logged. The host log sink prints plugin messages to stderr with the plugin id.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "beslam/plugin.h"
 #include "beslam/registry/registry.hpp"

@@ -21,17 +21,17 @@ struct ConfigField {
   std::string key;
   int32_t type = 0;
   bool required = false;
-  std::string default_value;  // YAML text
+  std::string default_value;            // YAML text
   double min_value = 1, max_value = 0;  // min > max: unbounded
-  std::string choices;        // "a|b|c" or empty
+  std::string choices;                  // "a|b|c" or empty
   std::string doc;
 };
 
 struct Plugin {
   std::string id, name, description;
   int32_t kind = 0;
-  std::string version;        // "major.minor.patch"
-  uint32_t abi_version = 0;   // (major << 16) | minor the plugin was built with
+  std::string version;       // "major.minor.patch"
+  uint32_t abi_version = 0;  // (major << 16) | minor the plugin was built with
   std::string library_path;
   std::vector<ConfigField> fields;
   beslam_plugin_descriptor descriptor{};  // the host's zero-filled copy
@@ -39,9 +39,9 @@ struct Plugin {
   uint32_t functions_size = 0;            // its struct_size
 };
 
-const char* kindName(int32_t kind);       // "detector", "motion_checker", ...
+const char* kindName(int32_t kind);             // "detector", "motion_checker", ...
 int32_t kindFromName(const std::string& name);  // 0 if unknown
-const char* configTypeName(int32_t type); // "bool", "int", ...
+const char* configTypeName(int32_t type);       // "bool", "int", ...
 const char* statusName(beslam_status status);
 
 class Registry {

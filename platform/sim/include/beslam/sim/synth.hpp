@@ -33,10 +33,9 @@
 #include <cstdint>
 #include <iosfwd>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 namespace YAML {
 class Node;
@@ -59,27 +58,27 @@ struct SynthConfig {
   } camera;
 
   struct Ego {
-    double speed_kmh = 33.0;          // cruise speed on straights
-    double max_lateral_accel = 3.0;   // m/s^2, slows the ego in turns
-    bool clockwise = true;            // direction round the loop block
-    double start_fraction = 0.0;      // where on the loop frame 0 is (0..1 of its length)
-    double pitch_amplitude_deg = 0.3; // small body motion
-    double roll_per_accel_deg = 0.25; // roll per m/s^2 of lateral acceleration
+    double speed_kmh = 33.0;           // cruise speed on straights
+    double max_lateral_accel = 3.0;    // m/s^2, slows the ego in turns
+    bool clockwise = true;             // direction round the loop block
+    double start_fraction = 0.0;       // where on the loop frame 0 is (0..1 of its length)
+    double pitch_amplitude_deg = 0.3;  // small body motion
+    double roll_per_accel_deg = 0.25;  // roll per m/s^2 of lateral acceleration
   } ego;
 
   struct World {
-    std::string type = "urban";       // urban (street grid) or highway (wide fast ring road)
-    int blocks_x = 3, blocks_y = 3;   // street grid; the ego loops round the centre block
+    std::string type = "urban";               // urban (street grid) or highway (wide fast ring road)
+    int blocks_x = 3, blocks_y = 3;           // street grid; the ego loops round the centre block
     double block_x = 100.0, block_y = 110.0;  // street centreline spacing (m)
     int lanes_per_direction = 1;
     double lane_width = 3.25;
     bool parking_lanes = true;
     double pavement_width = 3.5;
-    double corner_radius = 16.0;      // centreline corner radius of the routes (m)
+    double corner_radius = 16.0;  // centreline corner radius of the routes (m)
     double building_min_height = 8.0, building_max_height = 22.0;
     double building_gap_probability = 0.15;
     double building_setback_max = 3.0;
-    double tree_spacing = 7.0;        // mean distance between trees along a pavement (0: none)
+    double tree_spacing = 7.0;  // mean distance between trees along a pavement (0: none)
   } world;
 
   struct Objects {
@@ -91,9 +90,9 @@ struct SynthConfig {
   } objects;
 
   struct Image {
-    double noise_sigma = 2.0;         // grey levels
-    double blur_sigma = 0.4;          // pixels (0: none)
-    double exposure_variation = 0.04; // relative gain change between frames
+    double noise_sigma = 2.0;          // grey levels
+    double blur_sigma = 0.4;           // pixels (0: none)
+    double exposure_variation = 0.04;  // relative gain change between frames
   } image;
 
   struct Lidar {
@@ -102,13 +101,13 @@ struct SynthConfig {
     double fov_up_deg = 2.0, fov_down_deg = -24.8;
     double horizontal_resolution_deg = 0.2;
     double max_range = 120.0;
-    double range_noise = 0.005;       // metres, sigma
-    double mount_height = 1.73;       // metres above the road
+    double range_noise = 0.005;  // metres, sigma
+    double mount_height = 1.73;  // metres above the road
   } lidar;
 
   struct Output {
-    bool depth = false;               // also write depth/NNNNNN.png
-    int threads = 2;                  // frame workers (output is identical for any value)
+    bool depth = false;  // also write depth/NNNNNN.png
+    int threads = 2;     // frame workers (output is identical for any value)
   } output;
 };
 
@@ -130,15 +129,15 @@ const char* behaviourName(Behaviour b);
 
 struct ObjectInfo {
   int track_id = 0;
-  std::string type;      // Car, Van, Pedestrian
-  std::string shape;     // sedan, hatchback, suv, van, wagon, pedestrian
+  std::string type;   // Car, Van, Pedestrian
+  std::string shape;  // sedan, hatchback, suv, van, wagon, pedestrian
   Behaviour behaviour = Behaviour::Parked;
   double length = 0, width = 0, height = 0;
 };
 
 struct ObjectState {
   Eigen::Isometry3d T_world_obj = Eigen::Isometry3d::Identity();  // KITTI world, KITTI object frame
-  double speed = 0;      // m/s
+  double speed = 0;                                               // m/s
   bool moving = false;
 };
 
@@ -159,10 +158,10 @@ struct ObjectLabel {
 struct FrameRender {
   int index = 0;
   double stamp = 0;
-  cv::Mat grey;        // CV_8UC1
-  cv::Mat colour;      // CV_8UC3, BGR
-  cv::Mat instance;    // CV_16UC1
-  cv::Mat depth;       // CV_32FC1, camera z in metres, 0 where sky
+  cv::Mat grey;              // CV_8UC1
+  cv::Mat colour;            // CV_8UC3, BGR
+  cv::Mat instance;          // CV_16UC1
+  cv::Mat depth;             // CV_32FC1, camera z in metres, 0 where sky
   std::vector<float> lidar;  // x y z intensity, LiDAR frame
   std::vector<ObjectLabel> labels;
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();  // KITTI world (cam0 at frame 0)
@@ -171,8 +170,8 @@ struct FrameRender {
 struct SequenceSummary {
   int frames = 0;
   int parked = 0, driving = 0, stop_and_go = 0, pedestrians = 0;  // objects actually placed
-  double loop_length_m = 0;     // the ego's loop
-  double distance_m = 0;        // driven over the sequence
+  double loop_length_m = 0;                                       // the ego's loop
+  double distance_m = 0;                                          // driven over the sequence
   double laps = 0;
 };
 
@@ -192,14 +191,13 @@ class Synthesizer {
   // The same, reusing out's buffers (no fresh multi-megabyte allocations per frame).
   void render(int frame, FrameRender& out) const;
 
-  Eigen::Matrix<double, 3, 4> projection() const;      // P0 (= P2)
-  Eigen::Isometry3d T_cam_velo() const;                // Tr_velo_to_cam
-  Eigen::Isometry3d T_world_cam(int frame) const;      // ground truth, KITTI world
+  Eigen::Matrix<double, 3, 4> projection() const;  // P0 (= P2)
+  Eigen::Isometry3d T_cam_velo() const;            // Tr_velo_to_cam
+  Eigen::Isometry3d T_world_cam(int frame) const;  // ground truth, KITTI world
   const std::vector<ObjectInfo>& objects() const;
   ObjectState objectState(int track_id, int frame) const;
   // A car's mesh in its object frame (empty for pedestrians, whose mesh is animated).
-  void objectMesh(int track_id, std::vector<Eigen::Vector3f>& vertices,
-                  std::vector<std::array<int, 3>>& faces) const;
+  void objectMesh(int track_id, std::vector<Eigen::Vector3f>& vertices, std::vector<std::array<int, 3>>& faces) const;
   SequenceSummary summary() const;
 
  private:

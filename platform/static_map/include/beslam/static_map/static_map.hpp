@@ -3,21 +3,21 @@
 // Built from LiDAR scans where the sequence has them, else from the SLAM map points. Scans: each
 // keyframe's returns inside the camera's field of view (the only part the detector and motion checker
 // judge: a car beside or behind the ego has no box), thinned to one point per voxel, are inserted with
-// rays from the LiDAR origin (free space along the ray, occupied at its end, up to max_range). Map points: each is inserted with a ray from the
-// nearest keyframe centre. Points inside the box of an object that is not called static (moving, or
-// unknown: the platform cannot tell) are never inserted, so moving cars leave no trails; with no
-// detector there are no boxes and everything is inserted. Poses are the backend's final ones, known
-// only at the end of a run: scans wait in the camera frame until build().
+// rays from the LiDAR origin (free space along the ray, occupied at its end, up to max_range). Map points: each is
+// inserted with a ray from the nearest keyframe centre. Points inside the box of an object that is not called static
+// (moving, or unknown: the platform cannot tell) are never inserted, so moving cars leave no trails; with no detector
+// there are no boxes and everything is inserted. Poses are the backend's final ones, known only at the end of a run:
+// scans wait in the camera frame until build().
 #pragma once
 
+#include <octomap/OcTree.h>
+
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <octomap/OcTree.h>
 
 #include "beslam/data.h"
 
@@ -31,11 +31,11 @@ struct Options {
 };
 
 struct Stats {
-  int64_t scans = 0;             // scans inserted
-  int64_t points_inserted = 0;   // after thinning
-  int64_t points_in_boxes = 0;   // dropped: inside a box of an object not called static
+  int64_t scans = 0;                // scans inserted
+  int64_t points_inserted = 0;      // after thinning
+  int64_t points_in_boxes = 0;      // dropped: inside a box of an object not called static
   int64_t points_outside_view = 0;  // dropped: outside the camera's field of view
-  int64_t map_points = 0;        // map points inserted (no LiDAR)
+  int64_t map_points = 0;           // map points inserted (no LiDAR)
 };
 
 // True when p_cam lies inside `box` grown by `margin` on every side.
@@ -64,8 +64,8 @@ class StaticMapBuilder {
  private:
   bool inView(const Eigen::Vector3d& p_cam) const;
   struct Scan {
-    Eigen::Vector3f origin_cam;           // the LiDAR origin in the camera frame
-    std::vector<Eigen::Vector3f> p_cam;   // thinned returns
+    Eigen::Vector3f origin_cam;          // the LiDAR origin in the camera frame
+    std::vector<Eigen::Vector3f> p_cam;  // thinned returns
   };
   Options options_;
   std::map<int64_t, Scan> scans_;

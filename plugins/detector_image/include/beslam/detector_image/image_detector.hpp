@@ -12,11 +12,10 @@
 #pragma once
 
 #include <array>
-#include <string>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/dnn.hpp>
+#include <string>
+#include <vector>
 
 #include "beslam/data.h"
 
@@ -34,7 +33,7 @@ struct DnnOptions {
   int input_width = 320, input_height = 320;
   double score_threshold = 0.3;
   double nms_threshold = 0.45;
-  double containment_threshold = 0.6;  // a box this much inside a larger one of its class is dropped (0: off)
+  double containment_threshold = 0.6;         // a box this much inside a larger one of its class is dropped (0: off)
   std::vector<int> car_classes = {2};         // COCO car
   std::vector<int> pedestrian_classes = {0};  // COCO person
   std::vector<int> cycle_classes = {1, 3};    // COCO bicycle, motorbike: a person on one is a cyclist
@@ -59,18 +58,18 @@ class Detector2D {
 };
 
 struct LiftOptions {
-  double camera_height = 1.65;  // m above the road (KITTI cam 0/2: 1.65)
-  double camera_pitch = 0.0;    // rad, positive when the camera looks down
-  double max_distance = 40.0;   // m: farther boxes are uncertain
-  double max_relative_uncertainty = 0.15;  // sigma(distance)/distance above this: uncertain
-  double pixel_sigma = 2.0;     // px: bottom-edge noise
-  double pitch_sigma = 0.005;   // rad: road pitch unknown to the flat-ground model
-  double border_px = 3.0;       // a box edge this close to the image border is cut
-  std::array<double, 3> car_size = {3.9, 1.6, 1.5};         // length width height (m)
+  double camera_height = 1.65;                       // m above the road (KITTI cam 0/2: 1.65)
+  double camera_pitch = 0.0;                         // rad, positive when the camera looks down
+  double max_distance = 40.0;                        // m: farther boxes are uncertain
+  double max_relative_uncertainty = 0.15;            // sigma(distance)/distance above this: uncertain
+  double pixel_sigma = 2.0;                          // px: bottom-edge noise
+  double pitch_sigma = 0.005;                        // rad: road pitch unknown to the flat-ground model
+  double border_px = 3.0;                            // a box edge this close to the image border is cut
+  std::array<double, 3> car_size = {3.9, 1.6, 1.5};  // length width height (m)
   std::array<double, 3> pedestrian_size = {0.8, 0.6, 1.75};
   std::array<double, 3> cyclist_size = {1.75, 0.6, 1.7};
-  int yaw_candidates = 12;      // cars and cyclists: headings tried over 180 degrees
-  double yaw_prior_sigma = 0.5; // rad: preference for road-aligned headings (yaw -pi/2)
+  int yaw_candidates = 12;          // cars and cyclists: headings tried over 180 degrees
+  double yaw_prior_sigma = 0.5;     // rad: preference for road-aligned headings (yaw -pi/2)
   double height_consistency = 2.0;  // road distance above this times the height-prior distance: use the
                                     // height prior instead, flagged uncertain
 

@@ -17,6 +17,7 @@
 // A single scan gives no velocity and no front/back: yaw is reported in (-pi/2, pi/2].
 #pragma once
 
+#include <Eigen/Geometry>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -24,28 +25,26 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
-
 #include "beslam/data.h"
 
 namespace beslam::detector_lidar {
 
 struct Options {
   // Input selection.
-  double min_range = 1.5;          // m, from the LiDAR
-  double max_range = 60.0;         // m
-  bool camera_fov_only = true;     // report only cars seen in the image (needs a camera)
-  double fov_margin_px = 40.0;     // image grown by this many pixels on each side
-  double fov_context = 5.0;        // m: points this far outside the image's view still shape the boxes
+  double min_range = 1.5;       // m, from the LiDAR
+  double max_range = 60.0;      // m
+  bool camera_fov_only = true;  // report only cars seen in the image (needs a camera)
+  double fov_margin_px = 40.0;  // image grown by this many pixels on each side
+  double fov_context = 5.0;     // m: points this far outside the image's view still shape the boxes
 
   // Ground removal.
   std::string ground_method = "ransac";  // "ransac" | "grid"
   double ground_threshold = 0.25;        // m: points at most this far above the ground are ground
   double max_ground_tilt_deg = 10.0;     // ransac: plane normal within this of the camera's y axis
   int ransac_iterations = 200;
-  double grid_cell = 0.5;                // grid: cell size (m)
-  int grid_radius = 6;                   // grid: local ground = lowest point within this many cells
-  double max_height = 3.0;               // m above ground; higher points (trees, signs) are dropped
+  double grid_cell = 0.5;   // grid: cell size (m)
+  int grid_radius = 6;      // grid: local ground = lowest point within this many cells
+  double max_height = 3.0;  // m above ground; higher points (trees, signs) are dropped
 
   // Clustering (on a voxel-downsampled cloud).
   double voxel_size = 0.12;        // m; 0: no downsampling
@@ -59,12 +58,12 @@ struct Options {
   int lshape_min_points = 40;      // lshape: clusters with fewer points get the minimum-area rectangle
 
   // Car gate (on the fitted footprint before growing) and prior size (length, width, height).
-  double car_min_extent = 1.0;       // m: the larger footprint side must reach this
-  double car_max_length = 6.5;       // m
-  double car_max_width = 2.8;        // m
-  double car_min_top = 0.9;          // m above ground: highest point of the cluster, at least
-  double car_max_top = 2.0;          // m above ground: highest point of the cluster, at most
-  double car_max_bottom = 1.6;       // m above ground: lowest point, at most (a car behind a car shows its roof)
+  double car_min_extent = 1.0;  // m: the larger footprint side must reach this
+  double car_max_length = 6.5;  // m
+  double car_max_width = 2.8;   // m
+  double car_min_top = 0.9;     // m above ground: highest point of the cluster, at least
+  double car_max_top = 2.0;     // m above ground: highest point of the cluster, at most
+  double car_max_bottom = 1.6;  // m above ground: lowest point, at most (a car behind a car shows its roof)
   std::array<double, 3> car_size = {3.9, 1.6, 1.5};
   double car_min_length = 2.2;  // m: without free_space, a visible side shorter than this is grown
   double car_min_width = 1.2;
@@ -89,7 +88,7 @@ struct Stats {
   std::size_t invalid_points = 0;  // NaN / inf coordinates
   std::size_t used_points = 0;     // after range and FOV selection (context band included)
   std::size_t ground_points = 0;
-  std::size_t object_points = 0;   // above ground, below max_height
+  std::size_t object_points = 0;  // above ground, below max_height
   std::size_t clusters = 0;
   std::size_t cars = 0;
   bool ground_found = false;
@@ -99,8 +98,8 @@ struct Stats {
 struct Rect2 {
   Eigen::Vector2d center = Eigen::Vector2d::Zero();
   Eigen::Vector2d axis = Eigen::Vector2d::UnitX();  // unit direction of the first side
-  double extent_axis = 0;   // side length along axis
-  double extent_cross = 0;  // side length across it
+  double extent_axis = 0;                           // side length along axis
+  double extent_cross = 0;                          // side length across it
 };
 
 // L-shape fit (closeness criterion) of 2D points; heading searched over [0, 90) degrees in step_deg.

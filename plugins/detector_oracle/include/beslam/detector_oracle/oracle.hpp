@@ -20,10 +20,10 @@ namespace beslam::detector_oracle {
 class Random {
  public:
   explicit Random(uint64_t seed) : engine_(seed) {}
-  double uniform();                         // [0, 1)
+  double uniform();  // [0, 1)
   double uniform(double a, double b) { return a + (b - a) * uniform(); }
-  double normal();                          // N(0, 1), Box-Muller
-  int poisson(double mean);                 // Knuth's method (mean <= ~50)
+  double normal();                                      // N(0, 1), Box-Muller
+  int poisson(double mean);                             // Knuth's method (mean <= ~50)
   static uint64_t mix(uint64_t seed, uint64_t stream);  // splitmix64 of seed and stream
 
  private:
@@ -33,22 +33,22 @@ class Random {
 };
 
 struct OracleOptions {
-  std::vector<int32_t> classes;          // BESLAM_CLASS_* kept; empty: all
-  double position_noise = 0.0;           // m, std dev of each centre coordinate
-  double depth_noise_per_m = 0.0;        // std dev along the viewing ray, as a fraction of the range
-  double size_noise = 0.0;               // relative std dev of l, w, h (size * (1 + n), floored at 10 %)
-  double yaw_noise = 0.0;                // rad
-  double miss_rate = 0.0;                // probability a true box is dropped
-  double false_positives = 0.0;          // mean false boxes per frame (Poisson)
-  double max_range = 80.0;               // m: labels farther away are not detected; false positives fall inside
+  std::vector<int32_t> classes;    // BESLAM_CLASS_* kept; empty: all
+  double position_noise = 0.0;     // m, std dev of each centre coordinate
+  double depth_noise_per_m = 0.0;  // std dev along the viewing ray, as a fraction of the range
+  double size_noise = 0.0;         // relative std dev of l, w, h (size * (1 + n), floored at 10 %)
+  double yaw_noise = 0.0;          // rad
+  double miss_rate = 0.0;          // probability a true box is dropped
+  double false_positives = 0.0;    // mean false boxes per frame (Poisson)
+  double max_range = 80.0;         // m: labels farther away are not detected; false positives fall inside
   double true_score_min = 0.6, false_score_max = 0.9;  // true boxes score U(min, 1), false ones U(0.3, max)
   uint64_t seed = 0;
-  bool pass_track_ids = false;           // keep the label's track id (default -1: the motion checker must track)
+  bool pass_track_ids = false;  // keep the label's track id (default -1: the motion checker must track)
 };
 
 // One ground-truth object of one frame.
 struct TruthBox {
-  beslam_box3d box;   // geometric centre, l w h, yaw; track_id = the label's; motion_state if known
+  beslam_box3d box;  // geometric centre, l w h, yaw; track_id = the label's; motion_state if known
 };
 
 class LabelOracle {

@@ -12,12 +12,11 @@
 // velocity (absolute, over ground) is rotated into camera axes.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "beslam/data.h"
 #include "beslam/detector_replay/replay.hpp"
@@ -53,7 +52,7 @@ struct NuScenesFrames {
 NuScenesFrames readNuScenesFrames(const std::string& path);
 
 struct NuScenesOptions {
-  std::string results;          // results JSON
+  std::string results;  // results JSON
   NuScenesFrames frames;
   std::vector<Eigen::Isometry3d, Eigen::aligned_allocator<Eigen::Isometry3d>> ego_poses;  // per frame, overrides
   Eigen::Isometry3d T_ego_cam = Eigen::Isometry3d::Identity();

@@ -15,12 +15,11 @@
 // Policy::skip the row is left out and counted in the Report.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "beslam/data.h"
 #include "beslam/formats/geometry.hpp"
@@ -30,20 +29,20 @@ namespace beslam::detector_replay {
 enum class Policy { stop, skip };
 
 struct Report {
-  int64_t rows = 0;       // data rows read (comments and blank lines excluded)
-  int64_t boxes = 0;      // boxes kept
-  int64_t skipped = 0;    // malformed rows left out (Policy::skip)
-  int64_t filtered = 0;   // well-formed rows removed by class / score / depth filters or DontCare
+  int64_t rows = 0;                   // data rows read (comments and blank lines excluded)
+  int64_t boxes = 0;                  // boxes kept
+  int64_t skipped = 0;                // malformed rows left out (Policy::skip)
+  int64_t filtered = 0;               // well-formed rows removed by class / score / depth filters or DontCare
   std::vector<std::string> problems;  // the first few "file:line: cause" messages of skipped rows
   void problem(const std::string& message);
 };
 
 // Which boxes to keep, applied to every format.
 struct Filter {
-  std::vector<int32_t> classes;   // BESLAM_CLASS_* to keep; empty: all
-  double min_score = -1e300;      // after the score transform
-  double min_depth = -1e300;      // camera z of the centre
-  double max_distance = 1e300;    // |centre| in the camera frame
+  std::vector<int32_t> classes;  // BESLAM_CLASS_* to keep; empty: all
+  double min_score = -1e300;     // after the score transform
+  double min_depth = -1e300;     // camera z of the centre
+  double max_distance = 1e300;   // |centre| in the camera frame
   bool keeps(const beslam_box3d& box) const;
 };
 
@@ -52,7 +51,7 @@ class DetectionTable {
  public:
   void add(int64_t frame, const beslam_box3d& box);
   void cover(int64_t frame);  // marks a frame as covered by the source even without boxes
-  const std::vector<beslam_box3d>& at(int64_t frame) const;  // empty for frames without boxes
+  const std::vector<beslam_box3d>& at(int64_t frame) const;                       // empty for frames without boxes
   int64_t lastFrame() const { return static_cast<int64_t>(frames_.size()) - 1; }  // -1 when empty
   int64_t boxCount() const;
   size_t frameCount() const { return frames_.size(); }

@@ -4,12 +4,11 @@
 // projection of the clipped convex solid is the convex hull of its projected vertices.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "beslam/data.h"
 
@@ -30,8 +29,8 @@ std::vector<Eigen::Vector3d> clippedBoxVertices(const beslam_box3d& box, double 
 // margin_px on every side (Minkowski sum with an octagon), then clipped to the image rectangle grown by
 // `guard` pixels so coordinates stay small. Empty when nothing of the box is in front of the camera or
 // the polygon misses the image.
-std::vector<cv::Point2f> projectBoxPolygon(const beslam_box3d& box, const Intrinsics& K, double near,
-                                           double margin_px, double guard = 16.0);
+std::vector<cv::Point2f> projectBoxPolygon(const beslam_box3d& box, const Intrinsics& K, double near, double margin_px,
+                                           double guard = 16.0);
 
 // Sutherland-Hodgman clip of a convex polygon against an axis-aligned rectangle.
 std::vector<cv::Point2f> clipPolygonToRect(const std::vector<cv::Point2f>& polygon, const cv::Rect2f& rect);

@@ -17,22 +17,21 @@
 #pragma once
 
 #include <array>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace beslam::mask {
 
 struct ContourParams {
   double canny_low = 30, canny_high = 90;  // on the 3x3-blurred grey crop
-  double min_support = 0.3;        // a rectangle needs edge points in this fraction of its columns
-  double min_total_support = 0.3;  // over all six; below: the fallback region as is
-  double smooth_weight = 3.0;      // weight of the equation (3) term against the point distances (px)
-  double join_weight = 10.0;       // weight of the C0 joins (per px of gap)
-  double prior_tolerance_px = 6;   // with a prior: edge points this close to the prior outline only
+  double min_support = 0.3;                // a rectangle needs edge points in this fraction of its columns
+  double min_total_support = 0.3;          // over all six; below: the fallback region as is
+  double smooth_weight = 3.0;              // weight of the equation (3) term against the point distances (px)
+  double join_weight = 10.0;               // weight of the C0 joins (per px of gap)
+  double prior_tolerance_px = 6;           // with a prior: edge points this close to the prior outline only
   int max_iterations = 10;
-  int max_points_per_piece = 30;   // edge points per rectangle in the optimisation (evenly thinned)
-  int min_size_px = 10;            // crops narrower or lower than this keep the fallback region
+  int max_points_per_piece = 30;  // edge points per rectangle in the optimisation (evenly thinned)
+  int min_size_px = 10;           // crops narrower or lower than this keep the fallback region
 };
 
 struct Cubic {
@@ -49,12 +48,12 @@ struct Cubic {
 };
 
 struct ContourResult {
-  cv::Mat mask;                   // CV_8UC1 of the crop's size, 255 inside
-  bool refined = false;           // false: the fallback region was returned
-  std::array<Cubic, 6> curves{};  // R1..R6 in crop pixel coordinates
+  cv::Mat mask;                      // CV_8UC1 of the crop's size, 255 inside
+  bool refined = false;              // false: the fallback region was returned
+  std::array<Cubic, 6> curves{};     // R1..R6 in crop pixel coordinates
   std::array<bool, 6> from_edges{};  // rectangle fitted to edges (false: to the fallback outline)
-  double support = 0;             // fraction of columns with edge points, all rectangles
-  double smoothness = 0;          // equation (3) at the solution: mean |sin(d_e - d_j)| over the M points
+  double support = 0;                // fraction of columns with edge points, all rectangles
+  double smoothness = 0;             // equation (3) at the solution: mean |sin(d_e - d_j)| over the M points
 };
 
 // gray_crop: CV_8UC1 crop of the object (roi of the frame); region: CV_8UC1 same size, the projected

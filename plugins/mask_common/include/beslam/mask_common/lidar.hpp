@@ -5,11 +5,10 @@
 // vertical extent (camera y, the paper's "z") kept, and per-object masks from the projected points.
 #pragma once
 
-#include <cstdint>
-#include <vector>
-
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "beslam/data.h"
 #include "beslam/mask_common/box_projection.hpp"
@@ -27,9 +26,8 @@ struct CameraPoints {
 };
 
 // xyzi: `count` points, `stride_floats` floats apart (>= 4), x y z intensity in the LiDAR frame.
-CameraPoints lidarToCamera(const float* xyzi, size_t count, size_t stride_floats,
-                           const Eigen::Isometry3d& T_cam_lidar, const Intrinsics& K, double near = 0.5,
-                           double max_range = 120.0);
+CameraPoints lidarToCamera(const float* xyzi, size_t count, size_t stride_floats, const Eigen::Isometry3d& T_cam_lidar,
+                           const Intrinsics& K, double near = 0.5, double max_range = 120.0);
 
 struct BevRefineParams {
   double search_margin = 1.0;     // m: points this far around the box (BEV) are candidates
@@ -45,10 +43,10 @@ struct BevRefineParams {
 };
 
 struct BevRefineResult {
-  beslam_box3d box{};             // refined (or the input when not refined)
+  beslam_box3d box{};  // refined (or the input when not refined)
   bool refined = false;
-  int points = 0;                 // points matched to the object
-  double cost = 0;                // mean L-shape distance (m) of the fit
+  int points = 0;   // points matched to the object
+  double cost = 0;  // mean L-shape distance (m) of the fit
 };
 
 // Fraction of the box's (unclipped) image area outside the image, 0..1 (1 when behind the camera).
@@ -72,7 +70,7 @@ struct PointMaskParams {
   double min_coverage = 0.35;      // splatted points must cover this fraction of the box polygon
   int splat_half_width = 2;        // px: each point covers (2*hw+1) x (2*hh+1)
   int splat_half_height = 4;
-  int close_px = 5;                // morphological closing of the splats
+  int close_px = 5;  // morphological closing of the splats
 };
 
 // A per-object mask (CV_8UC1 of roi's size, 255 inside) from the object's projected points, clipped to

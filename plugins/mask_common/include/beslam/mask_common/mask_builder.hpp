@@ -5,11 +5,10 @@
 // Each object is computed on its own crop and painted far to near, so nearer objects win overlaps.
 #pragma once
 
-#include <optional>
-#include <vector>
-
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+#include <optional>
+#include <vector>
 
 #include "beslam/data.h"
 #include "beslam/mask_common/box_projection.hpp"
@@ -19,22 +18,22 @@
 namespace beslam::mask {
 
 struct MaskOptions {
-  double margin_px = 2.0;       // added around the projected polygon
-  double near = 0.3;            // near plane (m)
+  double margin_px = 2.0;  // added around the projected polygon
+  double near = 0.3;       // near plane (m)
   UnknownPolicy unknown = UnknownPolicy::Dynamic;
-  bool contour = false;         // edge contour refinement
+  bool contour = false;  // edge contour refinement
   ContourParams contour_params;
-  bool use_lidar = false;       // mask_lidar
-  bool refine_boxes = true;     // BEV fine-tuning (needs use_lidar)
-  bool point_masks = true;      // per-object masks from projected points (needs use_lidar)
-  double max_range = 80.0;      // LiDAR points beyond this are ignored
+  bool use_lidar = false;    // mask_lidar
+  bool refine_boxes = true;  // BEV fine-tuning (needs use_lidar)
+  bool point_masks = true;   // per-object masks from projected points (needs use_lidar)
+  double max_range = 80.0;   // LiDAR points beyond this are ignored
   BevRefineParams bev;
   PointMaskParams points;
 };
 
 struct ObjectMask {
-  beslam_box3d input{};       // as received
-  beslam_box3d box{};         // as used (refined with LiDAR)
+  beslam_box3d input{};  // as received
+  beslam_box3d box{};    // as used (refined with LiDAR)
   uint16_t label = 0;
   cv::Rect roi;               // crop in the image
   cv::Mat mask;               // CV_8UC1 of roi's size (255 inside); empty when not visible

@@ -11,21 +11,20 @@
 
 #include <cstdint>
 #include <map>
-#include <utility>
-#include <string>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace beslam::mask {
 
 struct ScoreOptions {
-  double max_distance = 30.0;         // m, camera to the box's bottom centre
-  int max_occlusion = 0;              // KITTI occluded field: 0 = unoccluded only
+  double max_distance = 30.0;  // m, camera to the box's bottom centre
+  int max_occlusion = 0;       // KITTI occluded field: 0 = unoccluded only
   double max_truncation = 0.1;
-  int min_pixels = 50;                // instance pixels
+  int min_pixels = 50;  // instance pixels
   std::vector<std::string> types = {"Car", "Van"};
-  int64_t first = 0, last = -1;       // frame range (last inclusive, -1: all)
+  int64_t first = 0, last = -1;  // frame range (last inclusive, -1: all)
 };
 
 struct ObjectScore {
@@ -34,7 +33,7 @@ struct ObjectScore {
   double distance = 0;
   bool moving = false;
   bool motion_known = false;
-  int predicted_label = 0;            // the most frequent label on the object (0: none)
+  int predicted_label = 0;  // the most frequent label on the object (0: none)
   double iou = 0;
   int gt_pixels = 0;
 };

@@ -32,14 +32,13 @@
 // tracker still tracks (camera frame) but reports UNKNOWN.
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <deque>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 #include "beslam/data.h"
 
@@ -48,44 +47,44 @@ namespace beslam::motion {
 struct Params {
   // Association.
   std::string association = "distance";  // "distance" (BEV centre distance) | "iou" (1 - BEV IoU)
-  double gate = 2.0;              // m: BEV distance gate at range 0
-  double gate_per_m = 0.03;       // m of gate added per metre of range
-  double min_iou = 0.01;          // "iou": smallest BEV IoU accepted
-  bool match_across_classes = false;  // let car/van/truck boxes match each other regardless (always on),
-                                      // and any class any other when true
+  double gate = 2.0;                     // m: BEV distance gate at range 0
+  double gate_per_m = 0.03;              // m of gate added per metre of range
+  double min_iou = 0.01;                 // "iou": smallest BEV IoU accepted
+  bool match_across_classes = false;     // let car/van/truck boxes match each other regardless (always on),
+                                         // and any class any other when true
   // Kalman filter.
-  double accel_sigma = 4.0;       // m/s^2, white-noise acceleration
-  double pos_sigma = 0.1;         // m, position noise of a detection at range 0
+  double accel_sigma = 4.0;        // m/s^2, white-noise acceleration
+  double pos_sigma = 0.1;          // m, position noise of a detection at range 0
   double pos_sigma_per_m = 0.005;  // m per metre of range
-  double velocity_sigma = 1.0;    // m/s, noise of a detector's own velocity
+  double velocity_sigma = 1.0;     // m/s, noise of a detector's own velocity
   // Ego-motion error (the pose source's drift): a parked car seems to move at up to
   // ego_speed_noise * (ego speed) + ego_turn_noise * (ego yaw rate) * range. A velocity error that more
   // observations do not average away; it widens every speed test and the pull-out test.
-  double ego_speed_noise = 0.01;  // fraction of the ego's speed (odometry translation drift)
-  double ego_turn_noise = 0.05;   // fraction of the ego's yaw rate (heading-rate error; lateral, grows with range)
+  double ego_speed_noise = 0.01;     // fraction of the ego's speed (odometry translation drift)
+  double ego_turn_noise = 0.05;      // fraction of the ego's yaw rate (heading-rate error; lateral, grows with range)
   double init_velocity_sigma = 5.0;  // m/s, velocity uncertainty of a new track (no detector velocity)
   // Track life.
-  double max_miss_time = 1.0;     // s a track survives without a detection
-  int max_history = 64;           // observations kept per track
+  double max_miss_time = 1.0;  // s a track survives without a detection
+  int max_history = 64;        // observations kept per track
   // Motion decision.
-  double window_dynamic = 0.5;    // s of history for dynamic evidence
-  double window_static = 1.5;     // s of history for static evidence
-  int min_observations = 3;       // before any decision (without a detector velocity)
-  double max_residual = 2.0;      // a window whose line-fit residual exceeds this many noise sigmas gives no evidence
+  double window_dynamic = 0.5;  // s of history for dynamic evidence
+  double window_static = 1.5;   // s of history for static evidence
+  int min_observations = 3;     // before any decision (without a detector velocity)
+  double max_residual = 2.0;    // a window whose line-fit residual exceeds this many noise sigmas gives no evidence
   // The two classes by definition: a car slower than dynamic_speed is parked, one faster than static_speed
   // moves (KITTI's truth: 0.3 and 1 m/s). Dynamic evidence rejects "parked", static evidence rejects "moving";
   // range enters through the noise model (pos_sigma_per_m, ego_turn_noise), not through these speeds.
-  double dynamic_speed = 0.3;     // m/s, dynamic evidence: speed - z_dynamic * sigma_v above this
-  double static_speed = 1.0;      // m/s, static evidence: speed + z_static * sigma_v below this
-  double z_dynamic = 3.0;         // standard errors the speed must clear (2D radial: 3 ~ 1 % false alarms a test)
+  double dynamic_speed = 0.3;  // m/s, dynamic evidence: speed - z_dynamic * sigma_v above this
+  double static_speed = 1.0;   // m/s, static evidence: speed + z_static * sigma_v below this
+  double z_dynamic = 3.0;      // standard errors the speed must clear (2D radial: 3 ~ 1 % false alarms a test)
   double z_static = 2.0;
   double displacement_margin = 0.75;  // m: a static track whose last 3 positions leave its parked position by
-                                     // this plus z_dynamic standard errors has dynamic evidence
-  int anchor_frames = 30;         // depth of the parked position's running mean
-  int start_frames = 2;           // STATIC -> DYNAMIC after this many dynamic frames in a row
-  int stop_dwell = 5;             // DYNAMIC -> STATIC after this many static frames in a row
-  double max_range = 200.0;       // m: boxes farther away get a track but stay UNKNOWN
-  double default_dt = 0.1;        // s, when timestamps do not increase
+                                      // this plus z_dynamic standard errors has dynamic evidence
+  int anchor_frames = 30;             // depth of the parked position's running mean
+  int start_frames = 2;               // STATIC -> DYNAMIC after this many dynamic frames in a row
+  int stop_dwell = 5;                 // DYNAMIC -> STATIC after this many static frames in a row
+  double max_range = 200.0;           // m: boxes farther away get a track but stay UNKNOWN
+  double default_dt = 0.1;            // s, when timestamps do not increase
 
   // Empty when valid, else the first violated constraint ("gate must be > 0").
   std::string validate() const;
@@ -134,8 +133,8 @@ class BevTracker {
     int32_t class_id = 0;
     Eigen::Vector4d x;  // x z vx vz
     Eigen::Matrix4d P;
-    double last_t = 0;  // last detection
-    double yaw_bev = 0; // footprint heading in the BEV plane
+    double last_t = 0;   // last detection
+    double yaw_bev = 0;  // footprint heading in the BEV plane
     double length = 4, width = 1.8;
     int hits = 0;
     std::deque<Observation> history;
@@ -160,9 +159,9 @@ class BevTracker {
   int32_t next_id_ = 0;
   bool have_time_ = false;
   double last_time_ = 0;
-  bool pose_mode_ = false;  // tracks live in a world frame (some pose seen)
+  bool pose_mode_ = false;                                   // tracks live in a world frame (some pose seen)
   std::vector<std::pair<double, Eigen::Isometry3d>> poses_;  // last two known poses, for extrapolation
-  double ego_speed_ = 0, ego_yaw_rate_ = 0;  // between the last two known poses (m/s, rad/s)
+  double ego_speed_ = 0, ego_yaw_rate_ = 0;                  // between the last two known poses (m/s, rad/s)
 };
 
 // BEV footprint helpers (x-z plane of the frame the box is expressed in).

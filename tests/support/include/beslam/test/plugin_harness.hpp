@@ -21,7 +21,8 @@ class PluginHarness {
   const registry::Plugin& plugin(const std::string& id) const { return registry.find(id); }
 
   // settings: key -> YAML-like text ("0.5", "true", "[1, 2]", "abc").
-  const std::vector<beslam_config_value>& config(const std::string& id, const std::map<std::string, std::string>& settings) {
+  const std::vector<beslam_config_value>& config(const std::string& id,
+                                                 const std::map<std::string, std::string>& settings) {
     const registry::Plugin& p = registry.find(id);
     values_.emplace_back();
     auto& out = values_.back();
@@ -39,9 +40,13 @@ class PluginHarness {
       v.key = keys_.back().c_str();
       v.type = f.type;
       switch (f.type) {
-        case BESLAM_CONFIG_BOOL: v.number = (text == "true") ? 1 : 0; break;
+        case BESLAM_CONFIG_BOOL:
+          v.number = (text == "true") ? 1 : 0;
+          break;
         case BESLAM_CONFIG_INT:
-        case BESLAM_CONFIG_DOUBLE: v.number = std::stod(text); break;
+        case BESLAM_CONFIG_DOUBLE:
+          v.number = std::stod(text);
+          break;
         case BESLAM_CONFIG_DOUBLE_LIST: {
           std::vector<double> list;
           std::string inner = text;
