@@ -1,29 +1,58 @@
 #!/usr/bin/env bash
 # The sanitised build (issue 17): clang with AddressSanitizer + UndefinedBehaviorSanitizer (any UB is an
-# error) and libFuzzer coverage, into build-sanitize/, then
-#   1. every unit test (module and plugin tests) with LeakSanitizer on;
-#   2. the end-to-end runs (`beslam run` as a child process: tests/integration, tests/sdk) with ASan and
-#      UBSan but no leak check: the host unloads its plugins at exit, and the static caches of the libraries
-#      they pulled in (OpenCV's among them) are then reported as leaks of an unknown module; the plugins'
-#      own code is leak-checked by their unit tests in step 1;
-#   3. every fuzz target for BESLAM_FUZZ_RUNS executions (default 10000 here; scripts/fuzz-nightly.sh runs
-#      1,000,000) from its seed corpus in tests/fuzz/corpus/.
-# Left to the Release suite (minutes under ASan, nothing memory-specific): the SLAM accuracy runs on KITTI
-# and synthetic sequences, the bench, the browser test of the report and the out-of-tree SDK builds.
+# error) and libFuzzer coverage, into build-sanitize/. Two sets (docs/testing.md):
+#   BESLAM_SANITIZE_SET=ci (default; what test.sh and CI run, within CI's 30 minutes): builds only the
+#     parsers, the host's core modules, the motion checker and mask cores and the replay plugins with
+#     their unit tests (LeakSanitizer on), then every fuzz target for BESLAM_FUZZ_RUNS executions
+#     (default 10000) from its seed corpus in tests/fuzz/corpus/;
+#   BESLAM_SANITIZE_SET=full: everything, every unit test with LeakSanitizer, the end-to-end runs
+#     (`beslam run` as a child process) without the leak check (the host unloads its plugins at exit and
+#     the static caches of the libraries they pulled in are then reported as leaks of an unknown module),
+#     and the fuzz targets. Left out even there (minutes under ASan, nothing memory-specific): the SLAM
+#     accuracy runs on KITTI and synthetic sequences, the bench, the report's browser test and the
+#     out-of-tree SDK builds.
+# BESLAM_SANITIZE_ONLY=fuzz runs only the fuzz targets (scripts/fuzz-nightly.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=${BESLAM_BUILD_JOBS:-2}
 runs=${BESLAM_FUZZ_RUNS:-10000}
+set_name=${BESLAM_SANITIZE_SET:-ci}
+only=${BESLAM_SANITIZE_ONLY:-}
+unit_tests=(abi_layout_test common_test formats_test datasets_test eval_test pipeline_spec_test pipeline_samples_test
+  static_map_test motion_score_test mask_common_test motion_bev_tracker_test detector_replay_test registry_test)
+fuzzers=(pipeline_yaml label_rows detection_rows nuscenes calibration image)
 cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
-  -DCMAKE_CXX_FLAGS="-O1 -g" -DCMAKE_C_FLAGS="-O1 -g" -DBESLAM_SANITIZE=ON -DBESLAM_FUZZ=ON \
-  -DBESLAM_FUZZ_RUNS="$runs" -DBESLAM_BUILD_BENCHMARKS=OFF > /dev/null
-cmake --build build-sanitize -j"$jobs"
-cd build-sanitize
+  -DCMAKE_CXX_FLAGS="-O1 -gline-tables-only" -DCMAKE_C_FLAGS="-O1 -gline-tables-only" -DBESLAM_SANITIZE=ON \
+  -DBESLAM_FUZZ=ON -DBESLAM_FUZZ_RUNS="$runs" -DBESLAM_BUILD_BENCHMARKS=OFF > /dev/null
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
-end_to_end='^(RunTest|Demo|ShippedConfigs|TemplateBuild)\.'
-slow='Kitti|KITTI|Demo|SlamSynthetic|^Synth\.|SyntheticStreets|BenchCommand|ReportBrowser|TemplateBuild'
-if [ "${BESLAM_SANITIZE_ONLY:-}" != "fuzz" ]; then
-  ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs" --timeout 900 -E "^fuzz\.|$end_to_end|$slow"
-  ASAN_OPTIONS=detect_leaks=0 ctest --output-on-failure -j"$jobs" --timeout 900 -R "$end_to_end" -E "$slow"
+export BESLAM_PLUGIN_PATH=$PWD/build-sanitize/lib/beslam/plugins
+if [ "$set_name" = full ]; then
+  cmake --build build-sanitize -j"$jobs"
+  cd build-sanitize
+  end_to_end='^(RunTest|Demo|ShippedConfigs|TemplateBuild)\.'
+  slow='Kitti|KITTI|Demo|SlamSynthetic|^Synth\.|SyntheticStreets|BenchCommand|ReportBrowser|TemplateBuild'
+  if [ "$only" != fuzz ]; then
+    ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs" --timeout 900 -E "^fuzz\.|$end_to_end|$slow"
+    ASAN_OPTIONS=detect_leaks=0 ctest --output-on-failure -j"$jobs" --timeout 900 -R "$end_to_end" -E "$slow"
+  fi
+  ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs" --timeout 3600 -R '^fuzz\.'
+  exit 0
 fi
-ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs" --timeout 3600 -R '^fuzz\.'
+if [ "$only" = fuzz ]; then
+  cmake --build build-sanitize -j"$jobs" --target "${fuzzers[@]}"
+else
+  cmake --build build-sanitize -j"$jobs" --target "${unit_tests[@]}" "${fuzzers[@]}"
+  failed=()
+  for t in "${unit_tests[@]}"; do  # from the source folder, as ctest runs them
+    if ASAN_OPTIONS=detect_leaks=1 build-sanitize/tests/"$t" > "build-sanitize/$t.log" 2>&1; then
+      echo "sanitize: $t $(grep -E '^\[  PASSED  \]' "build-sanitize/$t.log" | head -1)"
+    else
+      echo "sanitize: $t FAILED:"; tail -n 60 "build-sanitize/$t.log"; failed+=("$t")
+    fi
+  done
+  if [ ${#failed[@]} -gt 0 ]; then echo "sanitize: failed: ${failed[*]}"; exit 1; fi
+fi
+for f in "${fuzzers[@]}"; do
+  echo "sanitize: fuzz $f, $runs executions"
+  ASAN_OPTIONS=detect_leaks=1 tests/fuzz/run_fuzzer.sh "$PWD/build-sanitize/fuzz/$f" "$PWD/tests/fuzz/corpus/$f" "$runs"
+done
