@@ -88,6 +88,14 @@ TEST_F(PipelineSpecTest, NonScalarKeysAreOneError) {
   expectError("# t: rpeAde+#lt\n:\n t: rpeAde+#lt\n:\n?  : rpeAde+#lt\n:\n", {"pipeline.yaml"});
 }
 
+// Found by the pipeline_yaml fuzzer: a path the file system refuses to look at (a name longer than
+// NAME_MAX) escaped as std::filesystem_error.
+TEST_F(PipelineSpecTest, UnusablePathIsOneError) {
+  expectError("dataset:\n  type: kitti_odometry\n  root: " + std::string(5000, 'a') +
+                  "\n  sequence: \"00\"\nbackend: {plugin: backend_pose_replay, poses: p.txt}\n",
+              {"pipeline.yaml", "File name too long"});
+}
+
 TEST_F(PipelineSpecTest, UnknownKeyNamesLineAndKnownKeys) {
   expectError(std::string(kGood) + "datset: {}\n", {"pipeline.yaml:9: datset: unknown key", "known: name"});
   expectError("dataset:\n  type: tum\n  root: x\n  frist: 3\nbackend: {plugin: a}\n",
