@@ -168,19 +168,17 @@ bool ab3dmotClass(int64_t id, int32_t& class_id) {
 }
 
 bool nuscenesClass(const std::string& name, int32_t& class_id) {
-  if (name == "car")
-    class_id = BESLAM_CLASS_CAR;
-  else if (name == "truck" || name == "bus" || name == "trailer" || name == "construction_vehicle")
-    class_id = BESLAM_CLASS_TRUCK;
-  else if (name == "pedestrian")
-    class_id = BESLAM_CLASS_PEDESTRIAN;
-  else if (name == "bicycle" || name == "motorcycle")
-    class_id = BESLAM_CLASS_CYCLIST;
-  else if (name == "barrier" || name == "traffic_cone")
-    class_id = BESLAM_CLASS_UNKNOWN;
-  else
-    return false;
-  return true;
+  static const formats::NamedClass kNuscenes[] = {{"car", BESLAM_CLASS_CAR},
+                                                  {"truck", BESLAM_CLASS_TRUCK},
+                                                  {"bus", BESLAM_CLASS_TRUCK},
+                                                  {"trailer", BESLAM_CLASS_TRUCK},
+                                                  {"construction_vehicle", BESLAM_CLASS_TRUCK},
+                                                  {"pedestrian", BESLAM_CLASS_PEDESTRIAN},
+                                                  {"bicycle", BESLAM_CLASS_CYCLIST},
+                                                  {"motorcycle", BESLAM_CLASS_CYCLIST},
+                                                  {"barrier", BESLAM_CLASS_UNKNOWN},
+                                                  {"traffic_cone", BESLAM_CLASS_UNKNOWN}};
+  return formats::classByName(name, kNuscenes, class_id);
 }
 
 std::vector<int32_t> parseClassList(const std::string& list) {
@@ -229,7 +227,9 @@ beslam_box3d parseAb3dmotRow(const std::string& line, const std::string& path, i
   }
   if (v[0] != std::floor(v[0]) || v[0] < 0 || v[0] > kMaxFrame)
     failAt(path, line_no, "frame '" + std::string(f[0]) + "' is not a frame index");
-  if (v[1] != std::floor(v[1])) failAt(path, line_no, "class id '" + std::string(f[1]) + "' is not an integer");
+  // Class ids are small integers; anything outside int32 cannot be one (and would overflow the cast).
+  if (v[1] != std::floor(v[1]) || std::fabs(v[1]) > 2147483647.0)
+    failAt(path, line_no, "class id '" + std::string(f[1]) + "' is not an integer class id");
   int32_t class_id = 0;
   if (!ab3dmotClass(static_cast<int64_t>(v[1]), class_id))
     failAt(path, line_no, "unknown class id " + std::string(f[1]) + " (known: 1 Pedestrian, 2 Car, 3 Cyclist)");
