@@ -13,14 +13,14 @@
 #include "beslam/formats/geometry.hpp"
 #include "beslam/formats/labels.hpp"
 #include "beslam/formats/trajectory.hpp"
-#include "temp_files.hpp"
+#include "beslam/test/scratch_dir.hpp"
 
 namespace beslam::formats {
 namespace {
 
 namespace fs = std::filesystem;
 
-class Files : public TempFiles {
+class Files : public beslam::test::ScratchDir {
  protected:
   // The one error message reading `path` gives (empty when it reads).
   template <class F>
@@ -52,11 +52,11 @@ TEST_F(Files, KittiAndTumRowsReadAndRoundTripExactly) {
   EXPECT_EQ(detectFormat(tum), "tum");
 
   writeTum(write("out.tum", ""), t);
-  const Trajectory back = readTum((dir_ / "out.tum").string());
+  const Trajectory back = readTum(path("out.tum"));
   EXPECT_EQ(back.stamps, t.stamps);
   EXPECT_EQ(back.poses[1].translation(), t.poses[1].translation());
   writeKitti(write("out.kitti", ""), k);
-  EXPECT_EQ(readKitti((dir_ / "out.kitti").string()).poses[1].matrix(), k.poses[1].matrix());
+  EXPECT_EQ(readKitti(path("out.kitti")).poses[1].matrix(), k.poses[1].matrix());
 }
 
 TEST_F(Files, BadTrajectoryRowsNameTheFileAndLine) {
@@ -75,9 +75,8 @@ TEST_F(Files, BadTrajectoryRowsNameTheFileAndLine) {
   const std::string empty = write("empty.txt", "# nothing\n\n");
   EXPECT_EQ(errorOf([&] { readKitti(empty); }), empty + ": no poses in file (empty or only comments)");
   EXPECT_EQ(errorOf([&] { detectFormat(write("nine.txt", "1 2 3 4 5 6 7 8 9\n")); }),
-            (dir_ / "nine.txt").string() + ":1: cannot tell the format: 9 numbers per row (KITTI has 12, TUM has 8)");
-  EXPECT_NE(errorOf([&] { readKitti((dir_ / "absent.txt").string()); }).find("absent.txt: cannot open file"),
-            std::string::npos);
+            path("nine.txt") + ":1: cannot tell the format: 9 numbers per row (KITTI has 12, TUM has 8)");
+  EXPECT_NE(errorOf([&] { readKitti(path("absent.txt")); }).find("absent.txt: cannot open file"), std::string::npos);
   EXPECT_EQ(errorOf([&] { read(short_row, "csv"); }),
             short_row + ": unknown trajectory format 'csv' (expected kitti or tum)");
 }

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "beslam/formats/error.hpp"
-#include "temp_files.hpp"
+#include "beslam/test/scratch_dir.hpp"
 
 namespace fs = std::filesystem;
 using beslam::formats::Trajectory;
@@ -17,7 +17,7 @@ namespace traj = beslam::formats;
 
 namespace {
 
-class TrajectoryFiles : public TempFiles {
+class TrajectoryFiles : public beslam::test::ScratchDir {
  protected:
   // Expects `fn` to throw beslam::Error whose message starts with "path:line:" (or "path:" when line 0)
   // and contains `cause`.
@@ -154,7 +154,7 @@ TEST_F(TrajectoryFiles, WriterReplacesAtomicallyAndReportsUnwritablePath) {
   traj::writeKitti(file, makeTrajectory(3));
   traj::writeKitti(file, makeTrajectory(2));
   EXPECT_EQ(traj::readKitti(file).size(), 2u);
-  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
+  EXPECT_EQ(std::distance(fs::directory_iterator(path("")), fs::directory_iterator()), 1);
   const std::string bad = path("no_such_dir/out.txt");
   expectError([&] { traj::writeTum(bad, makeTrajectory(2)); }, bad, 0, "cannot write");
 }

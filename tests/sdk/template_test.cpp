@@ -15,6 +15,7 @@
 #include "beslam/common/error.hpp"
 #include "beslam/registry/instance.hpp"
 #include "beslam/registry/registry.hpp"
+#include "beslam/test/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 
@@ -25,12 +26,7 @@ int shell(const std::string& command, const fs::path& log) {
   return std::system(full.c_str());
 }
 
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using beslam::test::readText;
 
 class TemplateBuild : public ::testing::Test {
  protected:
@@ -42,7 +38,7 @@ class TemplateBuild : public ::testing::Test {
     ASSERT_EQ(shell("cmake --install " + std::string(BESLAM_BINARY_DIR) + " --prefix " + prefix.string(),
                     root_ / "install.log"),
               0)
-        << slurp(root_ / "install.log");
+        << readText(root_ / "install.log");
     ASSERT_TRUE(fs::exists(prefix / "include/beslam/sdk/sdk.hpp"));
     // Configure and build the template from the INSTALLED copy, as a plugin author would.
     const fs::path src = prefix / "share/beslam/plugin-template";
@@ -52,11 +48,21 @@ class TemplateBuild : public ::testing::Test {
                         (root_ / "build").string(),
                     root_ / "build.log"),
               0)
-        << slurp(root_ / "build.log");
+        << readText(root_ / "build.log");
     plugin_dir_ = root_ / "build" / "plugins";
     built_ = fs::exists(plugin_dir_ / "mask_rect.so") && fs::exists(plugin_dir_ / "label_replay.so");
   }
   static void TearDownTestSuite() { fs::remove_all(root_); }
+
+  // Each test starts with the built plugins scanned by a fresh registry (with no problems).
+  void SetUp() override {
+    ASSERT_TRUE(built_);
+    registry_.addSearchPath(plugin_dir_.string());
+    registry_.scan();
+    ASSERT_TRUE(registry_.problems().empty()) << registry_.problems().front();
+  }
+
+  beslam::registry::Registry registry_;
 
   static inline fs::path root_, plugin_dir_;
   static inline bool built_ = false;
@@ -65,11 +71,7 @@ class TemplateBuild : public ::testing::Test {
 }  // namespace
 
 TEST_F(TemplateBuild, HostLoadsAndRunsTheOutOfTreePlugin) {
-  ASSERT_TRUE(built_);
-  beslam::registry::Registry registry;
-  registry.addSearchPath(plugin_dir_.string());
-  registry.scan();
-  ASSERT_TRUE(registry.problems().empty()) << registry.problems().front();
+  beslam::registry::Registry& registry = registry_;
   const auto& plugin = registry.find("mask_rect", BESLAM_KIND_MASK_GENERATOR);
   EXPECT_EQ(plugin.version, "1.0.0");
   ASSERT_EQ(plugin.fields.size(), 3u);
@@ -113,21 +115,16 @@ TEST_F(TemplateBuild, HostLoadsAndRunsTheOutOfTreePlugin) {
 }
 
 TEST_F(TemplateBuild, BeslamPluginsListsIt) {
-  ASSERT_TRUE(built_);
   const fs::path out = root_ / "plugins.txt";
   ASSERT_EQ(shell(std::string(BESLAM_BINARY_DIR) + "/bin/beslam plugins --plugin-path " + plugin_dir_.string(), out), 0)
-      << slurp(out);
-  const std::string text = slurp(out);
+      << readText(out);
+  const std::string text = readText(out);
   EXPECT_NE(text.find("mask_rect  (mask_generator, version 1.0.0, ABI 1.2)"), std::string::npos) << text;
   EXPECT_NE(text.find("backend_pose_replay"), std::string::npos) << text;
 }
 
 TEST_F(TemplateBuild, TheOutOfTreeReplayPluginReadsLabelsThroughTheSdkFormats) {
-  ASSERT_TRUE(built_);
-  beslam::registry::Registry registry;
-  registry.addSearchPath(plugin_dir_.string());
-  registry.scan();
-  ASSERT_TRUE(registry.problems().empty()) << registry.problems().front();
+  beslam::registry::Registry& registry = registry_;
   const auto& plugin = registry.find("label_replay", BESLAM_KIND_DETECTOR);
   ASSERT_EQ(plugin.fields.size(), 3u);
   EXPECT_EQ(plugin.fields[2].choices, "empty|error");
@@ -180,7 +177,6 @@ TEST_F(TemplateBuild, TheOutOfTreeReplayPluginReadsLabelsThroughTheSdkFormats) {
 // backend) build out of tree from the installed SDK alone: their own folders, added to a project that
 // knows nothing but find_package(beslam_sdk); no host library exists there to link.
 TEST_F(TemplateBuild, BuiltInReplayPluginsBuildFromTheInstalledSdkAlone) {
-  ASSERT_TRUE(built_);
   const fs::path project = root_ / "replays";
   fs::create_directories(project);
   std::ofstream(project / "CMakeLists.txt") << "cmake_minimum_required(VERSION 3.19)\n"
@@ -197,13 +193,13 @@ TEST_F(TemplateBuild, BuiltInReplayPluginsBuildFromTheInstalledSdkAlone) {
                       " && cmake --build " + (project / "build").string() + " -j2",
                   root_ / "replays.log"),
             0)
-      << slurp(root_ / "replays.log");
+      << readText(root_ / "replays.log");
   const fs::path plugins = project / "build" / "plugins";
   const fs::path out = root_ / "replays_listed.txt";
   ASSERT_EQ(shell(std::string(BESLAM_BINARY_DIR) + "/bin/beslam plugins --json --plugin-path " + plugins.string(), out),
             0)
-      << slurp(out);
-  const std::string text = slurp(out);
+      << readText(out);
+  const std::string text = readText(out);
   for (const char* id : {"detector_replay", "detector_oracle", "backend_pose_replay"})
     EXPECT_NE(text.find(plugins.string() + "/" + id + ".so"), std::string::npos) << id << " not built out of tree:\n"
                                                                                  << text;

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "beslam/bench/bench.hpp"
+#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/report/report.hpp"
@@ -43,6 +44,14 @@ constexpr const char* kUsage =
 struct Usage : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+int cliInteger(const std::string& flag, const std::string& text, int lo, int hi) {
+  try {
+    return cli::integerInRange(flag, text, lo, hi);
+  } catch (const std::invalid_argument& e) {
+    throw Usage(e.what());
+  }
+}
 
 std::string selfExe() {
   std::error_code ec;
@@ -233,25 +242,14 @@ int runBenchCommand(const std::vector<std::string>& args, std::ostream& out, std
       } else if (a == "--out")
         out_dir = value();
       else if (a == "--jobs") {
-        const std::string v = value();
-        try {
-          jobs = std::stoi(v);
-        } catch (const std::exception&) {
-          throw Usage("--jobs: '" + v + "' is not a number");
-        }
-        if (jobs < 1 || jobs > 256) throw Usage("--jobs: expected 1 to 256, got " + v);
+        jobs = cliInteger("--jobs", value(), 1, 256);
       } else if (a == "--emit") {
         emit = value();
         if (emit != "slurm") throw Usage("--emit: only 'slurm' is supported, got '" + emit + "'");
       } else if (a == "--merge")
         merge_dir = value();
       else if (a == "--cell") {
-        const std::string v = value();
-        try {
-          cell = std::stoi(v);
-        } catch (const std::exception&) {
-          throw Usage("--cell: '" + v + "' is not a cell number");
-        }
+        cell = cliInteger("--cell", value(), 0, 1'000'000);
         if (i + 1 >= args.size()) throw Usage("--cell K DIR: the bench folder is missing");
         cell_dir = args[++i];
       } else if (!a.empty() && a[0] == '-')

@@ -77,6 +77,28 @@ struct Reader {
     return out;
   }
 
+  // doc[key]: a non-empty list of maps, each with a label unique in the list and only `allowed` keys;
+  // `each(entry, "key[i]", label)` reads the rest of an entry.
+  template <class Each>
+  void labelledList(const YAML::Node& doc, const std::string& key, const std::string& second,
+                    const std::set<std::string>& allowed, Each each) const {
+    const YAML::Node list = doc[key];
+    if (!list.IsDefined()) throwAt(path, key + ": missing");
+    if (!list.IsSequence() || list.size() == 0) fail(list, key + ": expected a non-empty list");
+    std::vector<std::string> labels;
+    for (size_t i = 0; i < list.size(); ++i) {
+      const YAML::Node e = list[i];
+      const std::string where = key + "[" + std::to_string(i) + "]";
+      if (!e.IsMap()) fail(e, where + ": expected a map with label and " + second);
+      onlyKeys(e, allowed, where);
+      const std::string l = label(e, where);
+      if (std::find(labels.begin(), labels.end(), l) != labels.end())
+        fail(e["label"], where + ".label: '" + l + "' is used twice");
+      labels.push_back(l);
+      each(e, where, l);
+    }
+  }
+
   std::string file(const YAML::Node& n, const std::string& what) const {
     fs::path p = scalar(n, what);
     if (p.is_relative()) p = base / p;
@@ -125,58 +147,43 @@ Matrix loadMatrix(const std::string& path) {
     m.seeds.push_back(v);
   }
 
-  const YAML::Node seqs = doc["sequences"];
-  if (!seqs.IsDefined()) throwAt(path, "sequences: missing");
-  if (!seqs.IsSequence() || seqs.size() == 0) r.fail(seqs, "sequences: expected a non-empty list");
-  for (size_t i = 0; i < seqs.size(); ++i) {
-    const YAML::Node e = seqs[i];
-    const std::string where = "sequences[" + std::to_string(i) + "]";
-    if (!e.IsMap()) r.fail(e, where + ": expected a map with label and sequence");
-    r.onlyKeys(e, {"label", "sequence", "root", "set"}, where);
-    SequenceEntry s;
-    s.label = r.label(e, where);
-    for (const auto& other : m.sequences)
-      if (other.label == s.label) r.fail(e["label"], where + ".label: '" + s.label + "' is used twice");
-    if (!e["sequence"].IsDefined()) r.fail(e, where + ": 'sequence' is missing (a KITTI sequence or synth preset)");
-    s.sets.push_back("dataset.sequence=\"" + r.scalar(e["sequence"], where + ".sequence") + "\"");
-    if (e["root"].IsDefined()) {
-      fs::path root = r.scalar(e["root"], where + ".root");
-      if (root.is_relative()) root = r.base / root;
-      s.sets.push_back("dataset.root=\"" + root.lexically_normal().string() + "\"");
-    }
-    for (auto& x : r.sets(e, where)) s.sets.push_back(x);
-    m.sequences.push_back(s);
-  }
+  r.labelledList(doc, "sequences", "sequence", {"label", "sequence", "root", "set"},
+                 [&](const YAML::Node& e, const std::string& where, const std::string& label) {
+                   SequenceEntry s;
+                   s.label = label;
+                   if (!e["sequence"].IsDefined())
+                     r.fail(e, where + ": 'sequence' is missing (a KITTI sequence or synth preset)");
+                   s.sets.push_back("dataset.sequence=\"" + r.scalar(e["sequence"], where + ".sequence") + "\"");
+                   if (e["root"].IsDefined()) {
+                     fs::path root = r.scalar(e["root"], where + ".root");
+                     if (root.is_relative()) root = r.base / root;
+                     s.sets.push_back("dataset.root=\"" + root.lexically_normal().string() + "\"");
+                   }
+                   for (auto& x : r.sets(e, where)) s.sets.push_back(x);
+                   m.sequences.push_back(s);
+                 });
 
-  const YAML::Node pipes = doc["pipelines"];
-  if (!pipes.IsDefined()) throwAt(path, "pipelines: missing");
-  if (!pipes.IsSequence() || pipes.size() == 0) r.fail(pipes, "pipelines: expected a non-empty list");
-  for (size_t i = 0; i < pipes.size(); ++i) {
-    const YAML::Node e = pipes[i];
-    const std::string where = "pipelines[" + std::to_string(i) + "]";
-    if (!e.IsMap()) r.fail(e, where + ": expected a map with label and file");
-    r.onlyKeys(e, {"label", "file", "set", "sequences"}, where);
-    PipelineEntry p;
-    p.label = r.label(e, where);
-    for (const auto& other : m.pipelines)
-      if (other.label == p.label) r.fail(e["label"], where + ".label: '" + p.label + "' is used twice");
-    if (!e["file"].IsDefined()) r.fail(e, where + ": 'file' is missing (a pipeline YAML)");
-    p.file = r.file(e["file"], where + ".file");
-    p.sets = r.sets(e, where);
-    if (e["sequences"].IsDefined()) {
-      const YAML::Node only = e["sequences"];
-      if (!only.IsSequence() || only.size() == 0)
-        r.fail(only, where + ".sequences: expected a non-empty list of sequence labels");
-      for (const auto& l : only) {
-        const std::string s = r.scalar(l, where + ".sequences");
-        bool known = false;
-        for (const auto& q : m.sequences) known |= q.label == s;
-        if (!known) r.fail(l, where + ".sequences: no sequence is labelled '" + s + "'");
-        p.sequences.push_back(s);
-      }
-    }
-    m.pipelines.push_back(p);
-  }
+  r.labelledList(doc, "pipelines", "file", {"label", "file", "set", "sequences"},
+                 [&](const YAML::Node& e, const std::string& where, const std::string& label) {
+                   PipelineEntry p;
+                   p.label = label;
+                   if (!e["file"].IsDefined()) r.fail(e, where + ": 'file' is missing (a pipeline YAML)");
+                   p.file = r.file(e["file"], where + ".file");
+                   p.sets = r.sets(e, where);
+                   if (e["sequences"].IsDefined()) {
+                     const YAML::Node only = e["sequences"];
+                     if (!only.IsSequence() || only.size() == 0)
+                       r.fail(only, where + ".sequences: expected a non-empty list of sequence labels");
+                     for (const auto& l : only) {
+                       const std::string s = r.scalar(l, where + ".sequences");
+                       bool known = false;
+                       for (const auto& q : m.sequences) known |= q.label == s;
+                       if (!known) r.fail(l, where + ".sequences: no sequence is labelled '" + s + "'");
+                       p.sequences.push_back(s);
+                     }
+                   }
+                   m.pipelines.push_back(p);
+                 });
 
   // Every cell's pipeline must load with its overrides and name plugins that exist with valid settings.
   registry::Registry registry;
@@ -198,7 +205,7 @@ Matrix loadMatrix(const std::string& path) {
         }
         pipeline::resolvePlugins(spec, registry);
       } catch (const Error& e) {
-        r.fail(pipes[i], "pipeline '" + p.label + "' on sequence '" + s.label + "': " + e.what());
+        r.fail(doc["pipelines"][i], "pipeline '" + p.label + "' on sequence '" + s.label + "': " + e.what());
       }
     }
   }

@@ -14,8 +14,10 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <vector>
 
 #include "beslam/common/error.hpp"
+#include "beslam/test/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using beslam::bench::loadMatrix;
@@ -23,12 +25,7 @@ using nlohmann::json;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using beslam::test::readText;
 
 void write(const fs::path& p, const std::string& s) {
   fs::create_directories(p.parent_path());
@@ -43,7 +40,7 @@ struct Result {
 Result shell(const std::string& cmd, const fs::path& dir) {
   const fs::path o = dir / "stdout.txt", e = dir / "stderr.txt";
   const int status = std::system((cmd + " > " + o.string() + " 2> " + e.string() + " < /dev/null").c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(o), slurp(e)};
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, readText(o), readText(e)};
 }
 
 const std::string kBeslam = std::string(BESLAM_BINARY_DIR) + "/bin/beslam";
@@ -154,15 +151,15 @@ double median(std::vector<double> v) {
 
 // Every Table I / objects figure of tables.json equals the median / min / max of the runs' own summaries.
 void expectTablesMatchSummaries(const fs::path& out, int cells) {
-  const json t = json::parse(slurp(out / "tables.json"));
+  const json t = json::parse(readText(out / "tables.json"));
   ASSERT_EQ(t["finished"], cells);
-  const json bench = json::parse(slurp(out / "bench.json"));
+  const json bench = json::parse(readText(out / "bench.json"));
   int rows = 0;
   for (const auto& row : t["table1"]) {
     std::vector<json> sums;
     for (const auto& c : bench["cells"])
       if (c["pipeline"] == row["pipeline"] && c["sequence"] == row["sequence"])
-        sums.push_back(json::parse(slurp(out / c["dir"].get<std::string>() / "summary.json")));
+        sums.push_back(json::parse(readText(out / c["dir"].get<std::string>() / "summary.json")));
     ASSERT_EQ(row["runs"], sums.size());
     auto check = [&](const json& s, std::initializer_list<const char*> path) {
       std::vector<double> v;
@@ -188,7 +185,7 @@ void expectTablesMatchSummaries(const fs::path& out, int cells) {
   }
   EXPECT_EQ(rows, 2);
   // The CSV carries the same numbers at full precision.
-  const std::string csv = slurp(out / "table1.csv");
+  const std::string csv = readText(out / "table1.csv");
   const std::string first = t["table1"][0]["ape_sim3_rmse"]["median"].dump();
   EXPECT_NE(csv.find("," + first + ","), std::string::npos) << csv;
   EXPECT_EQ(std::stod(first), t["table1"][0]["ape_sim3_rmse"]["median"].get<double>());
@@ -199,23 +196,26 @@ void expectTablesMatchSummaries(const fs::path& out, int cells) {
   }
 }
 
+// A matrix of 60 synthetic dynamic_street frames (rendered once into the build tree's cache) with the
+// given seeds and pipelines: "plain" (no semantics) and/or "beslam" (the full pipeline).
+void writeTinyMatrix(const fs::path& file, const std::string& name, const std::string& seeds,
+                     const std::vector<std::string>& pipelines) {
+  const fs::path cache = fs::path(BESLAM_BINARY_DIR) / "test-bench-synth-cache";
+  std::string yaml = "name: " + name + "\nseeds: " + seeds + "\nsequences:\n" +
+                     "  - label: ds\n    sequence: dynamic_street\n    root: " + cache.string() + "\n" +
+                     "    set: [\"dataset.synth_set=lidar.enabled=false,camera.colour=false,frames=60\"]\n" +
+                     "pipelines:\n";
+  for (const std::string& label : pipelines)
+    yaml += "  - {label: " + label + ", file: " + kAblation +
+            (label == "plain" ? "synth_no_semantics.yaml" : "synth_beslam.yaml") + "}\n";
+  write(file, yaml);
+}
+
 }  // namespace
 
 TEST(BenchCommand, TinyBenchTablesResumeSlurmAndMerge) {
   const fs::path dir = tempDir("tiny");
-  const fs::path cache = fs::path(BESLAM_BINARY_DIR) / "test-bench-synth-cache";
-  write(dir / "m.yaml",
-        "name: tiny\nseeds: [1, 2]\nsequences:\n"
-        "  - label: ds\n    sequence: dynamic_street\n    root: " +
-            cache.string() +
-            "\n"
-            "    set: [\"dataset.synth_set=lidar.enabled=false,camera.colour=false,frames=60\"]\n"
-            "pipelines:\n"
-            "  - {label: plain, file: " +
-            kAblation +
-            "synth_no_semantics.yaml}\n"
-            "  - {label: beslam, file: " +
-            kAblation + "synth_beslam.yaml}\n");
+  writeTinyMatrix(dir / "m.yaml", "tiny", "[1, 2]", {"plain", "beslam"});
   const fs::path out = dir / "out";
   Result r = shell(kBeslam + " bench " + (dir / "m.yaml").string() + " --out " + out.string() + " --jobs 2", dir);
   ASSERT_EQ(r.code, 0) << r.err << r.out;
@@ -237,7 +237,7 @@ TEST(BenchCommand, TinyBenchTablesResumeSlurmAndMerge) {
 
   // A broken summary is not a finished cell: --cell reruns it.
   {  // an interrupted run (SIGINT) writes a summary too: not finished
-    json j = json::parse(slurp(out / "runs/plain/ds/seed1/summary.json"));
+    json j = json::parse(readText(out / "runs/plain/ds/seed1/summary.json"));
     j["interrupted"] = true;
     std::ofstream(out / "runs/plain/ds/seed1/summary.json") << j.dump();
     EXPECT_FALSE(beslam::bench::cellFinished((out / "runs/plain/ds/seed1").string()));
@@ -254,7 +254,7 @@ TEST(BenchCommand, TinyBenchTablesResumeSlurmAndMerge) {
   const fs::path sl = dir / "slurm";
   r = shell(kBeslam + " bench " + (dir / "m.yaml").string() + " --out " + sl.string() + " --emit slurm", dir);
   ASSERT_EQ(r.code, 0) << r.err;
-  const std::string script = slurp(sl / "bench.sbatch");
+  const std::string script = readText(sl / "bench.sbatch");
   EXPECT_NE(script.find("#SBATCH --array=0-3"), std::string::npos) << script;
   EXPECT_FALSE(fs::exists(sl / "runs"));
   EXPECT_NE(shell("bash " + (sl / "bench.sbatch").string(), dir).code, 0);  // no task id: refuses
@@ -272,28 +272,20 @@ TEST(BenchCommand, TinyBenchTablesResumeSlurmAndMerge) {
 // summary marked interrupted: the bench says the cell failed, and running it again reruns that cell.
 TEST(BenchCommand, InterruptedCellIsRunAgain) {
   const fs::path dir = tempDir("interrupted");
-  const fs::path cache = fs::path(BESLAM_BINARY_DIR) / "test-bench-synth-cache";
-  write(dir / "m.yaml",
-        "name: interrupted\nseeds: [1]\nsequences:\n"
-        "  - label: ds\n    sequence: dynamic_street\n    root: " +
-            cache.string() +
-            "\n"
-            "    set: [\"dataset.synth_set=lidar.enabled=false,camera.colour=false,frames=60\"]\n"
-            "pipelines:\n  - {label: plain, file: " +
-            kAblation + "synth_no_semantics.yaml}\n");
+  writeTinyMatrix(dir / "m.yaml", "interrupted", "[1]", {"plain"});
   const std::string bench = kBeslam + " bench " + (dir / "m.yaml").string() + " --out " + (dir / "out").string();
   Result r = shell("BESLAM_DEBUG_SIGNAL_AT=3:SIGINT " + bench, dir);
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_NE(r.err.find("FAILED runs/plain/ds/seed1 (exit 130"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("beslam: error: " + (dir / "out").string() + ": 1 of 1 cells failed"), std::string::npos)
       << r.err;
-  const json s = json::parse(slurp(dir / "out/runs/plain/ds/seed1/summary.json"));
+  const json s = json::parse(readText(dir / "out/runs/plain/ds/seed1/summary.json"));
   EXPECT_TRUE(s["interrupted"].get<bool>());
-  EXPECT_EQ(json::parse(slurp(dir / "out/tables.json"))["finished"], 0);
+  EXPECT_EQ(json::parse(readText(dir / "out/tables.json"))["finished"], 0);
   r = shell(bench, dir);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("0 already finished, 1 to run"), std::string::npos) << r.err;
-  EXPECT_EQ(json::parse(slurp(dir / "out/tables.json"))["finished"], 1);
+  EXPECT_EQ(json::parse(readText(dir / "out/tables.json"))["finished"], 1);
 }
 
 // Every shipped matrix loads: its files exist, and each cell's pipeline resolves with its overrides.

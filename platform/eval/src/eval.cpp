@@ -109,15 +109,8 @@ nlohmann::ordered_json metricJson(const MetricStatistics& m) {
 }  // namespace
 
 std::string toString(AlignmentType type) {
-  switch (type) {
-    case AlignmentType::kNone:
-      return "none";
-    case AlignmentType::kSe3:
-      return "se3";
-    case AlignmentType::kSim3:
-      return "sim3";
-  }
-  return "none";
+  static const char* const kNames[] = {"none", "se3", "sim3"};  // in AlignmentType's order
+  return kNames[static_cast<int>(type)];
 }
 
 AlignmentType parseAlignmentType(const std::string& name) {

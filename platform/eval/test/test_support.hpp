@@ -1,4 +1,4 @@
-// Helpers shared by the eval tests: a scratch directory and a synthetic trajectory with known poses.
+// Helpers shared by the eval tests: the scratch-folder fixture and a synthetic trajectory with known poses.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -9,25 +9,12 @@
 #include <fstream>
 #include <string>
 
+#include "beslam/test/scratch_dir.hpp"
 #include "beslam/trajectory/trajectory.hpp"
 
 namespace beslam::eval::test {
 
-class ScratchDir : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() / ("beslam_eval_test_" + std::to_string(::getpid()) + "_" +
-                                                     ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string write(const std::string& name, const std::string& content) const {
-    std::ofstream(path(name), std::ios::binary) << content;
-    return path(name);
-  }
-  std::filesystem::path dir_;
-};
+using beslam::test::ScratchDir;
 
 // A helix with a wobbling orientation: T_world_cam(i), stamps 10 Hz from `t0`.
 inline trajectory::Trajectory helix(int n, double t0 = 100.0) {

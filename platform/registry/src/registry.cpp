@@ -16,21 +16,29 @@ namespace fs = std::filesystem;
 
 namespace beslam::registry {
 
+namespace {
+
+// The name of `code` in a table of {code, name} pairs, or `fallback`.
+struct CodeName {
+  int32_t code;
+  const char* name;
+};
+template <std::size_t N>
+const char* nameOf(int32_t code, const CodeName (&names)[N], const char* fallback) {
+  for (const CodeName& n : names)
+    if (n.code == code) return n.name;
+  return fallback;
+}
+
+}  // namespace
+
 const char* kindName(int32_t kind) {
-  switch (kind) {
-    case BESLAM_KIND_DETECTOR:
-      return "detector";
-    case BESLAM_KIND_MOTION_CHECKER:
-      return "motion_checker";
-    case BESLAM_KIND_MASK_GENERATOR:
-      return "mask_generator";
-    case BESLAM_KIND_RECONSTRUCTOR:
-      return "reconstructor";
-    case BESLAM_KIND_BACKEND:
-      return "backend";
-    default:
-      return "unknown";
-  }
+  static constexpr CodeName kNames[] = {{BESLAM_KIND_DETECTOR, "detector"},
+                                        {BESLAM_KIND_MOTION_CHECKER, "motion_checker"},
+                                        {BESLAM_KIND_MASK_GENERATOR, "mask_generator"},
+                                        {BESLAM_KIND_RECONSTRUCTOR, "reconstructor"},
+                                        {BESLAM_KIND_BACKEND, "backend"}};
+  return nameOf(kind, kNames, "unknown");
 }
 
 int32_t kindFromName(const std::string& name) {
@@ -40,43 +48,21 @@ int32_t kindFromName(const std::string& name) {
 }
 
 const char* configTypeName(int32_t type) {
-  switch (type) {
-    case BESLAM_CONFIG_BOOL:
-      return "bool";
-    case BESLAM_CONFIG_INT:
-      return "int";
-    case BESLAM_CONFIG_DOUBLE:
-      return "double";
-    case BESLAM_CONFIG_STRING:
-      return "string";
-    case BESLAM_CONFIG_PATH:
-      return "path";
-    case BESLAM_CONFIG_DOUBLE_LIST:
-      return "list of double";
-    default:
-      return "unknown";
-  }
+  static constexpr CodeName kNames[] = {
+      {BESLAM_CONFIG_BOOL, "bool"},     {BESLAM_CONFIG_INT, "int"},   {BESLAM_CONFIG_DOUBLE, "double"},
+      {BESLAM_CONFIG_STRING, "string"}, {BESLAM_CONFIG_PATH, "path"}, {BESLAM_CONFIG_DOUBLE_LIST, "list of double"}};
+  return nameOf(type, kNames, "unknown");
 }
 
 const char* statusName(beslam_status status) {
-  switch (status) {
-    case BESLAM_OK:
-      return "ok";
-    case BESLAM_ERROR_INVALID_ARGUMENT:
-      return "invalid argument";
-    case BESLAM_ERROR_INVALID_CONFIG:
-      return "invalid configuration";
-    case BESLAM_ERROR_RUNTIME:
-      return "runtime error";
-    case BESLAM_ERROR_OUT_OF_MEMORY:
-      return "out of memory";
-    case BESLAM_ERROR_UNSUPPORTED:
-      return "unsupported";
-    case BESLAM_ERROR_INTERNAL:
-      return "internal error";
-    default:
-      return "unknown status";
-  }
+  static constexpr CodeName kNames[] = {{BESLAM_OK, "ok"},
+                                        {BESLAM_ERROR_INVALID_ARGUMENT, "invalid argument"},
+                                        {BESLAM_ERROR_INVALID_CONFIG, "invalid configuration"},
+                                        {BESLAM_ERROR_RUNTIME, "runtime error"},
+                                        {BESLAM_ERROR_OUT_OF_MEMORY, "out of memory"},
+                                        {BESLAM_ERROR_UNSUPPORTED, "unsupported"},
+                                        {BESLAM_ERROR_INTERNAL, "internal error"}};
+  return nameOf(status, kNames, "unknown status");
 }
 
 namespace {

@@ -17,18 +17,14 @@
 #include <sstream>
 
 #include "beslam/common/error.hpp"
+#include "beslam/test/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using beslam::test::readText;
 
 fs::path tempDir(const std::string& name) {
   const fs::path d = fs::path(BESLAM_BINARY_DIR) / "test-report" / name;
@@ -91,7 +87,7 @@ fs::path makeRun(const fs::path& dir) {
 }
 
 json runData(const fs::path& report, int k) {
-  std::string s = slurp(report / "data" / ("run_" + std::to_string(k) + ".js"));
+  std::string s = readText(report / "data" / ("run_" + std::to_string(k) + ".js"));
   const std::string head = "BESLAM_REPORT.addRun(" + std::to_string(k) + ", ";
   EXPECT_EQ(s.rfind(head, 0), 0u);
   EXPECT_EQ(s.substr(s.size() - 3), ");\n");
@@ -108,7 +104,7 @@ TEST(Report, HandMadeRunFigures) {
   for (const char* f :
        {"index.html", "lib/three.min.js", "lib/OrbitControls.js", "lib/chart.min.js", "samples/0/000010.png"})
     EXPECT_TRUE(fs::exists(rep / f)) << f;
-  const std::string page = slurp(rep / "index.html");
+  const std::string page = readText(rep / "index.html");
   EXPECT_EQ(page.find("/*BESLAM_INDEX*/null"), std::string::npos);
   EXPECT_EQ(page.find("http://"), std::string::npos);  // nothing loads from a network
   EXPECT_EQ(page.find("https://"), std::string::npos);
@@ -214,13 +210,13 @@ TEST(ReportBrowser, ChromiumDrawsPlotsAndThe3DView) {
                             " --set dataset.sequence=dynamic_street"
                             " --set dataset.synth_set=lidar.enabled=false,camera.colour=false,frames=60 > " +
                             (dir / "run.log").string() + " 2>&1";
-    ASSERT_EQ(shell(cmd), 0) << slurp(dir / "run.log");
+    ASSERT_EQ(shell(cmd), 0) << readText(dir / "run.log");
   }
   const fs::path rep = dir / "report";
   ASSERT_EQ(shell(std::string(BESLAM_BINARY_DIR) + "/bin/beslam report " + run.string() + " --out " + rep.string() +
                   " > " + (dir / "report.log").string() + " 2>&1"),
             0)
-      << slurp(dir / "report.log");
+      << readText(dir / "report.log");
   const std::string chromium =
       "chromium --headless --no-sandbox --disable-gpu --enable-unsafe-swiftshader --disable-quic --no-first-run "
       "--disable-background-networking --disable-component-update --disable-sync --hide-scrollbars "
@@ -230,8 +226,8 @@ TEST(ReportBrowser, ChromiumDrawsPlotsAndThe3DView) {
   ASSERT_EQ(shell(chromium + "--dump-dom " + url + " > " + (dir / "dom.html").string() + " 2> " +
                   (dir / "chromium1.log").string()),
             0)
-      << slurp(dir / "chromium1.log");
-  const std::string dom = slurp(dir / "dom.html");
+      << readText(dir / "chromium1.log");
+  const std::string dom = readText(dir / "dom.html");
   EXPECT_NE(dom.find("data-status=\"ready\""), std::string::npos) << "the page did not finish drawing";
   std::smatch m;
   ASSERT_TRUE(std::regex_search(dom, m, std::regex("<pre id=\"errors\"[^>]*>([^<]*)</pre>")));
@@ -242,7 +238,7 @@ TEST(ReportBrowser, ChromiumDrawsPlotsAndThe3DView) {
   ASSERT_EQ(shell(chromium + "--screenshot=" + (dir / "screenshot.png").string() + " " + url + " > " +
                   (dir / "chromium2.log").string() + " 2>&1"),
             0)
-      << slurp(dir / "chromium2.log");
+      << readText(dir / "chromium2.log");
   const cv::Mat shot = cv::imread((dir / "screenshot.png").string(), cv::IMREAD_COLOR);
   ASSERT_FALSE(shot.empty());
   auto region = [&](const char* id) {

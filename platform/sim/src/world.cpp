@@ -191,24 +191,13 @@ std::vector<Tri> buildCarMesh(CarShape shape, double length, double width, doubl
   struct Shape {
     float hb, wb, rf, rr, rb;
   };
-  Shape s{};
-  switch (shape) {
-    case CarShape::Sedan:
-      s = {0.60f, 0.20f, 0.02f, -0.22f, -0.33f};
-      break;
-    case CarShape::Hatchback:
-      s = {0.60f, 0.22f, 0.05f, -0.38f, -0.48f};
-      break;
-    case CarShape::Wagon:
-      s = {0.60f, 0.19f, 0.03f, -0.46f, -0.49f};
-      break;
-    case CarShape::Suv:
-      s = {0.58f, 0.24f, 0.10f, -0.45f, -0.49f};
-      break;
-    case CarShape::Van:
-      s = {0.48f, 0.44f, 0.32f, -0.48f, -0.50f};
-      break;
-  }
+  // Per CarShape, in its declaration order (Sedan, Hatchback, Suv, Van, Wagon).
+  static constexpr Shape kShapes[] = {{0.60f, 0.20f, 0.02f, -0.22f, -0.33f},
+                                      {0.60f, 0.22f, 0.05f, -0.38f, -0.48f},
+                                      {0.58f, 0.24f, 0.10f, -0.45f, -0.49f},
+                                      {0.48f, 0.44f, 0.32f, -0.48f, -0.50f},
+                                      {0.60f, 0.19f, 0.03f, -0.46f, -0.49f}};
+  const Shape s = kShapes[static_cast<int>(shape)];
   st.l = l, st.w = w, st.h = h;
   st.hb = s.hb * h;
   st.x_wb = s.wb * l, st.x_rf = s.rf * l, st.x_rr = s.rr * l, st.x_rb = s.rb * l;

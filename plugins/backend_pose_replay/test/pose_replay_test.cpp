@@ -6,9 +6,12 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <memory>
 
 #include "beslam/common/error.hpp"
 #include "beslam/test/plugin_harness.hpp"
+#include "beslam/test/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using beslam::test::PluginHarness;
@@ -17,20 +20,28 @@ namespace {
 
 const std::string kLib = std::string(PLUGIN_DIR) + "/backend_pose_replay.so";
 
-std::string write(const std::string& name, const std::string& text) {
-  const fs::path path = fs::temp_directory_path() / ("beslam_pose_replay_" + std::to_string(::getpid()) + "_" + name);
-  std::ofstream(path) << text;
-  return path.string();
-}
+// A scratch folder and the plugin loaded through the host's registry.
+class PoseReplay : public ::testing::Test {
+ protected:
+  // The backend replaying `text` (written to `name`) with the given extra settings.
+  std::unique_ptr<beslam::registry::BackendInstance> open(const std::string& name, const std::string& text,
+                                                          std::map<std::string, std::string> settings = {}) {
+    settings["poses"] = dir_.write(name, text);
+    const auto& config = harness_.config("backend_pose_replay", settings);
+    return std::make_unique<beslam::registry::BackendInstance>(harness_.plugin("backend_pose_replay"),
+                                                               harness_.info(config), harness_.log);
+  }
+
+  beslam::test::TempDir dir_;
+  PluginHarness harness_{kLib};
+};
 
 }  // namespace
 
-TEST(PoseReplay, KittiRowsByFrameIndex) {
-  PluginHarness h(kLib);
-  const std::string poses =
-      write("kitti.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 2\n1 0 0 2 0 1 0 0 0 0 1 4\n");
-  const auto& config = h.config("backend_pose_replay", {{"poses", poses}, {"keyframe_interval", "2"}});
-  beslam::registry::BackendInstance backend(h.plugin("backend_pose_replay"), h.info(config), h.log);
+TEST_F(PoseReplay, KittiRowsByFrameIndex) {
+  auto instance = open("kitti.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 2\n1 0 0 2 0 1 0 0 0 0 1 4\n",
+                       {{"keyframe_interval", "2"}});
+  beslam::registry::BackendInstance& backend = *instance;
   for (int64_t i = 0; i < 4; ++i) {
     const beslam_frame frame = PluginHarness::frame(i, 0.1 * static_cast<double>(i));
     const auto predicted = backend.predictPose(frame);
@@ -47,37 +58,29 @@ TEST(PoseReplay, KittiRowsByFrameIndex) {
   }
   EXPECT_EQ(backend.trajectory(BESLAM_TRAJECTORY_FINAL).size(), 3u);
   EXPECT_EQ(backend.trajectory(BESLAM_TRAJECTORY_KEYFRAMES).size(), 2u);
-  fs::remove(poses);
 }
 
-TEST(PoseReplay, TumRowsByNearestTimestamp) {
-  PluginHarness h(kLib);
-  const std::string poses =
-      write("tum.txt", "# t x y z qx qy qz qw\n10.00 0 0 0 0 0 0 1\n10.10 0 0 1 0 0 0 1\n10.30 0 0 3 0 0 0 1\n");
-  const auto& config = h.config("backend_pose_replay", {{"poses", poses}, {"max_time_diff", "0.02"}});
-  beslam::registry::BackendInstance backend(h.plugin("backend_pose_replay"), h.info(config), h.log);
+TEST_F(PoseReplay, TumRowsByNearestTimestamp) {
+  auto instance =
+      open("tum.txt", "# t x y z qx qy qz qw\n10.00 0 0 0 0 0 0 1\n10.10 0 0 1 0 0 0 1\n10.30 0 0 3 0 0 0 1\n",
+           {{"max_time_diff", "0.02"}});
+  beslam::registry::BackendInstance& backend = *instance;
   const auto at = [&](double t) { return backend.predictPose(PluginHarness::frame(0, t)); };
   ASSERT_TRUE(at(10.11).has_value());
   EXPECT_DOUBLE_EQ(at(10.11)->translation().z(), 1.0);
   EXPECT_DOUBLE_EQ(at(10.29)->translation().z(), 3.0);
   EXPECT_FALSE(at(10.20).has_value());  // 0.1 s from both neighbours: no pose is invented
   EXPECT_FALSE(at(9.0).has_value());
-  fs::remove(poses);
 }
 
-TEST(PoseReplay, MalformedFilesAreNamedWithTheirLine) {
-  PluginHarness h(kLib);
+TEST_F(PoseReplay, MalformedFilesAreNamedWithTheirLine) {
   const auto error = [&](const std::string& text) {
-    const std::string poses = write("bad.txt", text);
-    const auto& config = h.config("backend_pose_replay", {{"poses", poses}});
-    std::string message;
     try {
-      beslam::registry::BackendInstance backend(h.plugin("backend_pose_replay"), h.info(config), h.log);
+      open("bad.txt", text);
     } catch (const beslam::Error& e) {
-      message = e.what();
+      return std::string(e.what());
     }
-    fs::remove(poses);
-    return message;
+    return std::string();
   };
   EXPECT_NE(error("1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 nan 0 0 1 0\n").find("bad.txt:2"), std::string::npos);
   EXPECT_NE(error("1 2 3\n").find("bad.txt"), std::string::npos);

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -82,24 +83,34 @@ inline Eigen::Matrix<double, 3, 8> boxCorners(const beslam_box3d& box) {
   return boxPose(box) * p_box;
 }
 
+// A dataset's class name and the ABI class it maps to; classByName() looks a name up in such a table.
+struct NamedClass {
+  const char* name;
+  int32_t class_id;
+};
+template <std::size_t N>
+bool classByName(const std::string& name, const NamedClass (&table)[N], int32_t& class_id) {
+  for (const NamedClass& c : table)
+    if (name == c.name) {
+      class_id = c.class_id;
+      return true;
+    }
+  return false;
+}
+
 // KITTI label types: Car Van Truck Pedestrian Person_sitting (Person) Cyclist, Tram and Misc
 // (-> BESLAM_CLASS_UNKNOWN). False for a name KITTI does not know.
 inline bool kittiClass(const std::string& name, int32_t& class_id) {
-  if (name == "Car")
-    class_id = BESLAM_CLASS_CAR;
-  else if (name == "Van")
-    class_id = BESLAM_CLASS_VAN;
-  else if (name == "Truck")
-    class_id = BESLAM_CLASS_TRUCK;
-  else if (name == "Pedestrian" || name == "Person_sitting" || name == "Person")
-    class_id = BESLAM_CLASS_PEDESTRIAN;
-  else if (name == "Cyclist")
-    class_id = BESLAM_CLASS_CYCLIST;
-  else if (name == "Tram" || name == "Misc")
-    class_id = BESLAM_CLASS_UNKNOWN;
-  else
-    return false;
-  return true;
+  static const NamedClass kKitti[] = {{"Car", BESLAM_CLASS_CAR},
+                                      {"Van", BESLAM_CLASS_VAN},
+                                      {"Truck", BESLAM_CLASS_TRUCK},
+                                      {"Pedestrian", BESLAM_CLASS_PEDESTRIAN},
+                                      {"Person_sitting", BESLAM_CLASS_PEDESTRIAN},
+                                      {"Person", BESLAM_CLASS_PEDESTRIAN},
+                                      {"Cyclist", BESLAM_CLASS_CYCLIST},
+                                      {"Tram", BESLAM_CLASS_UNKNOWN},
+                                      {"Misc", BESLAM_CLASS_UNKNOWN}};
+  return classByName(name, kKitti, class_id);
 }
 
 // The ABI class's KITTI-style name ("Misc" for unknown ids) and a motion state's name.

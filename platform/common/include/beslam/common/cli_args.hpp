@@ -45,6 +45,21 @@ inline double positiveNumber(const std::string& flag, const std::string& text) {
   return v;
 }
 
+/// `text` read whole as an integer in [lo, hi], else "FLAG: 'TEXT' is not an integer from LO to HI".
+inline int integerInRange(const std::string& flag, const std::string& text, int lo, int hi) {
+  std::size_t used = 0;
+  long long v = 0;
+  try {
+    v = std::stoll(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || v < lo || v > hi)
+    throw std::invalid_argument(flag + ": '" + text + "' is not an integer from " + std::to_string(lo) + " to " +
+                                std::to_string(hi));
+  return static_cast<int>(v);
+}
+
 /// The value after the flag at args[i] as a number > 0; advances i past it.
 inline double nextPositiveNumber(const std::vector<std::string>& args, std::size_t& i) {
   const std::string& flag = args[i];

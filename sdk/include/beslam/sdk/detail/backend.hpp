@@ -1,11 +1,7 @@
-// C-to-C++ glue of the Backend kind (included by backend.hpp): the beslam_backend_v1 table. Each function
-// converts the C views, calls the plugin through detail::call (exceptions become a status) and keeps what
-// it returns in storage that lives until the next call.
+// The beslam_backend_v1 table of the Backend kind (see detail/plugin.hpp for how the glue works).
 #pragma once
 
-namespace beslam::sdk {
-
-namespace detail {
+namespace beslam::sdk::detail {
 
 template <class Impl>
 const void* table(Tag<Impl>, const Backend*) {
@@ -81,5 +77,4 @@ const void* table(Tag<Impl>, const Backend*) {
       });
 }
 
-}  // namespace detail
-}  // namespace beslam::sdk
+}  // namespace beslam::sdk::detail

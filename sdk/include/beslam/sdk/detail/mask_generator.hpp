@@ -1,11 +1,7 @@
-// C-to-C++ glue of the MaskGenerator kind (included by mask_generator.hpp): the beslam_mask_generator_v1 table. Each
-// function converts the C views, calls the plugin through call() (exceptions become a status) and keeps what it returns
-// in storage that lives until the next call.
+// The beslam_mask_generator_v1 table of the MaskGenerator kind (see detail/plugin.hpp for how the glue works).
 #pragma once
 
-namespace beslam::sdk {
-
-namespace detail {
+namespace beslam::sdk::detail {
 
 template <class Impl>
 const void* table(Tag<Impl>, const MaskGenerator*) {
@@ -22,5 +18,4 @@ const void* table(Tag<Impl>, const MaskGenerator*) {
   });
 }
 
-}  // namespace detail
-}  // namespace beslam::sdk
+}  // namespace beslam::sdk::detail

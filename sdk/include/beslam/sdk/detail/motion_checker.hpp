@@ -1,11 +1,7 @@
-// C-to-C++ glue of the MotionChecker kind (included by motion_checker.hpp): the beslam_motion_checker_v1 table. Each
-// function converts the C views, calls the plugin through call() (exceptions become a status) and keeps what it returns
-// in storage that lives until the next call.
+// The beslam_motion_checker_v1 table of the MotionChecker kind (see detail/plugin.hpp for how the glue works).
 #pragma once
 
-namespace beslam::sdk {
-
-namespace detail {
+namespace beslam::sdk::detail {
 
 template <class Impl>
 const void* table(Tag<Impl>, const MotionChecker*) {
@@ -24,5 +20,4 @@ const void* table(Tag<Impl>, const MotionChecker*) {
   });
 }
 
-}  // namespace detail
-}  // namespace beslam::sdk
+}  // namespace beslam::sdk::detail

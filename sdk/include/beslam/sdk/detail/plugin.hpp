@@ -1,6 +1,8 @@
 // C-to-C++ glue shared by every kind (included by plugin.hpp): frame conversion, the noexcept guard
 // that turns C++ exceptions into status codes, the instance wrapper, call() which every kind's table
-// function goes through, and the descriptor builder.
+// function goes through, and the descriptor builder. Each kind's detail/<kind>.hpp builds its C function
+// table from these: each function converts the C views, calls the plugin through call() (exceptions
+// become a status) and keeps what it returns in storage that lives until the next call.
 #pragma once
 
 namespace beslam::sdk {

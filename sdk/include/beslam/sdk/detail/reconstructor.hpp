@@ -1,11 +1,7 @@
-// C-to-C++ glue of the Reconstructor kind (included by reconstructor.hpp): the beslam_reconstructor_v1 table. Each
-// function converts the C views, calls the plugin through call() (exceptions become a status) and keeps what it returns
-// in storage that lives until the next call.
+// The beslam_reconstructor_v1 table of the Reconstructor kind (see detail/plugin.hpp for how the glue works).
 #pragma once
 
-namespace beslam::sdk {
-
-namespace detail {
+namespace beslam::sdk::detail {
 
 template <class Impl>
 const void* table(Tag<Impl>, const Reconstructor*) {
@@ -25,5 +21,4 @@ const void* table(Tag<Impl>, const Reconstructor*) {
       });
 }
 
-}  // namespace detail
-}  // namespace beslam::sdk
+}  // namespace beslam::sdk::detail

@@ -1,13 +1,24 @@
-// A self-deleting temporary folder for plugin tests, with a small file writer.
+// A self-deleting temporary folder for tests, with a small file writer, and readText() to read a file
+// back. Standard library only.
 #pragma once
 
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 namespace beslam::test {
+
+// The whole file as bytes, or "" when it is missing or unreadable (for failure messages of logs that
+// may not exist).
+inline std::string readText(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
 
 class TempDir {
  public:
@@ -24,7 +35,7 @@ class TempDir {
   std::string write(const std::string& name, const std::string& text) const {
     const std::filesystem::path p = path_ / name;
     std::filesystem::create_directories(p.parent_path());
-    std::ofstream(p) << text;
+    std::ofstream(p, std::ios::binary) << text;
     return p.string();
   }
   const std::filesystem::path& path() const { return path_; }
