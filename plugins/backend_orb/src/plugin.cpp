@@ -62,8 +62,8 @@ const beslam::sdk::Settings<Options> kSettings{
     path(&Options::vocabulary, "vocabulary", "\"\"",
          "ORB vocabulary file (beslam vocab train); empty: the default one if installed or built, 'none': no "
          "bag of words"),
-    setting(&Options::bow_matching, "bow_matching", "true",
-            "reference-keyframe tracking matches by bag of words (needs a vocabulary)"),
+    setting(&Options::bow_matching, "bow_matching", "false",
+            "reference-keyframe tracking matches by bag of words (needs a vocabulary; measured no better)"),
     setting(&Options::triangulation_bow, "triangulation_bow", "false",
             "new points: epipolar candidates only under the same bag-of-words node (ORB-SLAM2; needs a vocabulary)"),
     setting(&Options::relocalisation, "relocalisation", "true",

@@ -7,8 +7,8 @@
 // --max-images), then the seeded k-majority tree; same inputs and seed give a byte-identical file.
 // rank: how well the vocabulary tells neighbouring frames of a sequence: odd frames query the even
 // ones at least --gap frames away; prints recall@1 (the best match is one of the nearest allowed frames,
-// at most gap + 1 away) and the mean score ratio of the nearest allowed frame to frames more than 20 away. Errors: one line "beslam-vocab: error: ...",
-// exit 1 (2 for usage).
+// at most gap + 1 away) and the mean score ratio of the nearest allowed frame to frames more than 20 away. Errors: one
+// line "beslam-vocab: error: ...", exit 1 (2 for usage).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -111,7 +111,8 @@ int train(const std::vector<std::string>& args) {
     }
   }
   if (dirs.empty() || out.empty()) throw UsageError("train needs --images DIR and --out FILE");
-  if (options.k < 2 || options.levels < 1 || options.levels > 10) throw UsageError("--k must be >= 2, --levels in 1..10");
+  if (options.k < 2 || options.levels < 1 || options.levels > 10)
+    throw UsageError("--k must be >= 2, --levels in 1..10");
   if (features < 100) throw UsageError("--features must be >= 100");
   const auto t0 = std::chrono::steady_clock::now();
   const auto files = imagesUnder(dirs, max_images);
@@ -194,9 +195,8 @@ int rank(const std::vector<std::string>& args) {
     hits += static_cast<int>(q > best_j ? q - best_j : best_j - q) <= gap + 1;
     if (far_n > 0 && far_sum > 0) ratio_sum += adjacent / (far_sum / far_n);
   }
-  std::printf("%s on %s: %d queries, gap %d: recall@1 %.3f, nearest/far score ratio %.2f\n", file.c_str(),
-              dir.c_str(), queries, gap, queries ? static_cast<double>(hits) / queries : 0.0,
-              queries ? ratio_sum / queries : 0.0);
+  std::printf("%s on %s: %d queries, gap %d: recall@1 %.3f, nearest/far score ratio %.2f\n", file.c_str(), dir.c_str(),
+              queries, gap, queries ? static_cast<double>(hits) / queries : 0.0, queries ? ratio_sum / queries : 0.0);
   return 0;
 }
 

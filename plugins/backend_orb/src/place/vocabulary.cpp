@@ -1,5 +1,7 @@
 #include "place/vocabulary.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -9,7 +11,6 @@
 #include <iterator>
 #include <sstream>
 #include <stdexcept>
-#include <unistd.h>
 
 #include "matching/hamming.hpp"
 
@@ -190,29 +191,35 @@ Vocabulary Vocabulary::train(const std::vector<cv::Mat>& images, const Vocabular
     ++n_images;
   }
   for (uint32_t w : v.words_)
-    v.nodes_[w].weight = static_cast<float>(std::log(static_cast<double>(n_images) / std::max<uint32_t>(1, seen_in[w])));
+    v.nodes_[w].weight =
+        static_cast<float>(std::log(static_cast<double>(n_images) / std::max<uint32_t>(1, seen_in[w])));
   return v;
 }
 
 void Vocabulary::buildDerived() {
+  const size_t n = nodes_.size();
   words_.clear();
-  for (Node& n : nodes_) n.children.clear();
-  for (uint32_t i = 1; i < nodes_.size(); ++i) {
-    Node& n = nodes_[i];
-    nodes_[n.parent].children.push_back(i);
-    n.depth = nodes_[n.parent].depth + 1;
+  child_begin_.assign(n + 1, 0);
+  for (uint32_t i = 1; i < n; ++i) {
+    ++child_begin_[nodes_[i].parent + 1];
+    nodes_[i].depth = nodes_[nodes_[i].parent].depth + 1;
   }
-  for (uint32_t i = 0; i < nodes_.size(); ++i)
-    if (nodes_[i].children.empty()) words_.push_back(i);
+  for (size_t i = 0; i < n; ++i) child_begin_[i + 1] += child_begin_[i];
+  children_.assign(n > 0 ? n - 1 : 0, 0);
+  std::vector<uint32_t> fill(child_begin_.begin(), child_begin_.end() - 1);
+  for (uint32_t i = 1; i < n; ++i) children_[fill[nodes_[i].parent]++] = i;
+  for (uint32_t i = 0; i < n; ++i)
+    if (child_begin_[i] == child_begin_[i + 1]) words_.push_back(i);
 }
 
 void Vocabulary::descend(const uint8_t* d, int direct_depth, uint32_t& leaf, uint32_t& direct) const {
   uint32_t id = 0;
   direct = 0;
-  while (!nodes_[id].children.empty()) {
+  while (child_begin_[id] != child_begin_[id + 1]) {
     int best = 257;
-    uint32_t best_id = nodes_[id].children.front();
-    for (uint32_t c : nodes_[id].children) {
+    uint32_t best_id = children_[child_begin_[id]];
+    for (uint32_t k = child_begin_[id]; k < child_begin_[id + 1]; ++k) {
+      const uint32_t c = children_[k];
       const int dist = hamming(d, nodes_[c].descriptor);
       if (dist < best) {
         best = dist;
@@ -314,7 +321,11 @@ Vocabulary Vocabulary::load(const std::string& path) {
   };
   std::ifstream f(path, std::ios::binary);
   if (!f) throw fail("cannot open the file");
-  std::string in((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  f.seekg(0, std::ios::end);
+  const std::streamoff size = f.tellg();
+  f.seekg(0, std::ios::beg);
+  std::string in(size > 0 ? static_cast<size_t>(size) : 0, '\0');
+  if (size > 0 && !f.read(in.data(), size)) throw fail("cannot read the file");
   if (std::memcmp(in.data(), kMagic, std::min<size_t>(8, in.size())) != 0 || in.empty())
     throw fail("wrong magic (not a BE-SLAM vocabulary)");
   if (in.size() < kHeaderBytes) throw fail("truncated header (" + std::to_string(in.size()) + " bytes)");
@@ -325,8 +336,8 @@ Vocabulary Vocabulary::load(const std::string& path) {
                std::to_string(kFormatVersion));
   const uint32_t k = get<uint32_t>(in, at), levels = get<uint32_t>(in, at), weighting = get<uint32_t>(in, at);
   const uint32_t count = get<uint32_t>(in, at);
-  if (k < 2 || k > 1000 || levels < 1 || levels > 32) throw fail("bad tree shape k=" + std::to_string(k) +
-                                                                 " L=" + std::to_string(levels));
+  if (k < 2 || k > 1000 || levels < 1 || levels > 32)
+    throw fail("bad tree shape k=" + std::to_string(k) + " L=" + std::to_string(levels));
   if (weighting != kWeightingTfIdf) throw fail("unknown weighting " + std::to_string(weighting));
   const uint64_t expected = kHeaderBytes + static_cast<uint64_t>(count) * kNodeBytes + 8;
   if (count == 0) throw fail("no nodes");

@@ -29,10 +29,10 @@ using BowVector = std::vector<std::pair<uint32_t, float>>;
 using FeatureVector = std::map<uint32_t, std::vector<int>>;
 
 struct VocabularyTrainOptions {
-  int k = 10;                // children per node
-  int levels = 6;            // depth of the tree (words are at most this deep)
-  uint64_t seed = 1;         // k-means++ seeding
-  int max_iterations = 10;   // k-majority rounds per node
+  int k = 10;               // children per node
+  int levels = 6;           // depth of the tree (words are at most this deep)
+  uint64_t seed = 1;        // k-means++ seeding
+  int max_iterations = 10;  // k-majority rounds per node
 };
 
 class Vocabulary {
@@ -64,7 +64,6 @@ class Vocabulary {
     uint32_t parent = kNoParent;
     uint8_t descriptor[32] = {};
     float weight = 0;  // idf for words, 0 elsewhere
-    std::vector<uint32_t> children;
     uint32_t depth = 0;
   };
   void descend(const uint8_t* d, int direct_depth, uint32_t& leaf, uint32_t& direct) const;
@@ -72,6 +71,8 @@ class Vocabulary {
 
   int k_ = 0, levels_ = 0;
   std::vector<Node> nodes_;
+  std::vector<uint32_t> child_begin_;  // children of node i: children_[child_begin_[i] .. child_begin_[i + 1])
+  std::vector<uint32_t> children_;
   std::vector<uint32_t> words_;  // node ids of the leaves
 };
 
