@@ -185,6 +185,7 @@ int runCommand(const std::vector<std::string>& args) {
     for (const auto& [name, value] : s.backend_counters) {
       if (name == "features_static") features_static = value;
       if (name == "tracked_static") tracked_static = value;
+      if (name == "relocalisations" && value > 0) std::cout << "relocalisations: " << value << "\n";
     }
     if (features_static > 0 || s.map_points_static > 0)
       std::cout << "static objects: " << features_static << " features, " << tracked_static
