@@ -13,6 +13,9 @@
 #include "beslam/formats/align.hpp"
 #include "beslam_orb/orb_slam.hpp"
 #include "features/orb_extractor.hpp"
+#include "map/frame.hpp"
+#include "map/map.hpp"
+#include "place/keyframe_database.hpp"
 #include "place/vocabulary.hpp"
 #include "synthetic_world.hpp"
 
@@ -187,6 +190,43 @@ TEST(Vocabulary, ScoresRankTheViewOfTheSamePlaceFirst) {
     EXPECT_EQ(static_cast<int>(best) * 6, q - 1) << "query " << q;
     EXPECT_GT(best_score, second) << "query " << q;
   }
+}
+
+// The inverted index: shared words per keyframe, erase, culled keyframes passed over, and the candidate
+// with the most similar vector first.
+TEST(KeyFrameDatabase, FindsKeyFramesSharingWordsAndForgetsErasedOnes) {
+  Map map;
+  const ScalePyramid pyramid(8, 1.2);
+  const Camera camera{640, 480, 500, 500, 320, 240};
+  auto features = std::make_shared<FeatureSet>();
+  auto keyframe = [&](const BowVector& bow) {
+    Frame f(0, 0.0, features);
+    f.bow = bow;
+    return map.createKeyFrame(f, camera, pyramid);
+  };
+  KeyFrame* a = keyframe({{1, 0.5f}, {2, 0.5f}});
+  KeyFrame* b = keyframe({{2, 0.25f}, {3, 0.75f}});
+  KeyFrame* c = keyframe({{4, 1.0f}});
+  KeyFrameDatabase db;
+  for (KeyFrame* kf : {a, b, c}) db.add(kf);
+  const BowVector query{{2, 0.3f}, {3, 0.7f}};
+  auto shared = db.sharedWords(query);
+  ASSERT_EQ(shared.size(), 2u);
+  EXPECT_EQ(shared[0].first, a);
+  EXPECT_EQ(shared[0].second, 1);
+  EXPECT_EQ(shared[1].first, b);
+  EXPECT_EQ(shared[1].second, 2);
+  const auto candidates = db.relocalisationCandidates(query);
+  ASSERT_FALSE(candidates.empty());
+  EXPECT_EQ(candidates.front(), b);
+  db.erase(b);
+  shared = db.sharedWords(query);
+  ASSERT_EQ(shared.size(), 1u);
+  EXPECT_EQ(shared[0].first, a);
+  a->bad = true;
+  EXPECT_TRUE(db.sharedWords(query).empty());
+  db.clear();
+  EXPECT_TRUE(db.sharedWords({{4, 1.0f}}).empty());
 }
 
 // Tracking lost in 5 black frames relocalises by bag of words within 3 frames of the images returning,
