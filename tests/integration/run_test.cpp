@@ -259,6 +259,21 @@ TEST_F(RunTest, UsageErrors) {
   EXPECT_NE(help.out.find("--set KEY=VALUE"), std::string::npos);
 }
 
+// `beslam X ...` runs beslam-X next to the binary with the same arguments, exit code and output.
+TEST_F(RunTest, ExternalCommandRunsNextToTheBinary) {
+  if (!fs::exists(std::string(BESLAM_BINARY_DIR) + "/bin/beslam-vocab")) GTEST_SKIP() << "beslam-vocab not built";
+  const std::string vocabulary = std::string(BESLAM_SOURCE_DIR) + "/plugins/backend_orb/data/orb_vocabulary.bvoc";
+  const Result info = beslam("vocab info " + vocabulary, dir_);
+  EXPECT_EQ(info.code, 0) << info.err;
+  EXPECT_NE(info.out.find("k 10, L 6"), std::string::npos) << info.out;
+  const Result missing = beslam("vocab info " + (dir_ / "missing.bvoc").string(), dir_);
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.err.find("missing.bvoc"), std::string::npos) << missing.err;
+  EXPECT_EQ(lines(missing.err), 1) << missing.err;
+  EXPECT_EQ(beslam("vocab", dir_).code, 2);
+  EXPECT_EQ(beslam("no-such-command", dir_).code, 2);
+}
+
 // The world unit gates the motion checker: a backend whose world is not metric (a replayed monocular
 // estimate) gives it no pose, so every box stays unknown; a metric one is said to be from frame 0.
 TEST_F(RunTest, MotionCheckerGetsNoPoseUntilTheWorldIsMetric) {

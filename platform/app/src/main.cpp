@@ -7,10 +7,17 @@
 //   beslam synth --config FILE --out DIR [--set key=value]...
 //   beslam bench MATRIX.yaml [--out DIR] [--jobs N] [--emit slurm] | --merge DIR | --cell K DIR
 //   beslam report RUN_DIR [--out DIR]
+//   beslam X ...   any other command runs the executable beslam-X next to beslam (git-style), e.g.
+//                  beslam vocab train ... runs beslam-vocab train ...
 // Every failure prints one line "beslam: error: <file or plugin>: <cause>" and exits non-zero
 // (2 for a usage error, 1 for anything else).
+#include <unistd.h>
+
+#include <cerrno>
 #include <csignal>
 #include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <functional>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -45,6 +52,7 @@ constexpr const char* kUsage =
     "  synth               render a synthetic sequence with full ground truth\n"
     "  bench MATRIX.yaml   pipelines x sequences x seeds: runs, tables, report (docs/benchmarks.md)\n"
     "  report RUN_DIR      a self-contained HTML report of one run\n"
+    "  vocab               ORB vocabularies for backend_orb (beslam-vocab: train, info, rank)\n"
     "\n"
     "`beslam <command> --help` describes a command's options.\n";
 
@@ -177,6 +185,7 @@ int runCommand(const std::vector<std::string>& args) {
     for (const auto& [name, value] : s.backend_counters) {
       if (name == "features_static") features_static = value;
       if (name == "tracked_static") tracked_static = value;
+      if (name == "relocalisations" && value > 0) std::cout << "relocalisations: " << value << "\n";
     }
     if (features_static > 0 || s.map_points_static > 0)
       std::cout << "static objects: " << features_static << " features, " << tracked_static
@@ -260,6 +269,25 @@ int pluginsCommand(const std::vector<std::string>& args) {
   return 0;
 }
 
+// Git-style extension: `beslam X args...` replaces this process with beslam-X (next to this binary)
+// run with the same arguments, so its output and exit code are the command's. Returns when there is no
+// such executable; throws when there is one that cannot be run.
+void runExternalCommand(const std::string& command, char** argv) {
+  if (command.empty() || command.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_-") != std::string::npos)
+    return;
+  std::error_code ec;
+  std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) self = std::filesystem::absolute(argv[0], ec);
+  const std::string tool = (self.parent_path() / ("beslam-" + command)).string();
+  if (::access(tool.c_str(), X_OK) != 0) return;
+  std::vector<char*> tool_argv{const_cast<char*>(tool.c_str())};
+  for (char** a = argv + 2; *a; ++a) tool_argv.push_back(*a);
+  tool_argv.push_back(nullptr);
+  std::cout.flush();
+  ::execv(tool.c_str(), tool_argv.data());
+  throw beslam::Error(tool + ": cannot run: " + std::strerror(errno));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -286,6 +314,7 @@ int main(int argc, char** argv) {
                 << BESLAM_ABI_VERSION_MINOR << ")\n";
       return 0;
     }
+    runExternalCommand(command, argv);  // returns only when there is no beslam-<command>
     throw UsageError("unknown command '" + command + "'");
   } catch (const UsageError& e) {
     std::cerr << "beslam: usage error: " << e.what() << "\n" << kUsage;

@@ -17,6 +17,8 @@
 #include "map/map_point.hpp"
 #include "mapping/local_mapper.hpp"
 #include "optimize/bundle_adjustment.hpp"
+#include "place/keyframe_database.hpp"
+#include "place/vocabulary.hpp"
 #include "scale/object_range.hpp"
 #include "scale/parked_car_scale.hpp"
 #include "tracking/tracker.hpp"
@@ -45,6 +47,7 @@ LocalMapperOptions mapperOptions(const Options& o) {
   m.triangulation_ratio = static_cast<float>(o.triangulation_ratio);
   m.max_cos_parallax = o.triangulation_max_cos_parallax;
   m.triangulation_check_orientation = o.triangulation_check_orientation;
+  m.triangulation_bow = o.triangulation_bow && !o.vocabulary.empty();
   m.keyframe_culling = o.keyframe_culling;
   m.ba.robust_iterations = o.local_ba_iterations_robust;
   m.ba.refine_iterations = o.local_ba_iterations_refine;
@@ -108,6 +111,8 @@ struct OrbSlam::Impl {
   Camera camera;
   Options options;
   OrbExtractor extractor;
+  place::Vocabulary vocabulary;  // empty without Options::vocabulary
+  KeyFrameDatabase database;
   Map map;
   LocalMapper mapper;
   Tracker tracker;
@@ -130,10 +135,11 @@ struct OrbSlam::Impl {
       : camera(c),
         options(o),
         extractor(extractorOptions(o)),
+        vocabulary(o.vocabulary.empty() ? place::Vocabulary() : place::Vocabulary::load(o.vocabulary)),
         mapper(map, c, extractor.pyramid(), mapperOptions(o)),
         tracker(
             c, o, extractor.pyramid(), map, [this](KeyFrame* kf, bool initial) { pending.emplace_back(kf, initial); },
-            [this] { mapper.reset(); }) {
+            [this] { mapper.reset(); }, vocabulary.empty() ? nullptr : &vocabulary, &database) {
     if (options.threaded_mapping) worker = std::thread([this] { run(); });
   }
 

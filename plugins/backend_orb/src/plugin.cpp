@@ -1,6 +1,8 @@
 // backend_orb as a BE-SLAM backend plugin: OrbSlam behind the SDK's Backend base class.
 #include <algorithm>
+#include <filesystem>
 #include <set>
+#include <system_error>
 
 #include "beslam/sdk/sdk.hpp"
 #include "beslam_orb/orb_slam.hpp"
@@ -9,6 +11,7 @@ namespace {
 
 using beslam::orb::Options;
 using beslam::orb::OrbSlam;
+using beslam::sdk::path;
 using beslam::sdk::setting;
 
 // Each setting once: its schema entry and the beslam::orb::Options member it sets.
@@ -56,17 +59,42 @@ const beslam::sdk::Settings<Options> kSettings{
     setting(&Options::threaded_mapping, "threaded_mapping", "false",
             "local mapping on its own thread (same results, overlaps the next frame)"),
     setting(&Options::seed, "seed", "42", 0, 2147483647.0, "seed of every random choice (RANSAC)"),
+    path(&Options::vocabulary, "vocabulary", "\"\"",
+         "ORB vocabulary file (beslam vocab train); empty: the default one if installed or built, 'none': no "
+         "bag of words"),
+    setting(&Options::bow_matching, "bow_matching", "false",
+            "reference-keyframe tracking matches by bag of words (needs a vocabulary; measured no better)"),
+    setting(&Options::triangulation_bow, "triangulation_bow", "false",
+            "new points: epipolar candidates only under the same bag-of-words node (ORB-SLAM2; needs a vocabulary)"),
+    setting(&Options::relocalisation, "relocalisation", "true",
+            "relocalise when lost (by bag of words with a vocabulary, else near the last pose)"),
 };
 // clang-format on
 
-const beslam::sdk::PluginInfo kInfo(
-    "backend_orb", "ORB monocular SLAM",
-    "ORB-SLAM2-class monocular tracking and local mapping (no loop closure); dynamic mask labels get no "
-    "features, static objects get more; optional metric scale from the camera height",
-    {0, 2, 0}, kSettings);
+const beslam::sdk::PluginInfo kInfo("backend_orb", "ORB monocular SLAM",
+                                    "ORB-SLAM2-class monocular tracking, local mapping and relocalisation (no loop "
+                                    "closure); dynamic mask labels get no "
+                                    "features, static objects get more; optional metric scale from the camera height",
+                                    {0, 3, 0}, kSettings);
+
+// The vocabulary a run uses: the setting's file, none for "none", else the default one (installed, or
+// the source tree's, see docs/place-recognition.md); without one the backend runs without bag of words.
+std::string resolveVocabulary(const std::string& setting, const beslam::sdk::Context& context) {
+  // "none" (the host resolves paths against the pipeline's folder, so it arrives as <folder>/none).
+  if (std::filesystem::path(setting).filename() == "none") return "";
+  if (!setting.empty()) return setting;
+  for (const char* candidate : {BESLAM_ORB_VOCABULARY_INSTALLED, BESLAM_ORB_VOCABULARY_SOURCE}) {
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(candidate, ec)) return candidate;
+  }
+  context.warn(
+      "no ORB vocabulary found (set backend.vocabulary): bag-of-words matching and BoW relocalisation are off");
+  return "";
+}
 
 beslam::orb::Options readOptions(const beslam::sdk::Config& config, const beslam::sdk::Context& context) {
   beslam::orb::Options o = kSettings.read(config);
+  o.vocabulary = resolveVocabulary(o.vocabulary, context);
   o.camera_height = context.cameraHeight().value_or(0);  // the rig's, from the dataset: not a setting
   std::string error;
   if (!o.validate(&error)) throw beslam::sdk::ConfigError(error);
@@ -130,8 +158,10 @@ class OrbBackend : public beslam::sdk::Backend {
     out.T_world_cam = r.T_world_cam;
     out.stage_ms = r.stage_ms;
     out.world_is_metric = r.world_is_metric;
-    out.counters = {
-        {"features", r.features}, {"features_static", r.features_static}, {"tracked_static", r.tracked_static}};
+    out.counters = {{"features", r.features},
+                    {"features_static", r.features_static},
+                    {"tracked_static", r.tracked_static},
+                    {"relocalisations", r.relocalised ? 1 : 0}};
     out.keypoints.reserve(r.keypoints.size());
     for (const auto& k : r.keypoints)
       out.keypoints.push_back(

@@ -1,4 +1,5 @@
-// The frame being tracked: its features, matched map points, outlier flags and pose T_cw.
+// The frame being tracked: its features, matched map points, outlier flags, pose T_cw and, once
+// computed, its bag of words.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -7,6 +8,7 @@
 #include <vector>
 
 #include "features/feature_set.hpp"
+#include "place/vocabulary.hpp"
 
 namespace beslam::orb {
 
@@ -22,6 +24,10 @@ struct Frame {
   Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
   bool has_pose = false;
   KeyFrame* reference = nullptr;
+  // Bag of words and direct index (filled by the tracker when a vocabulary is loaded and they are needed).
+  bool has_bow = false;
+  place::BowVector bow;
+  place::FeatureVector feature_vector;
 
   Frame() = default;
   Frame(int64_t idx, double ts, std::shared_ptr<const FeatureSet> f)

@@ -17,6 +17,8 @@ KeyFrame::KeyFrame(long id_, const Frame& frame, const Camera& cam, const ScaleP
       pyramid(pyr),
       T_cw(frame.T_cw),
       points(frame.points),
+      bow(frame.bow),
+      feature_vector(frame.feature_vector),
       map_(map) {
   // Tracking outliers stay out (ORB-SLAM2 passes them on for BA to judge; measured worse here).
   for (size_t i = 0; i < points.size(); ++i)

@@ -13,6 +13,7 @@
 #include "features/feature_set.hpp"
 #include "features/scale_pyramid.hpp"
 #include "map/id_less.hpp"
+#include "place/vocabulary.hpp"
 
 namespace beslam::orb {
 
@@ -34,6 +35,8 @@ class KeyFrame {
   std::vector<MapPoint*> points;  // per keypoint, may be null
   bool bad = false;
   Eigen::Isometry3d T_cp = Eigen::Isometry3d::Identity();  // to parent, set when culled
+  place::BowVector bow;                                    // empty without a vocabulary
+  place::FeatureVector feature_vector;                     // direct index
 
   // Spanning tree.
   KeyFrame* parent = nullptr;

@@ -222,7 +222,7 @@ int LocalMapper::createNewPoints(KeyFrame* kf) {
     const Eigen::Isometry3d T21 = T2 * T1.inverse();
     const Eigen::Matrix3d F21 = Kinv.transpose() * skew(T21.translation()) * T21.linear() * Kinv;
     matching::searchForTriangulation(kf, kf2, F21, matches, options_.triangulation_ratio,
-                                     options_.triangulation_check_orientation);
+                                     options_.triangulation_check_orientation, options_.triangulation_bow);
     Eigen::Matrix<double, 3, 4> P1, P2;
     P1 << T1.linear(), T1.translation();
     P2 << T2.linear(), T2.translation();

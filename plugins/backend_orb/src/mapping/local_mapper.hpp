@@ -24,6 +24,7 @@ struct LocalMapperOptions {
   float triangulation_ratio = 1.0f;
   double max_cos_parallax = 0.9998;
   bool triangulation_check_orientation = false;
+  bool triangulation_bow = false;  // epipolar candidates only under the same BoW direct-index node
   int fuse_neighbours = 20, fuse_second_order = 5;
   bool keyframe_culling = true;
   optimize::BundleAdjustmentOptions ba;

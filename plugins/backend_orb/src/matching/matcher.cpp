@@ -225,11 +225,68 @@ int searchByProjectionWide(Frame& cur, const std::vector<MapPoint*>& points, con
   return n;
 }
 
+int searchByBoW(const KeyFrame* kf, Frame& cur, float ratio, bool check_orientation) {
+  const FeatureSet& fk = *kf->features;
+  const FeatureSet& f = *cur.features;
+  std::vector<int> matched_from(f.size(), -1);  // kf keypoint index per frame keypoint
+  RotationHistogram hist;
+  int n = 0;
+  auto ki = kf->feature_vector.begin();
+  auto fi = cur.feature_vector.begin();
+  while (ki != kf->feature_vector.end() && fi != cur.feature_vector.end()) {
+    if (ki->first < fi->first) {
+      ki = kf->feature_vector.lower_bound(fi->first);
+      continue;
+    }
+    if (fi->first < ki->first) {
+      fi = cur.feature_vector.lower_bound(ki->first);
+      continue;
+    }
+    for (int ik : ki->second) {
+      MapPoint* mp = kf->points[ik];
+      if (!mp || mp->bad) continue;
+      const uint8_t* dk = fk.descriptor(ik);
+      NearestTwo nn;
+      for (int j : fi->second) {
+        if (cur.points[j]) continue;
+        nn.add(hamming(dk, f.descriptor(j)), j);
+      }
+      if (nn.index < 0 || nn.best > kThLow || nn.best >= ratio * nn.second) continue;
+      cur.points[nn.index] = mp;
+      cur.outlier[nn.index] = false;
+      matched_from[nn.index] = ik;
+      if (check_orientation) hist.add(fk.keypoints[ik].angle, f.keypoints[nn.index].angle, nn.index);
+      ++n;
+    }
+    ++ki;
+    ++fi;
+  }
+  if (check_orientation)
+    for (int j : hist.rejected()) {
+      if (cur.points[j] && matched_from[j] >= 0) {
+        cur.points[j] = nullptr;
+        --n;
+      }
+    }
+  return n;
+}
+
 int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen::Matrix3d& F21,
-                           std::vector<std::pair<int, int>>& matches, float ratio, bool check_orientation) {
+                           std::vector<std::pair<int, int>>& matches, float ratio, bool check_orientation,
+                           bool same_bow_node) {
   matches.clear();
   const FeatureSet& f1 = *kf1->features;
   const FeatureSet& f2 = *kf2->features;
+  // Direct-index node of every keypoint (empty: no restriction).
+  std::vector<uint32_t> node1, node2;
+  if (same_bow_node && !kf1->feature_vector.empty() && !kf2->feature_vector.empty()) {
+    node1.assign(f1.size(), 0);
+    node2.assign(f2.size(), 0);
+    for (const auto& [node, idx] : kf1->feature_vector)
+      for (int i : idx) node1[i] = node;
+    for (const auto& [node, idx] : kf2->feature_vector)
+      for (int i : idx) node2[i] = node;
+  }
   const Camera& cam = kf2->camera;
   const ScalePyramid& pyr = kf2->pyramid;
 
@@ -300,6 +357,7 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
       if (stamp[i2] == static_cast<int>(i1)) continue;
       stamp[i2] = static_cast<int>(i1);
       if (kf2->points[i2]) continue;
+      if (!node2.empty() && node2[i2] != node1[i1]) continue;
       const cv::KeyPoint& kp2 = f2.keypoints[i2];
       const double dl = line.x() * kp2.pt.x + line.y() * kp2.pt.y + line.z();
       if (dl * dl / (ln * ln) >= 3.84 * pyr.sigma2[kp2.octave]) continue;

@@ -52,9 +52,17 @@ int searchByProjectionWide(Frame& cur, const std::vector<MapPoint*>& points, con
                            const Camera& camera, const ScalePyramid& pyramid, float radius, float ratio,
                            int max_distance);
 
+// Bag of words (ORB-SLAM2's SearchByBoW): each of kf's map points against the frame's keypoints under the
+// same direct-index node; best under the strict threshold, ratio test, rotation check. Needs both direct
+// indices. Sets cur.points (only slots still empty) and returns the number of matches.
+int searchByBoW(const KeyFrame* kf, Frame& cur, float ratio, bool check_orientation = true);
+
 // Unmatched keypoints of kf1 against unmatched keypoints of kf2 along epipolar lines (F21: x2' F21 x1 = 0).
+// same_bow_node (ORB-SLAM2's candidates): only pairs under the same direct-index node, when both
+// keyframes have one.
 int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen::Matrix3d& F21,
-                           std::vector<std::pair<int, int>>& matches, float ratio, bool check_orientation);
+                           std::vector<std::pair<int, int>>& matches, float ratio, bool check_orientation,
+                           bool same_bow_node = false);
 
 // Projects points into kf; a match either adds an observation or merges duplicates (the point with
 // more observations survives). Returns the number of fused points.

@@ -16,12 +16,15 @@
 #include "matching/matcher.hpp"
 #include "optimize/bundle_adjustment.hpp"
 #include "optimize/pose_optimizer.hpp"
+#include "place/keyframe_database.hpp"
 
 namespace beslam::orb {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+constexpr int kBowDirectLevelsUp = 4;  // direct index: features grouped 4 levels above the words (ORB-SLAM2)
 
 // The map point of slot i, or null; a bad point is dropped from the slot first.
 MapPoint* goodPoint(std::vector<MapPoint*>& points, size_t i) {
@@ -32,13 +35,21 @@ MapPoint* goodPoint(std::vector<MapPoint*>& points, size_t i) {
 }  // namespace
 
 Tracker::Tracker(const Camera& camera, const Options& options, const ScalePyramid& pyramid, Map& map, KeyFrameSink sink,
-                 std::function<void()> on_reset)
+                 std::function<void()> on_reset, const place::Vocabulary* vocabulary, KeyFrameDatabase* database)
     : camera_(camera),
       options_(options),
       pyramid_(pyramid),
       map_(map),
       sink_(std::move(sink)),
-      on_reset_(std::move(on_reset)) {}
+      on_reset_(std::move(on_reset)),
+      vocabulary_(vocabulary),
+      database_(database) {}
+
+void Tracker::computeBow(Frame& f) const {
+  if (!vocabulary_ || f.has_bow || !f.features) return;
+  vocabulary_->transform(f.features->descriptors, f.bow, &f.feature_vector, kBowDirectLevelsUp);
+  f.has_bow = true;
+}
 
 std::optional<Eigen::Isometry3d> Tracker::predictPose() const {
   if (state_ != TrackingState::Ok || !velocity_ || !last_.has_pose) return std::nullopt;
@@ -85,14 +96,17 @@ TrackResult Tracker::track(std::shared_ptr<const FeatureSet> features, double ti
       ok = trackWithMotionModel();
       if (!ok) ok = trackReferenceKeyFrame();
     }
-  } else {
+  } else if (options_.relocalisation) {
     ok = relocalise();
+    result.relocalised = ok;  // counted once local-map tracking confirms it
   }
   result.stage_ms.emplace_back("track_frame", msSince(t0));
   current_.reference = validReference();
   t0 = Clock::now();
   if (ok) ok = trackLocalMap();
   result.stage_ms.emplace_back("track_local_map", msSince(t0));
+  result.relocalised = result.relocalised && ok;
+  if (result.relocalised) ++relocalisations_;
 
   if (ok) {
     state_ = TrackingState::Ok;
@@ -192,6 +206,8 @@ bool Tracker::createInitialMap(const std::vector<int>& matches12, const TwoViewR
   current_.has_pose = true;
   current_.clearMatches();
   init_frame_.clearMatches();
+  computeBow(init_frame_);
+  computeBow(current_);
   KeyFrame* kf_ini = map_.createKeyFrame(init_frame_, camera_, pyramid_);
   KeyFrame* kf_cur = map_.createKeyFrame(current_, camera_, pyramid_);
   for (size_t i = 0; i < matches12.size(); ++i) {
@@ -226,6 +242,10 @@ bool Tracker::createInitialMap(const std::vector<int>& matches12, const TwoViewR
   for (MapPoint* mp : kf_ini->points)
     if (mp) mp->updateNormalAndDepth();
 
+  if (database_) {
+    database_->add(kf_ini);
+    database_->add(kf_cur);
+  }
   sink_(kf_ini, true);
   sink_(kf_cur, true);
   current_.T_cw = kf_cur->T_cw;
@@ -324,6 +344,7 @@ void Tracker::rescaleFrom(const KeyFrame* first_kf, const Eigen::Vector3d& c, do
 void Tracker::reset() {
   if (map_.numKeyFrames() > 0) ++resets_;
   map_.clear();
+  if (database_) database_->clear();
   if (on_reset_) on_reset_();
   state_ = TrackingState::NotInitialized;
   init_active_ = false;
@@ -390,6 +411,16 @@ bool Tracker::trackWithMotionModel() {
 bool Tracker::trackReferenceKeyFrame() {
   KeyFrame* ref = validReference();
   if (!ref || !last_.has_pose) return false;
+  // ORB-SLAM2: the reference keyframe's points matched by bag of words, starting from the last pose.
+  if (options_.bow_matching && vocabulary_ && !ref->feature_vector.empty()) {
+    computeBow(current_);
+    current_.clearMatches();
+    if (matching::searchByBoW(ref, current_, 0.7f, true) >= 15) {
+      current_.T_cw = last_.T_cw;
+      optimizeFramePose();
+      if (discardOutliers() >= 10) return true;
+    }
+  }
   const Eigen::Isometry3d guess = velocity_ ? (*velocity_) * last_.T_cw : last_.T_cw;
   for (float radius : {20.f, 50.f}) {
     current_.clearMatches();
@@ -404,6 +435,118 @@ bool Tracker::trackReferenceKeyFrame() {
 }
 
 bool Tracker::relocalise() {
+  if (vocabulary_ && database_ && relocaliseByBoW()) return true;
+  return relocaliseNearLastPose();
+}
+
+// ORB-SLAM2's relocalisation: keyframes sharing many words (grouped with their covisible neighbours),
+// BoW matching (ratio 0.75, >= 15 matches), EPnP in RANSAC, pose-only optimisation, more matches by
+// projection of the candidate's points when short of 50 inliers; success with 50 inliers or more.
+bool Tracker::relocaliseByBoW() {
+  computeBow(current_);
+  const auto candidates = database_->relocalisationCandidates(current_.bow);
+  if (std::getenv("BESLAM_ORB_DEBUG"))
+    std::fprintf(stderr, "frame %ld: relocalisation, %zu candidates\n", static_cast<long>(current_.index),
+                 candidates.size());
+  for (KeyFrame* kf : candidates) {
+    if (kf->bad) continue;
+    if (relocaliseWith(kf)) {
+      last_reloc_frame_ = current_.index;
+      return true;
+    }
+  }
+  current_.clearMatches();
+  return false;
+}
+
+bool Tracker::relocaliseWith(KeyFrame* kf) {
+  current_.clearMatches();
+  const int bow_matches = matching::searchByBoW(kf, current_, 0.75f, true);
+  if (std::getenv("BESLAM_ORB_DEBUG"))
+    std::fprintf(stderr, "  keyframe %ld (frame %ld): %d BoW matches\n", kf->id, static_cast<long>(kf->frame_index),
+                 bow_matches);
+  if (bow_matches < 15) return false;
+  std::vector<cv::Point3f> obj;
+  std::vector<cv::Point2f> img;
+  std::vector<size_t> idx;
+  for (size_t i = 0; i < current_.size(); ++i) {
+    MapPoint* mp = current_.points[i];
+    if (!mp) continue;
+    obj.emplace_back(static_cast<float>(mp->position.x()), static_cast<float>(mp->position.y()),
+                     static_cast<float>(mp->position.z()));
+    img.push_back(current_.features->keypoints[i].pt);
+    idx.push_back(i);
+  }
+  cv::Mat K;
+  cv::eigen2cv(intrinsics(camera_), K);
+  cv::Mat rvec, tvec, inliers;
+  cv::setRNGSeed(static_cast<int>(options_.seed + static_cast<uint64_t>(kf->id)));
+  // Reprojection threshold: chi-square 5.991 (2 dof) at level 0, sqrt(5.991) = 2.45 px.
+  if (!cv::solvePnPRansac(obj, img, K, cv::Mat(), rvec, tvec, false, 300, 2.45f, 0.99, inliers, cv::SOLVEPNP_EPNP) ||
+      inliers.rows < 10)
+    return false;
+  std::vector<bool> keep(idx.size(), false);
+  for (int r = 0; r < inliers.rows; ++r) keep[inliers.at<int>(r)] = true;
+  for (size_t k = 0; k < idx.size(); ++k)
+    if (!keep[k]) current_.points[idx[k]] = nullptr;
+  cv::Mat R;
+  cv::Rodrigues(rvec, R);
+  Eigen::Matrix3d Re;
+  Eigen::Vector3d te;
+  cv::cv2eigen(R, Re);
+  cv::cv2eigen(tvec, te);
+  current_.T_cw = Eigen::Isometry3d::Identity();
+  current_.T_cw.linear() = Re;
+  current_.T_cw.translation() = te;
+  int good = optimizeFramePose();
+  if (std::getenv("BESLAM_ORB_DEBUG"))
+    std::fprintf(stderr, "  PnP inliers %d, after pose optimisation %d\n", inliers.rows, good);
+  if (good < 10) return false;
+  for (size_t i = 0; i < current_.size(); ++i)
+    if (current_.outlier[i]) {
+      current_.points[i] = nullptr;
+      current_.outlier[i] = false;
+    }
+  // Short of 50: the candidate's other points by projection (window 10, then 3 with the refined pose).
+  const std::vector<MapPoint*> kf_points = kf->validPoints();
+  auto searchMore = [&](float radius) {
+    std::vector<MapPoint*> unmatched;
+    std::vector<MapPoint*> matched = current_.points;
+    std::sort(matched.begin(), matched.end());
+    for (MapPoint* mp : kf_points)
+      if (!std::binary_search(matched.begin(), matched.end(), mp)) unmatched.push_back(mp);
+    Frame probe = current_;
+    probe.clearMatches();
+    matching::searchByProjectionWide(probe, unmatched, current_.T_cw, camera_, pyramid_, radius, 0.9f,
+                                     matching::kThHigh);
+    int added = 0;
+    for (size_t i = 0; i < current_.size(); ++i)
+      if (probe.points[i] && !current_.points[i]) {
+        current_.points[i] = probe.points[i];
+        ++added;
+      }
+    return added;
+  };
+  if (good < 50) {
+    if (good + searchMore(10.f) >= 50) {
+      good = optimizeFramePose();
+      if (good > 30 && good < 50) {
+        for (size_t i = 0; i < current_.size(); ++i)
+          if (current_.outlier[i]) {
+            current_.points[i] = nullptr;
+            current_.outlier[i] = false;
+          }
+        if (good + searchMore(3.f) >= 50) good = optimizeFramePose();
+      }
+    }
+  }
+  if (good < 50) return false;
+  discardOutliers();
+  return true;
+}
+
+// Without a vocabulary: the last good pose's neighbourhood searched by projection, then PnP.
+bool Tracker::relocaliseNearLastPose() {
   if (!last_good_pose_) return false;
   // Candidate points: the last local map, or everything seen by the last keyframe's neighbourhood.
   std::vector<MapPoint*> points;
@@ -455,7 +598,6 @@ bool Tracker::relocalise() {
   optimizeFramePose();
   if (discardOutliers() < 50) return false;
   last_reloc_frame_ = current_.index;
-  ++relocalisations_;
   return true;
 }
 
@@ -588,7 +730,9 @@ bool Tracker::needNewKeyFrame() const {
 }
 
 void Tracker::createKeyFrame() {
+  computeBow(current_);
   KeyFrame* kf = map_.createKeyFrame(current_, camera_, pyramid_);
+  if (database_ && vocabulary_) database_->add(kf);
   reference_kf_ = kf;
   current_.reference = kf;
   last_kf_ = kf;

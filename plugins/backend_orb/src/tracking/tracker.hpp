@@ -1,6 +1,8 @@
 // Tracking: monocular two-view initialisation, then per frame a constant-velocity prediction searched
-// by projection (reference-keyframe search as fallback), pose-only optimisation, local-map tracking and
-// the keyframe decision. States NotInitialized -> Ok <-> Lost; lost with a tiny map resets it.
+// by projection (reference-keyframe search as fallback: by bag of words with a vocabulary, else by
+// projection), pose-only optimisation, local-map tracking and the keyframe decision. States
+// NotInitialized -> Ok <-> Lost; lost with a tiny map resets it, otherwise relocalisation (BoW candidates
+// from the keyframe database + PnP RANSAC with a vocabulary; a search around the last pose without).
 #pragma once
 
 #include <cstdint>
@@ -20,6 +22,7 @@
 namespace beslam::orb {
 
 class KeyFrame;
+class KeyFrameDatabase;
 class Map;
 class MapPoint;
 
@@ -37,7 +40,8 @@ class Tracker {
   // on_keyframe(kf, initial): hand a new keyframe to local mapping (initial = the two initial keyframes).
   using KeyFrameSink = std::function<void(KeyFrame*, bool initial)>;
   Tracker(const Camera& camera, const Options& options, const ScalePyramid& pyramid, Map& map, KeyFrameSink sink,
-          std::function<void()> on_reset);
+          std::function<void()> on_reset, const place::Vocabulary* vocabulary = nullptr,
+          KeyFrameDatabase* database = nullptr);
 
   TrackResult track(std::shared_ptr<const FeatureSet> features, double timestamp, int64_t index);
   bool initialising() const { return state_ == TrackingState::NotInitialized; }
@@ -46,6 +50,7 @@ class Tracker {
   const std::vector<FrameRecord>& records() const { return records_; }
   int resets() const { return resets_; }
   int relocalisations() const { return relocalisations_; }
+  bool usesBow() const { return vocabulary_ != nullptr; }
   int64_t initialisedAt() const { return initialised_at_; }
   KeyFrame* lastKeyFrame() const { return last_kf_; }
   // Matched map points of the last tracked frame that lie on static objects (inliers only).
@@ -68,6 +73,10 @@ class Tracker {
   bool trackWithMotionModel();
   bool trackReferenceKeyFrame();
   bool relocalise();
+  bool relocaliseByBoW();
+  bool relocaliseNearLastPose();
+  bool relocaliseWith(KeyFrame* kf);
+  void computeBow(Frame& f) const;
   bool trackLocalMap();
   void updateLocalKeyFrames();
   void updateLocalPoints();
@@ -85,6 +94,8 @@ class Tracker {
   Map& map_;
   KeyFrameSink sink_;
   std::function<void()> on_reset_;
+  const place::Vocabulary* vocabulary_;
+  KeyFrameDatabase* database_;
 
   TrackingState state_ = TrackingState::NotInitialized;
   Frame current_, last_;

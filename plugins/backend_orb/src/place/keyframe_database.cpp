@@ -1,0 +1,81 @@
+#include "place/keyframe_database.hpp"
+
+#include <algorithm>
+#include <map>
+
+#include "map/id_less.hpp"
+#include "map/keyframe.hpp"
+
+namespace beslam::orb {
+
+void KeyFrameDatabase::add(KeyFrame* kf) {
+  for (const auto& [word, weight] : kf->bow) index_[word].push_back(kf);
+}
+
+void KeyFrameDatabase::erase(KeyFrame* kf) {
+  for (const auto& [word, weight] : kf->bow) {
+    auto it = index_.find(word);
+    if (it == index_.end()) continue;
+    auto& list = it->second;
+    list.erase(std::remove(list.begin(), list.end(), kf), list.end());
+    if (list.empty()) index_.erase(it);
+  }
+}
+
+std::vector<std::pair<KeyFrame*, int>> KeyFrameDatabase::sharedWords(const place::BowVector& bow) const {
+  std::map<KeyFrame*, int, IdLess<KeyFrame>> count;
+  for (const auto& [word, weight] : bow) {
+    auto it = index_.find(word);
+    if (it == index_.end()) continue;
+    for (KeyFrame* kf : it->second)
+      if (!kf->bad) ++count[kf];
+  }
+  return {count.begin(), count.end()};
+}
+
+std::vector<KeyFrame*> KeyFrameDatabase::relocalisationCandidates(const place::BowVector& bow) const {
+  const auto shared = sharedWords(bow);
+  if (shared.empty()) return {};
+  // Shared words as a share of the keyframe's words: ORB-SLAM2 compares raw counts, which favours the
+  // two initial keyframes (twice the features) so much that with a small vocabulary they were the only
+  // candidates left.
+  auto share = [](KeyFrame* kf, int n) { return static_cast<double>(n) / std::max<size_t>(1, kf->bow.size()); };
+  double max_share = 0;
+  for (const auto& [kf, n] : shared) max_share = std::max(max_share, share(kf, n));
+  std::map<KeyFrame*, double, IdLess<KeyFrame>> score;
+  for (const auto& [kf, n] : shared)
+    if (share(kf, n) >= 0.8 * max_share) score[kf] = place::Vocabulary::score(bow, kf->bow);
+  if (score.empty()) return {};
+  // Each candidate's group: itself and those of its 10 best covisible keyframes that are candidates too.
+  struct Group {
+    double accumulated;
+    KeyFrame* best;
+  };
+  std::vector<Group> groups;
+  double best_accumulated = 0;
+  for (const auto& [kf, s] : score) {
+    Group g{s, kf};
+    double best_single = s;
+    for (KeyFrame* n : kf->bestCovisibles(10)) {
+      auto it = score.find(n);
+      if (it == score.end() || n->bad) continue;
+      g.accumulated += it->second;
+      if (it->second > best_single) {
+        best_single = it->second;
+        g.best = n;
+      }
+    }
+    groups.push_back(g);
+    best_accumulated = std::max(best_accumulated, g.accumulated);
+  }
+  std::stable_sort(groups.begin(), groups.end(),
+                   [](const Group& a, const Group& b) { return a.accumulated > b.accumulated; });
+  std::vector<KeyFrame*> out;
+  for (const Group& g : groups) {
+    if (g.accumulated <= 0.75 * best_accumulated) break;
+    if (std::find(out.begin(), out.end(), g.best) == out.end()) out.push_back(g.best);
+  }
+  return out;
+}
+
+}  // namespace beslam::orb

@@ -1,0 +1,37 @@
+// KeyFrameDatabase: an inverted index from vocabulary word to the keyframes whose BoW vector has it.
+//
+// add() indexes a keyframe's BoW vector, erase() removes it, clear() empties the index. Queries pass
+// over bad (culled) keyframes. relocalisationCandidates() follows ORB-SLAM2's rule: keyframes sharing
+// at least 0.8 x the best share of shared words (counted relative to the keyframe's word count, where
+// ORB-SLAM2 uses raw counts), scored by BoW similarity, grouped with their 10 best covisible keyframes;
+// the best keyframe of every group scoring above 0.75 x the best group, best group first. Results come
+// in a deterministic order (keyframe ids break ties), whatever the pointers' addresses.
+#pragma once
+
+#include <cstdint>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "place/vocabulary.hpp"
+
+namespace beslam::orb {
+
+class KeyFrame;
+
+class KeyFrameDatabase {
+ public:
+  void add(KeyFrame* kf);
+  void erase(KeyFrame* kf);
+  void clear() { index_.clear(); }
+
+  // Keyframes that share at least one word with bow, with the number of shared words, in id order.
+  std::vector<std::pair<KeyFrame*, int>> sharedWords(const place::BowVector& bow) const;
+  // Relocalisation candidates for a frame's BoW vector, best first.
+  std::vector<KeyFrame*> relocalisationCandidates(const place::BowVector& bow) const;
+
+ private:
+  std::unordered_map<uint32_t, std::vector<KeyFrame*>> index_;
+};
+
+}  // namespace beslam::orb
