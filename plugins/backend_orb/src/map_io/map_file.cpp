@@ -190,7 +190,9 @@ const KeyFrame* liveAncestor(const KeyFrame* kf) {
   return kf;
 }
 
-void writeAtomically(const std::string& path, const std::string& bytes) {
+// Writes the pieces, one after the other, to a temporary file next to `path`, flushes it to disk and
+// renames it over `path`.
+void writeAtomically(const std::string& path, const std::vector<const std::string*>& pieces) {
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   auto failed = [&](const std::string& what, int err) {
     ::unlink(tmp.c_str());
@@ -202,16 +204,18 @@ void writeAtomically(const std::string& path, const std::string& bytes) {
     fail(path, "cannot create the temporary file '" + tmp + "': " + std::strerror(err) +
                    " (an existing file is left as it was)");
   }
-  size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int err = n < 0 ? errno : EIO;
-      ::close(fd);
-      failed("cannot write", err);
+  for (const std::string* bytes : pieces) {
+    size_t done = 0;
+    while (done < bytes->size()) {
+      const ssize_t n = ::write(fd, bytes->data() + done, bytes->size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        const int err = n < 0 ? errno : EIO;
+        ::close(fd);
+        failed("cannot write", err);
+      }
+      done += static_cast<size_t>(n);
     }
-    done += static_cast<size_t>(n);
   }
   if (::fsync(fd) != 0) {
     const int err = errno;
@@ -342,15 +346,13 @@ void saveMapFile(const std::string& path, const Map& map, const MapFileInfo& inf
     for (const Eigen::Vector3d& p : l.points_object) w.vec3(p);
   }
 
-  std::string& payload = w.buffer();
-  Writer file;
-  file.bytes(kMagic, sizeof(kMagic));
-  file.u32(kMapFileVersion);
-  file.u64(payload.size());
-  file.buffer().reserve(kHeaderBytes + payload.size() + kTrailerBytes);
-  file.bytes(payload.data(), payload.size());
-  file.u64(fnv1a(payload.data(), payload.size()));
-  writeAtomically(path, file.buffer());
+  const std::string& payload = w.buffer();
+  Writer header, trailer;  // written around the payload, which is not copied
+  header.bytes(kMagic, sizeof(kMagic));
+  header.u32(kMapFileVersion);
+  header.u64(payload.size());
+  trailer.u64(fnv1a(payload.data(), payload.size()));
+  writeAtomically(path, {&header.buffer(), &payload, &trailer.buffer()});
 }
 
 MapFileInfo loadMapFile(const std::string& path, const MapFileInfo& expected, const ScalePyramid& pyramid, Map& map,
