@@ -12,11 +12,16 @@
 #include <iterator>
 #include <stdexcept>
 #include <string>
+#include <unordered_set>
 
 #include "beslam_orb/orb_slam.hpp"
+#include "features/orb_extractor.hpp"
 #include "map/keyframe.hpp"
+#include "map/map.hpp"
 #include "map/map_point.hpp"
+#include "mapping/local_mapper.hpp"
 #include "synthetic_world.hpp"
+#include "tracking/tracker.hpp"
 
 namespace beslam::orb {
 namespace {
@@ -216,6 +221,65 @@ TEST_F(MapFileTest, LoadingAfterTrackingIsALogicError) {
   OrbSlam slam(test::CorridorWorld().camera(), smallOptions());
   slam.track(corridorImages()[0], cv::Mat(), 0, 0);
   EXPECT_THROW(slam.loadMap(path("map.bin")), std::logic_error);
+}
+
+// The tracker's side of freeing: a keyframe that trajectory records, the reference and the local map point at
+// is culled and freed; the records follow its parent with unchanged poses and tracking goes on. (Keyframe
+// culling rarely fires on these sequences, so the culling is forced here.)
+TEST(MapMemory, TrackerLetsGoOfACulledKeyFrame) {
+  const Camera cam = test::CorridorWorld().camera();
+  Options o = smallOptions();
+  ExtractorOptions eo;
+  eo.features = o.features;
+  const OrbExtractor extractor(eo);
+  Map map;
+  LocalMapper mapper(map, cam, extractor.pyramid(), LocalMapperOptions{});
+  std::vector<std::pair<KeyFrame*, bool>> jobs;
+  Tracker tracker(
+      cam, o, extractor.pyramid(), map, [&](KeyFrame* kf, bool initial) { jobs.emplace_back(kf, initial); },
+      [&] { mapper.reset(); });
+  auto track = [&](int i) {
+    const int budget = tracker.initialising() ? o.features * o.init_features_factor : o.features;
+    const TrackResult r = tracker.track(extractor.extract(corridorImages()[i], cv::Mat(), budget), 0.1 * i, i);
+    for (auto& [kf, initial] : jobs) mapper.processKeyFrame(kf, !initial);
+    jobs.clear();
+    return r.state;
+  };
+  for (int i = 0; i < 25; ++i) track(i);
+  ASSERT_GE(map.numKeyFrames(), 5u);
+  auto composed = [](const FrameRecord& r) {
+    Eigen::Isometry3d T_c_ref = r.T_c_ref;
+    const KeyFrame* ref = r.reference;
+    while (ref->bad) {
+      T_c_ref = T_c_ref * ref->T_cp;
+      ref = ref->parent;
+    }
+    return T_c_ref * ref->T_cw;
+  };
+  // The keyframe most records are referenced to, and the current reference: culled.
+  std::map<const KeyFrame*, int> uses;
+  for (const FrameRecord& r : tracker.records()) ++uses[r.reference];
+  KeyFrame* doomed = nullptr;
+  for (const auto& [kf, n] : uses)
+    if (kf != map.origin() && (!doomed || n > uses[doomed])) doomed = const_cast<KeyFrame*>(kf);
+  ASSERT_NE(doomed, nullptr);
+  std::vector<Eigen::Isometry3d> before;
+  for (const FrameRecord& r : tracker.records()) before.push_back(composed(r));
+  const long kfs_before = KeyFrame::instances();
+  doomed->setBad();
+  tracker.forgetCulled();
+  mapper.forgetCulled();
+  map.releaseCulled();
+  EXPECT_EQ(KeyFrame::instances(), kfs_before - 1);
+  const std::unordered_set<const KeyFrame*> live(map.keyframes().begin(), map.keyframes().end());
+  ASSERT_EQ(tracker.records().size(), before.size());
+  for (size_t k = 0; k < before.size(); ++k) {
+    const FrameRecord& r = tracker.records()[k];
+    ASSERT_TRUE(live.count(r.reference)) << "record of frame " << r.index;
+    EXPECT_TRUE(composed(r).isApprox(before[k], 1e-9)) << "frame " << r.index;
+  }
+  ASSERT_TRUE(tracker.lastKeyFrame() == nullptr || live.count(tracker.lastKeyFrame()));
+  for (int i = 25; i < kFrames; ++i) EXPECT_EQ(track(i), TrackingState::Ok) << "frame " << i;
 }
 
 // A whole run: what culling removed is freed (allocated objects = live ones), and so is everything with
