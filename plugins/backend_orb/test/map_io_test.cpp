@@ -223,8 +223,8 @@ TEST_F(MapFileTest, LoadingAfterTrackingIsALogicError) {
   EXPECT_THROW(slam.loadMap(path("map.bin")), std::logic_error);
 }
 
-// The tracker's side of freeing: a keyframe that trajectory records, the reference and the local map point at
-// is culled and freed; the records follow its parent with unchanged poses and tracking goes on. (Keyframe
+// The tracker's side of freeing: a keyframe that trajectory records and the local map point at is culled
+// and freed; the records follow its parent with unchanged poses and tracking goes on. (Keyframe
 // culling rarely fires on these sequences, so the culling is forced here.)
 TEST(MapMemory, TrackerLetsGoOfACulledKeyFrame) {
   const Camera cam = test::CorridorWorld().camera();
@@ -256,12 +256,11 @@ TEST(MapMemory, TrackerLetsGoOfACulledKeyFrame) {
     }
     return T_c_ref * ref->T_cw;
   };
-  // The keyframe most records are referenced to, and the current reference: culled.
-  std::map<const KeyFrame*, int> uses;
-  for (const FrameRecord& r : tracker.records()) ++uses[r.reference];
+  // The earliest keyframe after the origin that records are referenced to: culled (a recent one would take
+  // the points the current frames track with it).
   KeyFrame* doomed = nullptr;
-  for (const auto& [kf, n] : uses)
-    if (kf != map.origin() && (!doomed || n > uses[doomed])) doomed = const_cast<KeyFrame*>(kf);
+  for (const FrameRecord& r : tracker.records())
+    if (r.reference != map.origin() && (!doomed || r.reference->id < doomed->id)) doomed = r.reference;
   ASSERT_NE(doomed, nullptr);
   std::vector<Eigen::Isometry3d> before;
   for (const FrameRecord& r : tracker.records()) before.push_back(composed(r));
