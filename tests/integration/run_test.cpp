@@ -274,6 +274,41 @@ TEST_F(RunTest, ExternalCommandRunsNextToTheBinary) {
   EXPECT_EQ(beslam("no-such-command", dir_).code, 2);
 }
 
+// --save-map / --load-map / --localise-only reach backend_orb as its settings (a relative FILE is taken
+// from the working folder); a map that cannot be loaded is one line naming the file.
+TEST_F(RunTest, MapFlagsReachTheOrbBackend) {
+  const fs::path path = dir_ / "orb.yaml";
+  std::ofstream(path) << "dataset: {type: kitti_odometry, root: data, sequence: \"00\"}\n"
+                      << "backend: {plugin: backend_orb, features: 500}\n";
+  const fs::path map_file = dir_ / "noise.map";
+  Result r =
+      beslam("run " + path.string() + " --out " + (dir_ / "save").string() + " --save-map " + map_file.string(), dir_);
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(map_file));
+  EXPECT_EQ(slurp(map_file).substr(0, 8), "BESLAMAP");
+  r = beslam("run " + path.string() + " --out " + (dir_ / "load").string() + " --load-map " + map_file.string() +
+                 " --localise-only",
+             dir_);
+  EXPECT_EQ(r.code, 0) << r.err;
+  const fs::path missing = fs::absolute(fs::path("no_such_dir_xyz") / "missing.map").lexically_normal();
+  r = beslam(
+      "run " + path.string() + " --out " + (dir_ / "missing").string() + " --load-map no_such_dir_xyz/missing.map",
+      dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("map file '" + missing.string() + "': cannot open"), std::string::npos) << r.err;
+  // An interrupted run ends through the backend's finish too: the map is saved.
+  const fs::path interrupted = dir_ / "interrupted.map";
+  r = beslam(
+      "run " + path.string() + " --out " + (dir_ / "interrupted").string() + " --save-map " + interrupted.string(),
+      dir_, "BESLAM_DEBUG_SIGNAL_AT=2:SIGINT ");
+  EXPECT_EQ(r.code, 128 + SIGINT) << r.err;
+  EXPECT_EQ(slurp(interrupted).substr(0, 8), "BESLAMAP");
+  r = beslam("run " + path.string() + " --out " + (dir_ / "alone").string() + " --localise-only", dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("localisation_only needs a map"), std::string::npos) << r.err;
+}
+
 // The world unit gates the motion checker: a backend whose world is not metric (a replayed monocular
 // estimate) gives it no pose, so every box stays unknown; a metric one is said to be from frame 0.
 TEST_F(RunTest, MotionCheckerGetsNoPoseUntilTheWorldIsMetric) {

@@ -1,5 +1,6 @@
 // `beslam`: the command-line front of the host.
 //   beslam run PIPELINE.yaml [--set key=value]... [--out DIR] [--plugin-path DIR]... [--quiet]
+//              [--load-map FILE] [--save-map FILE] [--localise-only]
 //   beslam plugins [--plugin-path DIR]... [--json]
 //   beslam eval --ref FILE --est FILE [...]
 //   beslam eval-motion --run DIR [...]
@@ -64,6 +65,9 @@ constexpr const char* kRunUsage =
     "  --plugin-path DIR   also look for plugins in DIR (repeatable; BESLAM_PLUGIN_PATH works too)\n"
     "  --quiet             no progress line, warnings only\n"
     "  --verbose           plugins' info messages too\n"
+    "  --load-map FILE     start from a saved map (backend.load_map; backend_orb)\n"
+    "  --save-map FILE     save the map at the end of the run, also when interrupted (backend.save_map)\n"
+    "  --localise-only     track against the loaded map without changing it (backend.localisation_only)\n"
     "\n"
     "Writes trajectory.tum/.kitti, trajectory_online.tum, keyframes.tum, pipeline.resolved.yaml,\n"
     "timing.csv, summary.json, and objects.txt, masks/, map_points.ply where the pipeline makes them.\n";
@@ -104,6 +108,17 @@ std::function<void(int64_t)> debugSignalAt() {
   };
 }
 
+// --load-map / --save-map FILE as the --set of the backend's path setting: FILE relative to the working
+// folder (a pipeline's own paths are relative to the pipeline file), single-quoted for YAML.
+std::string backendPathOverride(const char* key, const std::string& file) {
+  std::error_code ec;
+  const std::filesystem::path absolute = std::filesystem::absolute(file, ec);
+  if (file.empty() || ec) throw UsageError(std::string("run: not a file name for ") + key + ": '" + file + "'");
+  std::string quoted;
+  for (char c : absolute.lexically_normal().string()) quoted += c == '\'' ? "''" : std::string(1, c);
+  return std::string("backend.") + key + "='" + quoted + "'";
+}
+
 bool wantsHelp(const std::vector<std::string>& args) {
   for (const auto& a : args)
     if (a == "--help" || a == "-h") return true;
@@ -133,6 +148,12 @@ int runCommand(const std::vector<std::string>& args) {
       options.progress = false;
     else if (a == "--verbose")
       options.log_level = BESLAM_LOG_INFO;
+    else if (a == "--load-map")
+      overrides.push_back(backendPathOverride("load_map", takeValue(args, i)));
+    else if (a == "--save-map")
+      overrides.push_back(backendPathOverride("save_map", takeValue(args, i)));
+    else if (a == "--localise-only")
+      overrides.push_back("backend.localisation_only=true");
     else if (!a.empty() && a[0] == '-')
       throw UsageError("run: unknown option " + a);
     else if (pipeline_path.empty())

@@ -15,6 +15,7 @@
 #include "map/keyframe.hpp"
 #include "map/map.hpp"
 #include "map/map_point.hpp"
+#include "map_io/map_file.hpp"
 #include "mapping/local_mapper.hpp"
 #include "optimize/bundle_adjustment.hpp"
 #include "place/keyframe_database.hpp"
@@ -140,7 +141,33 @@ struct OrbSlam::Impl {
         tracker(
             c, o, extractor.pyramid(), map, [this](KeyFrame* kf, bool initial) { pending.emplace_back(kf, initial); },
             [this] { mapper.reset(); }, vocabulary.empty() ? nullptr : &vocabulary, &database) {
+    if (options.localisation_only) object_scale_done = true;  // the map's unit is the loaded map's
     if (options.threaded_mapping) worker = std::thread([this] { run(); });
+  }
+
+  // What a map file made by this instance records about it; the vocabulary identity stays empty until
+  // there is a place-recognition vocabulary.
+  MapFileInfo mapFileInfo() const {
+    MapFileInfo info;
+    info.camera = camera;
+    info.levels = options.levels;
+    info.scale_factor = options.scale_factor;
+    info.metric = mapper.metric();
+    return info;
+  }
+
+  void loadMap(const std::string& path) {
+    waitIdle();
+    if (stats.frames > 0 || map.numKeyFrames() > 0)
+      throw std::logic_error("OrbSlam::loadMap: only before the first frame (map file '" + path + "')");
+    std::vector<ObjectLandmark> loaded;
+    const MapFileInfo info = loadMapFile(path, mapFileInfo(), extractor.pyramid(), map, loaded);
+    landmarks = std::move(loaded);
+    if (info.metric) {  // in metres already: the mapper keeps it so, the parked cars do not rescale it
+      mapper.rescale(1.0, std::max(0L, map.lastKeyFrameId()));
+      object_scale_done = true;
+    }
+    tracker.mapLoaded();
   }
 
   ~Impl() {
@@ -207,7 +234,7 @@ struct OrbSlam::Impl {
       } else {  // already metric (by the road): a correction about the current camera
         const Eigen::Vector3d centre = tracker.lastCentre();
         map.rescaleFrom(0, s, centre);
-        tracker.rescaleFrom(map.allKeyFrames().front().get(), centre, s);
+        tracker.rescaleFrom(map.keyFrameFrom(0), centre, s);
       }
       mapper.objectScaled();
       if (std::getenv("BESLAM_ORB_DEBUG"))
@@ -216,8 +243,9 @@ struct OrbSlam::Impl {
       stats.object_scale_frame = index;
       stats.object_scale_factor = s;
     }
-    if (const auto c = mapper.takePendingCorrection()) {
-      KeyFrame* first = map.allKeyFrames().at(static_cast<size_t>(c->first_kf_id)).get();
+    const auto correction = mapper.takePendingCorrection();
+    if (KeyFrame* first = correction ? map.keyFrameFrom(correction->first_kf_id) : nullptr) {
+      const auto c = correction;
       const Eigen::Vector3d centre = tracker.lastCentre();
       map.rescaleFrom(c->first_kf_id, c->factor, centre);
       tracker.rescaleFrom(first, centre, c->factor);
@@ -227,6 +255,7 @@ struct OrbSlam::Impl {
         std::fprintf(stderr, "frame %ld: scale x%.4f from keyframe %ld (frame %ld) on\n", static_cast<long>(index),
                      c->factor, c->first_kf_id, static_cast<long>(first->frame_index));
     }
+    releaseCulled();
     double background_mapping_ms = 0;
     if (options.threaded_mapping) {
       std::lock_guard<std::mutex> lock(mutex);
@@ -298,11 +327,20 @@ struct OrbSlam::Impl {
     return result;
   }
 
+  // Frees the keyframes and map points culled since the last call, once the tracker and the mapper have let
+  // go of them. Mapping must be idle (both modes: after waitIdle()).
+  void releaseCulled() {
+    if (!map.hasCulled()) return;
+    tracker.forgetCulled();
+    mapper.forgetCulled();
+    map.releaseCulled();
+  }
+
   // The map, the tracker and the mapper's references times s: the world is in metres from this frame on.
   void becomeMetric(double s, int64_t index) {
     map.rescale(s);
     tracker.rescale(s);
-    mapper.rescale(s, map.allKeyFrames().empty() ? 0 : map.allKeyFrames().back()->id);
+    mapper.rescale(s, std::max(0L, map.lastKeyFrameId()));
     parked_scale.rescale(s);
     stats.metric_from_frame = index;
     stats.metric_scale_factor = s;
@@ -342,6 +380,7 @@ OrbSlam::OrbSlam(const Camera& camera, const Options& options) {
   if (camera.width <= 0 || camera.height <= 0 || camera.fx <= 0 || camera.fy <= 0)
     throw std::invalid_argument("beslam::orb::Camera: width, height, fx and fy must be > 0");
   impl_ = std::make_unique<Impl>(camera, options);
+  if (!options.load_map.empty()) impl_->loadMap(options.load_map);
 }
 
 OrbSlam::~OrbSlam() = default;
@@ -356,9 +395,18 @@ TrackResult OrbSlam::track(const cv::Mat& gray, const cv::Mat& label_mask, doubl
 void OrbSlam::finish() {
   impl_->waitIdle();
   KeyFrame* last = impl_->tracker.lastKeyFrame();
-  if (last && !last->bad && impl_->map.numKeyFrames() > 2)
+  if (!impl_->options.localisation_only && last && !last->bad && impl_->map.numKeyFrames() > 2)
     optimize::localBundleAdjustment(last, impl_->map, mapperOptions(impl_->options).ba);
+  impl_->releaseCulled();
+  if (!impl_->options.save_map.empty()) saveMap(impl_->options.save_map);
 }
+
+void OrbSlam::saveMap(const std::string& path) const {
+  impl_->waitIdle();
+  saveMapFile(path, impl_->map, impl_->mapFileInfo(), impl_->landmarks);
+}
+
+void OrbSlam::loadMap(const std::string& path) { impl_->loadMap(path); }
 
 std::vector<FramePose> OrbSlam::trajectory() const {
   impl_->waitIdle();
@@ -400,6 +448,7 @@ std::vector<CloudPoint> OrbSlam::mapPoints() const {
 }
 
 void OrbSlam::addObjectLandmarks(const std::vector<ObjectLandmark>& landmarks) {
+  if (impl_->options.localisation_only) return;  // the loaded map's landmarks stay as they are
   for (const ObjectLandmark& l : landmarks) {
     bool replaced = false;
     for (ObjectLandmark& mine : impl_->landmarks)
@@ -415,6 +464,7 @@ std::vector<ObjectLandmark> OrbSlam::objectLandmarks() const { return impl_->lan
 
 void OrbSlam::dropObject(int32_t object_id) {
   impl_->waitIdle();
+  if (impl_->options.localisation_only) return;  // the map does not change
   impl_->stats.object_points_dropped += impl_->map.dropObjectPoints(object_id);
 }
 

@@ -68,14 +68,20 @@ const beslam::sdk::Settings<Options> kSettings{
             "new points: epipolar candidates only under the same bag-of-words node (ORB-SLAM2; needs a vocabulary)"),
     setting(&Options::relocalisation, "relocalisation", "true",
             "relocalise when lost (by bag of words with a vocabulary, else near the last pose)"),
+    path(&Options::load_map, "load_map", "\"\"",
+         "map file to start from (saved by save_map with the same camera); tracking first localises in it"),
+    path(&Options::save_map, "save_map", "\"\"", "map file written at the end of the run (also when interrupted)"),
+    setting(&Options::localisation_only, "localisation_only", "false",
+            "track against the loaded map (load_map) without changing it: no keyframes, map points or BA"),
 };
 // clang-format on
 
-const beslam::sdk::PluginInfo kInfo("backend_orb", "ORB monocular SLAM",
-                                    "ORB-SLAM2-class monocular tracking, local mapping and relocalisation (no loop "
-                                    "closure); dynamic mask labels get no "
-                                    "features, static objects get more; optional metric scale from the camera height",
-                                    {0, 3, 0}, kSettings);
+const beslam::sdk::PluginInfo kInfo(
+    "backend_orb", "ORB monocular SLAM",
+    "ORB-SLAM2-class monocular tracking, local mapping and relocalisation (no loop closure); dynamic mask "
+    "labels get no features, static objects get more; optional metric scale from the camera height; map save "
+    "and load, localisation-only tracking",
+    {0, 3, 0}, kSettings);
 
 // The vocabulary a run uses: the setting's file, none for "none", else the default one (installed, or
 // the source tree's, see docs/place-recognition.md); without one the backend runs without bag of words.
@@ -98,6 +104,17 @@ beslam::orb::Options readOptions(const beslam::sdk::Config& config, const beslam
   o.camera_height = context.cameraHeight().value_or(0);  // the rig's, from the dataset: not a setting
   std::string error;
   if (!o.validate(&error)) throw beslam::sdk::ConfigError(error);
+  if (o.localisation_only && o.load_map.empty())
+    throw beslam::sdk::ConfigError("localisation_only needs a map to localise in (load_map)");
+  // A map that cannot be saved should fail the run now, not after it.
+  if (!o.save_map.empty()) {
+    const std::filesystem::path folder = std::filesystem::absolute(o.save_map).parent_path();
+    std::error_code ec;
+    if (!std::filesystem::is_directory(folder, ec))
+      throw beslam::sdk::ConfigError("save_map: folder '" + folder.string() + "' does not exist");
+    if (std::filesystem::is_directory(o.save_map, ec))
+      throw beslam::sdk::ConfigError("save_map: '" + o.save_map + "' is a folder");
+  }
   return o;
 }
 
@@ -122,7 +139,14 @@ int32_t toState(beslam::orb::TrackingState s) {
 class OrbBackend : public beslam::sdk::Backend {
  public:
   OrbBackend(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
-      : slam_(readCamera(context), readOptions(config, context)) {}
+      : slam_(readCamera(context), readOptions(config, context)) {
+    if (!slam_.options().load_map.empty()) {
+      const beslam::orb::Statistics s = slam_.statistics();
+      context.info("map '" + slam_.options().load_map + "' loaded: " + std::to_string(s.keyframes) + " keyframes, " +
+                   std::to_string(s.map_points) + " map points" +
+                   (slam_.options().localisation_only ? " (localisation only)" : ""));
+    }
+  }
 
   std::optional<Eigen::Isometry3d> predictPose(const beslam::sdk::Frame& frame) override {
     return slam_.predictPose(frame.timestamp);

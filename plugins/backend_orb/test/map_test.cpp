@@ -1,10 +1,12 @@
 // Map bookkeeping on a simulated map: covisibility weights, keyframe culling of redundant keyframes
-// with spanning-tree re-parenting, point replacement (fusion) and observation erasure.
+// with spanning-tree re-parenting, point replacement (fusion) and observation erasure, and culled
+// objects freed with no pointer to them left in the live map.
 #include "map/map.hpp"
 
 #include <gtest/gtest.h>
 
 #include <random>
+#include <unordered_set>
 
 #include "features/scale_pyramid.hpp"
 #include "map/frame.hpp"
@@ -97,6 +99,61 @@ TEST(Map, ReplacingAPointMovesItsObservations) {
   a->eraseObservation(m.kfs[0]);
   EXPECT_TRUE(a->bad);
   EXPECT_EQ(m.kfs[1]->points[0], nullptr);
+}
+
+// Every pointer the live map holds points at a live object (compared by address: nothing is dereferenced
+// that may have been freed).
+void expectNoCulledReferences(const Map& map) {
+  const std::unordered_set<const KeyFrame*> kfs(map.keyframes().begin(), map.keyframes().end());
+  const std::unordered_set<const MapPoint*> points(map.points().begin(), map.points().end());
+  for (const KeyFrame* kf : map.keyframes()) {
+    if (kf != map.origin()) EXPECT_TRUE(kfs.count(kf->parent)) << "keyframe " << kf->id << ": parent";
+    for (const KeyFrame* c : kf->children) EXPECT_TRUE(kfs.count(c)) << "keyframe " << kf->id << ": child";
+    for (const auto& [other, w] : kf->connections()) EXPECT_TRUE(kfs.count(other)) << "keyframe " << kf->id;
+    for (const MapPoint* mp : kf->points)
+      if (mp) EXPECT_TRUE(points.count(mp)) << "keyframe " << kf->id << ": map point";
+  }
+  for (const MapPoint* mp : map.points()) {
+    EXPECT_TRUE(kfs.count(mp->reference)) << "map point " << mp->id << ": reference";
+    for (const auto& [kf, idx] : mp->observations) EXPECT_TRUE(kfs.count(kf)) << "map point " << mp->id;
+  }
+}
+
+TEST(Map, CulledObjectsAreFreed) {
+  const long kfs_before = KeyFrame::instances(), points_before = MapPoint::instances();
+  {
+    SimMap m(5);
+    EXPECT_EQ(KeyFrame::instances() - kfs_before, 5);
+    EXPECT_EQ(MapPoint::instances() - points_before, 150);
+    LocalMapper mapper(m.map, kCam, m.pyr, LocalMapperOptions{});
+    ASSERT_EQ(mapper.cullKeyFrames(m.kfs[4]), 2);
+    // Two of the points lose all but two observations too.
+    m.kfs[0]->erasePoint(size_t{0});  // as bundle adjustment drops an outlier: both sides
+    m.points[0]->eraseObservation(m.kfs[0]);
+    m.points[1]->replaceWith(m.points[2]);
+    EXPECT_TRUE(m.points[0]->bad);
+    EXPECT_EQ(m.map.allocatedKeyFrames(), 5u);  // flagged, still allocated until released
+    EXPECT_EQ(m.map.allocatedPoints(), 150u);
+    m.map.releaseCulled();
+    EXPECT_EQ(m.map.allocatedKeyFrames(), 3u);
+    EXPECT_EQ(m.map.allocatedPoints(), 148u);
+    EXPECT_EQ(m.map.numKeyFrames(), 3u);
+    EXPECT_EQ(m.map.points().size(), 148u);
+    EXPECT_EQ(KeyFrame::instances() - kfs_before, 3);
+    EXPECT_EQ(MapPoint::instances() - points_before, 148);
+    expectNoCulledReferences(m.map);
+    // The live map goes on working: more culling and releasing.
+    m.kfs[3]->erasePoint(size_t{3});
+    m.points[3]->eraseObservation(m.kfs[3]);
+    m.map.releaseCulled();
+    EXPECT_EQ(MapPoint::instances() - points_before, 147);
+    expectNoCulledReferences(m.map);
+    m.map.clear();
+    EXPECT_EQ(KeyFrame::instances(), kfs_before);
+    EXPECT_EQ(MapPoint::instances(), points_before);
+  }
+  EXPECT_EQ(KeyFrame::instances(), kfs_before);
+  EXPECT_EQ(MapPoint::instances(), points_before);
 }
 
 }  // namespace

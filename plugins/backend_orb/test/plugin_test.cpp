@@ -1,10 +1,14 @@
 // The backend_orb plugin the way the host uses it: dlopen, the C descriptor, create from schema
-// defaults, track rendered frames through the C function table, read the trajectory, destroy.
+// defaults, track rendered frames through the C function table, read the trajectory, destroy; save a map
+// in finish, localise in it in another instance, and a map file that cannot be loaded is the creation's
+// error text.
 #include <dlfcn.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -54,6 +58,16 @@ std::vector<beslam_config_value> defaults(const beslam_plugin_descriptor* d, con
     v.push_back(c);
   }
   return v;
+}
+
+void setText(std::vector<beslam_config_value>& config, const char* key, const char* text) {
+  for (beslam_config_value& c : config)
+    if (std::strcmp(c.key, key) == 0) c.text = text;
+}
+
+void setNumber(std::vector<beslam_config_value>& config, const char* key, double value) {
+  for (beslam_config_value& c : config)
+    if (std::strcmp(c.key, key) == 0) c.number = value;
 }
 
 beslam_create_info createInfo(const std::vector<beslam_config_value>& config) {
@@ -111,6 +125,84 @@ TEST(BackendOrbPlugin, RejectsAnInvalidConfiguration) {
   void* instance = nullptr;
   EXPECT_EQ(l.desc->create(&info, &instance), BESLAM_ERROR_INVALID_CONFIG);
   EXPECT_EQ(instance, nullptr);
+}
+
+// Tracks `frames` rendered corridor frames through the C table; returns how many were tracked.
+int trackFrames(const beslam_backend_v1* table, void* instance, int first, int frames) {
+  const beslam::orb::test::CorridorWorld world;
+  int ok_frames = 0;
+  for (int i = first; i < first + frames; ++i) {
+    const cv::Mat image = world.render(i);
+    beslam_frame frame{};
+    frame.struct_size = sizeof(frame);
+    frame.index = i;
+    frame.timestamp = 0.1 * i;
+    frame.gray = {image.data, image.cols, image.rows, static_cast<int32_t>(image.step), BESLAM_PIXEL_GRAY8};
+    beslam_track_result result{};
+    result.struct_size = sizeof(result);
+    if (table->track(instance, &frame, nullptr, nullptr, &result) != BESLAM_OK) return -1;
+    ok_frames += result.state == BESLAM_TRACKING_OK;
+  }
+  return ok_frames;
+}
+
+void keepLastError(void* user_data, int32_t level, const char*, const char* message) {
+  if (level == BESLAM_LOG_ERROR) *static_cast<std::string*>(user_data) = message;
+}
+
+TEST(BackendOrbPlugin, SavesAMapAndLocalisesInIt) {
+  Loaded l;
+  load(l);
+  if (HasFatalFailure()) return;
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("beslam_orb_plugin_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string map_file = (dir / "corridor.map").string();
+  const auto* table = static_cast<const beslam_backend_v1*>(l.desc->functions);
+  {
+    auto config = defaults(l.desc, "features", 1000);
+    setText(config, "save_map", map_file.c_str());
+    const beslam_create_info info = createInfo(config);
+    void* instance = nullptr;
+    ASSERT_EQ(l.desc->create(&info, &instance), BESLAM_OK);
+    EXPECT_GE(trackFrames(table, instance, 0, 15), 10);
+    EXPECT_EQ(table->finish(instance), BESLAM_OK);
+    l.desc->destroy(instance);
+  }
+  ASSERT_TRUE(std::filesystem::exists(map_file));
+  {
+    auto config = defaults(l.desc, "features", 1000);
+    setText(config, "load_map", map_file.c_str());
+    setNumber(config, "localisation_only", 1);
+    const beslam_create_info info = createInfo(config);
+    void* instance = nullptr;
+    ASSERT_EQ(l.desc->create(&info, &instance), BESLAM_OK);
+    EXPECT_EQ(trackFrames(table, instance, 2, 10), 10);
+    EXPECT_EQ(table->finish(instance), BESLAM_OK);
+    l.desc->destroy(instance);
+  }
+  {
+    const auto size = std::filesystem::file_size(map_file);
+    std::filesystem::resize_file(map_file, size / 2);
+    auto config = defaults(l.desc, "features", 1000);
+    setText(config, "load_map", map_file.c_str());
+    beslam_create_info info = createInfo(config);
+    std::string error;
+    beslam_host host{sizeof(beslam_host), BESLAM_ABI_VERSION, &error, keepLastError};
+    info.host = &host;
+    void* instance = nullptr;
+    EXPECT_EQ(l.desc->create(&info, &instance), BESLAM_ERROR_RUNTIME);
+    EXPECT_EQ(instance, nullptr);
+    EXPECT_NE(error.find("map file '" + map_file + "': truncated"), std::string::npos) << error;
+  }
+  {
+    auto config = defaults(l.desc, "features", 1000);
+    setNumber(config, "localisation_only", 1);  // without load_map
+    const beslam_create_info info = createInfo(config);
+    void* instance = nullptr;
+    EXPECT_EQ(l.desc->create(&info, &instance), BESLAM_ERROR_INVALID_CONFIG);
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

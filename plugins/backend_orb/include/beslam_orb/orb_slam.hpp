@@ -10,6 +10,8 @@
 // map points made there are "trusted": never culled as recent points, weighted by
 // Options::static_object_weight in pose optimisation and bundle adjustment; 1.0 by default).
 //
+// Map reuse: loadMap() / saveMap() (or Options::load_map / save_map) and Options::localisation_only.
+//
 // Threading: with Options::threaded_mapping the local mapping of a new keyframe runs on its own thread
 // while the caller goes on (and while the next frame's features are extracted); tracking of the next
 // frame waits for it. Results are the same as in the default single-threaded mode.
@@ -97,6 +99,13 @@ struct Options {
   double init_min_parallax_deg = 1.0;  // two-view reconstruction needs this much parallax
   int init_match_max_level = 0;        // initial matching uses keypoints up to this pyramid level
   uint64_t seed = 42;                  // seeds every random choice (RANSAC)
+  // Map reuse (src/map_io/map_file.hpp: versioned binary file, atomic save). load_map: a map file the
+  // constructor loads (the camera and the pyramid options must be the ones it was made with); tracking
+  // then starts by localising in it. save_map: the file finish() saves the map to. localisation_only:
+  // track against the loaded map without changing it (no keyframes, map points, culling, bundle
+  // adjustment, rescaling or map statistics); without a loaded map nothing is tracked.
+  std::string load_map, save_map;
+  bool localisation_only = false;
 
   bool validate(std::string* error) const;
 };
@@ -173,7 +182,8 @@ struct Statistics {
 
 class OrbSlam {
  public:
-  OrbSlam(const Camera& camera, const Options& options);  // throws std::invalid_argument on bad input
+  // Throws std::invalid_argument on bad input, std::runtime_error when Options::load_map cannot be loaded.
+  OrbSlam(const Camera& camera, const Options& options);
   ~OrbSlam();
   OrbSlam(const OrbSlam&) = delete;
   OrbSlam& operator=(const OrbSlam&) = delete;
@@ -187,8 +197,16 @@ class OrbSlam {
   TrackResult track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index,
                     const std::vector<ObjectBox>& car_boxes = {});
 
-  // Waits for the mapping thread and runs a last local bundle adjustment.
+  // Waits for the mapping thread and runs a last local bundle adjustment (not in localisation-only mode),
+  // then saves the map to Options::save_map if set (throws std::runtime_error naming the file on failure).
   void finish();
+
+  // Saves the map (live keyframes, map points, covisibility, object landmarks, camera) to `path`
+  // atomically; throws std::runtime_error naming the file. Waits for the mapping thread.
+  void saveMap(const std::string& path) const;
+  // Loads a map file into this OrbSlam before its first track(); throws std::runtime_error naming the
+  // file and the problem (another format version or camera, truncated, corrupt) and keeps no part of it.
+  void loadMap(const std::string& path);
 
   // Each tracked frame: its pose relative to its reference keyframe composed with that keyframe's
   // current (optimised) pose. Untracked frames are absent.

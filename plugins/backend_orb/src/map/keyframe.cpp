@@ -1,12 +1,16 @@
 #include "map/keyframe.hpp"
 
 #include <algorithm>
+#include <atomic>
 
 #include "map/frame.hpp"
 #include "map/map.hpp"
 #include "map/map_point.hpp"
 
 namespace beslam::orb {
+namespace {
+std::atomic<long> g_keyframes{0};
+}  // namespace
 
 KeyFrame::KeyFrame(long id_, const Frame& frame, const Camera& cam, const ScalePyramid& pyr, Map* map)
     : id(id_),
@@ -20,10 +24,15 @@ KeyFrame::KeyFrame(long id_, const Frame& frame, const Camera& cam, const ScaleP
       bow(frame.bow),
       feature_vector(frame.feature_vector),
       map_(map) {
+  ++g_keyframes;
   // Tracking outliers stay out (ORB-SLAM2 passes them on for BA to judge; measured worse here).
   for (size_t i = 0; i < points.size(); ++i)
     if (points[i] && (frame.outlier[i] || points[i]->bad)) points[i] = nullptr;
 }
+
+KeyFrame::~KeyFrame() { --g_keyframes; }
+
+long KeyFrame::instances() { return g_keyframes; }
 
 void KeyFrame::erasePoint(MapPoint* mp) {
   const int idx = mp->index(this);
@@ -123,6 +132,14 @@ void KeyFrame::updateConnections() {
     parent->children.insert(this);
     first_connection_ = false;
   }
+}
+
+void KeyFrame::restoreLinks(KeyFrame* parent_kf, const std::map<KeyFrame*, int, IdLess<KeyFrame>>& weights) {
+  weights_ = weights;
+  sortConnections();
+  parent = parent_kf;
+  if (parent) parent->children.insert(this);
+  first_connection_ = parent == nullptr;
 }
 
 void KeyFrame::setBad() {

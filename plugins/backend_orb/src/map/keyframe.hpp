@@ -24,6 +24,10 @@ struct Frame;
 class KeyFrame {
  public:
   KeyFrame(long id, const Frame& frame, const Camera& camera, const ScalePyramid& pyramid, Map* map);
+  ~KeyFrame();
+  KeyFrame(const KeyFrame&) = delete;
+  KeyFrame& operator=(const KeyFrame&) = delete;
+  static long instances();  // keyframes allocated now, in every map (tests: culled ones are freed)
 
   const long id;
   const int64_t frame_index;
@@ -67,6 +71,9 @@ class KeyFrame {
   const std::map<KeyFrame*, int, IdLess<KeyFrame>>& connections() const { return weights_; }
 
   void setBad();  // culls the keyframe: links, observations, children re-parented
+  // Map loading: the covisibility weights and spanning-tree parent as they were saved (the parent's
+  // children follow). The other side of each link is restored by that keyframe's own call.
+  void restoreLinks(KeyFrame* parent, const std::map<KeyFrame*, int, IdLess<KeyFrame>>& weights);
 
  private:
   void sortConnections();

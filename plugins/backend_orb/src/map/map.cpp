@@ -1,35 +1,81 @@
 #include "map/map.hpp"
 
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
 #include "map/frame.hpp"
 
 namespace beslam::orb {
 
 KeyFrame* Map::createKeyFrame(const Frame& frame, const Camera& camera, const ScalePyramid& pyramid) {
-  all_keyframes_.push_back(std::make_unique<KeyFrame>(next_kf_id_++, frame, camera, pyramid, this));
-  if (keyframes_.empty()) origin_ = all_keyframes_.back().get();
-  keyframes_.insert(all_keyframes_.back().get());
-  return all_keyframes_.back().get();
+  return restoreKeyFrame(next_kf_id_, frame, camera, pyramid);
 }
 
 MapPoint* Map::createMapPoint(const Eigen::Vector3d& position, KeyFrame* reference) {
-  all_points_.push_back(std::make_unique<MapPoint>(next_point_id_++, position, reference, this));
-  points_.insert(all_points_.back().get());
-  return all_points_.back().get();
+  return restoreMapPoint(next_point_id_, position, reference, reference ? reference->id : -1);
+}
+
+KeyFrame* Map::restoreKeyFrame(long id, const Frame& frame, const Camera& camera, const ScalePyramid& pyramid) {
+  auto [it, inserted] = owned_keyframes_.emplace(id, nullptr);
+  if (!inserted) throw std::logic_error("Map: keyframe id " + std::to_string(id) + " exists");
+  it->second = std::make_unique<KeyFrame>(id, frame, camera, pyramid, this);
+  KeyFrame* kf = it->second.get();
+  if (keyframes_.empty() && !origin_) origin_ = kf;
+  keyframes_.insert(kf);
+  next_kf_id_ = std::max(next_kf_id_, id + 1);
+  return kf;
+}
+
+MapPoint* Map::restoreMapPoint(long id, const Eigen::Vector3d& position, KeyFrame* reference, long first_keyframe_id) {
+  auto [it, inserted] = owned_points_.emplace(id, nullptr);
+  if (!inserted) throw std::logic_error("Map: map point id " + std::to_string(id) + " exists");
+  it->second = std::make_unique<MapPoint>(id, position, reference, this, first_keyframe_id);
+  MapPoint* mp = it->second.get();
+  points_.insert(mp);
+  next_point_id_ = std::max(next_point_id_, id + 1);
+  return mp;
+}
+
+void Map::eraseKeyFrame(KeyFrame* kf) {
+  if (keyframes_.erase(kf)) {
+    culled_keyframes_.push_back(kf->id);
+    ++culled_;
+  }
+}
+
+void Map::eraseMapPoint(MapPoint* mp) {
+  if (points_.erase(mp)) culled_points_.push_back(mp->id);
+}
+
+void Map::releaseCulled() {
+  for (long id : culled_points_) owned_points_.erase(id);
+  for (long id : culled_keyframes_) owned_keyframes_.erase(id);
+  culled_points_.clear();
+  culled_keyframes_.clear();
 }
 
 void Map::clear() {
-  // Objects stay allocated: frames and trajectory records may still point at them.
   keyframes_.clear();
   points_.clear();
+  culled_keyframes_.clear();
+  culled_points_.clear();
+  owned_points_.clear();
+  owned_keyframes_.clear();
   origin_ = nullptr;
 }
 
+KeyFrame* Map::keyFrameFrom(long id) const {
+  auto it = owned_keyframes_.lower_bound(id);
+  return it == owned_keyframes_.end() ? nullptr : it->second.get();
+}
+
 void Map::rescale(double s) {
-  for (auto& kf : all_keyframes_) {
+  for (auto& [id, kf] : owned_keyframes_) {
     kf->T_cw.translation() *= s;
     kf->T_cp.translation() *= s;
   }
-  for (auto& mp : all_points_) {
+  for (auto& [id, mp] : owned_points_) {
     mp->position *= s;
     mp->min_distance *= static_cast<float>(s);
     mp->max_distance *= static_cast<float>(s);
@@ -37,13 +83,13 @@ void Map::rescale(double s) {
 }
 
 void Map::rescaleFrom(long first_kf_id, double s, const Eigen::Vector3d& c) {
-  for (size_t i = static_cast<size_t>(first_kf_id); i < all_keyframes_.size(); ++i) {
-    KeyFrame& kf = *all_keyframes_[i];
+  for (auto it = owned_keyframes_.lower_bound(first_kf_id); it != owned_keyframes_.end(); ++it) {
+    KeyFrame& kf = *it->second;
     const Eigen::Vector3d centre = c + s * (kf.centre() - c);
     kf.T_cw.translation() = -(kf.T_cw.linear() * centre);
     kf.T_cp.translation() *= s;
   }
-  for (auto& mp : all_points_) {
+  for (auto& [id, mp] : owned_points_) {
     if (!mp->reference || mp->reference->id < first_kf_id) continue;
     mp->position = c + s * (mp->position - c);
     mp->min_distance *= static_cast<float>(s);

@@ -1,6 +1,7 @@
 #include "map/map_point.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <vector>
 
@@ -10,9 +11,18 @@
 #include "matching/hamming.hpp"
 
 namespace beslam::orb {
+namespace {
+std::atomic<long> g_points{0};
+}  // namespace
 
-MapPoint::MapPoint(long id_, const Eigen::Vector3d& pos, KeyFrame* ref, Map* map)
-    : id(id_), position(pos), reference(ref), first_keyframe_id(ref ? ref->id : -1), map_(map) {}
+MapPoint::MapPoint(long id_, const Eigen::Vector3d& pos, KeyFrame* ref, Map* map, long first_kf_id)
+    : id(id_), position(pos), reference(ref), first_keyframe_id(first_kf_id), map_(map) {
+  ++g_points;
+}
+
+MapPoint::~MapPoint() { --g_points; }
+
+long MapPoint::instances() { return g_points; }
 
 void MapPoint::addObservation(KeyFrame* kf, size_t idx) { observations.emplace(kf, idx); }
 

@@ -19,7 +19,12 @@ using Descriptor = std::array<uint8_t, 32>;
 
 class MapPoint {
  public:
-  MapPoint(long id, const Eigen::Vector3d& position, KeyFrame* reference, Map* map);
+  // first_keyframe_id: the id of the keyframe that made it (reference's id; another when loaded).
+  MapPoint(long id, const Eigen::Vector3d& position, KeyFrame* reference, Map* map, long first_keyframe_id);
+  ~MapPoint();
+  MapPoint(const MapPoint&) = delete;
+  MapPoint& operator=(const MapPoint&) = delete;
+  static long instances();  // map points allocated now, in every map (tests: culled ones are freed)
 
   const long id;
   Eigen::Vector3d position;

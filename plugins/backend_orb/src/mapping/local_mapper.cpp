@@ -182,6 +182,10 @@ void LocalMapper::registerKeyFrame(KeyFrame* kf) {
   kf->updateConnections();
 }
 
+void LocalMapper::forgetCulled() {
+  recent_.remove_if([](const MapPoint* mp) { return mp->bad; });
+}
+
 void LocalMapper::cullRecentPoints(KeyFrame* kf) {
   const int th_obs = 2;
   for (auto it = recent_.begin(); it != recent_.end();) {

@@ -67,6 +67,8 @@ class LocalMapper {
     object_reference_ = GroundReference(options_.ground.reference_keyframes, options_.metric_max_spread);
     object_scaled_ = false;
   }
+  // Culled map points are about to be freed (Map::releaseCulled): drop them from the recent points.
+  void forgetCulled();
   // The factor the map should be multiplied by to be in metres, once, when the mapper has found it;
   // the caller rescales map and tracker (with no mapping running) and calls rescale(s) here.
   std::optional<double> takePendingScale() {

@@ -13,6 +13,7 @@
 #include "map/keyframe.hpp"
 #include "map/map.hpp"
 #include "map/map_point.hpp"
+#include "map_io/localise_in_map.hpp"
 #include "matching/matcher.hpp"
 #include "optimize/bundle_adjustment.hpp"
 #include "optimize/pose_optimizer.hpp"
@@ -60,6 +61,7 @@ TrackResult Tracker::track(std::shared_ptr<const FeatureSet> features, double ti
   TrackResult result;
   current_ = Frame(index, timestamp, std::move(features));
   if (state_ == TrackingState::NotInitialized) {
+    if (options_.localisation_only) return result;  // no map to localise in; making one would change it
     auto t0 = Clock::now();
     initialise(result);
     result.stage_ms.emplace_back("initialise", msSince(t0));
@@ -113,7 +115,7 @@ TrackResult Tracker::track(std::shared_ptr<const FeatureSet> features, double ti
     velocity_ = last_.has_pose ? std::optional<Eigen::Isometry3d>(current_.T_cw * last_.T_cw.inverse()) : std::nullopt;
     last_good_pose_ = current_.T_cw;
     t0 = Clock::now();
-    if (needNewKeyFrame()) {
+    if (!options_.localisation_only && needNewKeyFrame()) {
       createKeyFrame();
       result.is_keyframe = true;
       result.keyframe_id = last_kf_->id;
@@ -136,7 +138,8 @@ TrackResult Tracker::track(std::shared_ptr<const FeatureSet> features, double ti
     state_ = TrackingState::Lost;
     velocity_.reset();
     current_.has_pose = false;
-    if (static_cast<int>(map_.numKeyFrames()) <= options_.lost_reset_max_keyframes) {
+    if (!options_.localisation_only && !map_loaded_ &&
+        static_cast<int>(map_.numKeyFrames()) <= options_.lost_reset_max_keyframes) {
       reset();
       result.state = state_;
       return result;
@@ -341,6 +344,33 @@ void Tracker::rescaleFrom(const KeyFrame* first_kf, const Eigen::Vector3d& c, do
   }
 }
 
+void Tracker::forgetCulled() {
+  for (FrameRecord& r : records_) {
+    while (r.reference && r.reference->bad && r.reference->parent) {
+      r.T_c_ref = r.T_c_ref * r.reference->T_cp;
+      r.reference = r.reference->parent;
+    }
+  }
+  auto live = [this](KeyFrame* kf) {
+    while (kf && kf->bad) kf = kf->parent;
+    return kf;
+  };
+  reference_kf_ = live(reference_kf_);
+  if (last_kf_ && last_kf_->bad) last_kf_ = map_.keyframes().empty() ? nullptr : *map_.keyframes().rbegin();
+  local_kfs_.erase(std::remove_if(local_kfs_.begin(), local_kfs_.end(), [](KeyFrame* kf) { return kf->bad; }),
+                   local_kfs_.end());
+  local_points_.erase(std::remove_if(local_points_.begin(), local_points_.end(), [](MapPoint* mp) { return mp->bad; }),
+                      local_points_.end());
+  for (Frame* f : {&current_, &last_, &init_frame_}) {
+    f->reference = live(f->reference);
+    for (MapPoint*& mp : f->points)
+      if (mp && mp->bad) mp = mp->latest()->bad ? nullptr : mp->latest();
+  }
+  for (Frame& f : init_between_)
+    for (MapPoint*& mp : f.points)
+      if (mp && mp->bad) mp = mp->latest()->bad ? nullptr : mp->latest();
+}
+
 void Tracker::reset() {
   if (map_.numKeyFrames() > 0) ++resets_;
   map_.clear();
@@ -353,7 +383,7 @@ void Tracker::reset() {
   reference_kf_ = last_kf_ = nullptr;
   local_kfs_.clear();
   local_points_.clear();
-  last_ = Frame();
+  last_ = current_ = Frame();  // their map points are gone with the map
   last_good_pose_.reset();
   records_.clear();  // poses before a reset live in another world frame
 }
@@ -547,7 +577,7 @@ bool Tracker::relocaliseWith(KeyFrame* kf) {
 
 // Without a vocabulary: the last good pose's neighbourhood searched by projection, then PnP.
 bool Tracker::relocaliseNearLastPose() {
-  if (!last_good_pose_) return false;
+  if (!last_good_pose_) return map_loaded_ && localiseInLoadedMap();
   // Candidate points: the last local map, or everything seen by the last keyframe's neighbourhood.
   std::vector<MapPoint*> points;
   KeyFrame* ref = validReference();
@@ -601,6 +631,28 @@ bool Tracker::relocaliseNearLastPose() {
   return true;
 }
 
+// No pose to start from in a loaded map: the keyframes, nearest in frame order first, a block of them per
+// frame so that a frame from elsewhere costs a bounded time; the next frame tries the next block.
+bool Tracker::localiseInLoadedMap() {
+  constexpr size_t kCandidatesPerFrame = 40;
+  const std::vector<KeyFrame*> ordered = candidatesByFrameOrder(map_, current_.index);
+  if (ordered.empty()) return false;
+  std::vector<KeyFrame*> block;
+  for (size_t k = 0; k < std::min(kCandidatesPerFrame, ordered.size()); ++k)
+    block.push_back(ordered[(localise_offset_ + k) % ordered.size()]);
+  localise_offset_ = (localise_offset_ + block.size()) % ordered.size();
+  MapLocaliserOptions o;
+  o.trusted_weight = options_.static_object_weight;
+  o.seed = options_.seed;
+  KeyFrame* kf = localiseInMap(current_, block, camera_, pyramid_, o);
+  if (!kf) return false;
+  localise_offset_ = 0;
+  reference_kf_ = kf;
+  last_reloc_frame_ = current_.index;
+  ++relocalisations_;
+  return true;
+}
+
 // ---------------------------------------------------------------- local map
 
 bool Tracker::trackLocalMap() {
@@ -612,7 +664,7 @@ bool Tracker::trackLocalMap() {
   for (size_t i = 0; i < current_.size(); ++i) {
     MapPoint* mp = current_.points[i];
     if (!mp || current_.outlier[i]) continue;
-    ++mp->found;
+    if (!options_.localisation_only) ++mp->found;  // the map's statistics are part of the map
     if (mp->numObservations() > 0) ++inliers_;
   }
   if (current_.index < last_reloc_frame_ + static_cast<int64_t>(options_.fps) && inliers_ < 50) return false;
@@ -694,7 +746,7 @@ void Tracker::searchLocalPoints() {
   for (size_t i = 0; i < current_.size(); ++i) {
     MapPoint* mp = goodPoint(current_.points, i);
     if (!mp) continue;
-    ++mp->visible;
+    if (!options_.localisation_only) ++mp->visible;
     mp->last_seen_frame = current_.index;
     mp->track_in_view = false;
   }
@@ -702,7 +754,7 @@ void Tracker::searchLocalPoints() {
   for (MapPoint* mp : local_points_) {
     if (mp->last_seen_frame == current_.index || mp->bad) continue;
     if (isInFrustum(mp, 0.5f)) {
-      ++mp->visible;
+      if (!options_.localisation_only) ++mp->visible;
       ++to_match;
     }
   }

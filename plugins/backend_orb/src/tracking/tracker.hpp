@@ -62,6 +62,15 @@ class Tracker {
   void rescale(double s);
   // The map's newer part was scaled about c (Map::rescaleFrom): frames after keyframe first_kf follow.
   void rescaleFrom(const KeyFrame* first_kf, const Eigen::Vector3d& c, double s);
+  // A map was loaded into the (empty) map: tracking starts lost and localises in it (map_io/localise_in_map).
+  void mapLoaded() {
+    state_ = TrackingState::Lost;
+    map_loaded_ = true;
+  }
+  // Culled keyframes and map points are about to be freed (Map::releaseCulled): records referenced to a
+  // culled keyframe are re-anchored to its live ancestor, replaced points followed, culled ones dropped
+  // from the frames, the local map and the reference / last keyframe.
+  void forgetCulled();
   // The centre of the last tracked frame (world), the fixed point of scale corrections.
   Eigen::Vector3d lastCentre() const { return last_.T_cw.inverse().translation(); }
 
@@ -77,6 +86,7 @@ class Tracker {
   bool relocaliseNearLastPose();
   bool relocaliseWith(KeyFrame* kf);
   void computeBow(Frame& f) const;
+  bool localiseInLoadedMap();
   bool trackLocalMap();
   void updateLocalKeyFrames();
   void updateLocalPoints();
@@ -117,6 +127,8 @@ class Tracker {
   std::vector<FrameRecord> records_;
   int resets_ = 0, relocalisations_ = 0;
   int64_t initialised_at_ = -1;
+  bool map_loaded_ = false;     // never reset a loaded map
+  size_t localise_offset_ = 0;  // next block of keyframes to try (localiseInLoadedMap)
 };
 
 }  // namespace beslam::orb
