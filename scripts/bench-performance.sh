@@ -9,6 +9,7 @@
 #
 #   scripts/bench-performance.sh                          # all cases, build/ only, 5 runs each
 #   scripts/bench-performance.sh --n 3 --cases orb00_threaded --base build-base
+#   scripts/bench-performance.sh --no-run --base build-base     # tables again from the last runs
 #
 # Cases: orb00 (configs/kitti_mono_orb.yaml on KITTI 00, deterministic inline mapping), orb00_threaded
 # (the same with backend.threaded_mapping=true), detector06 (configs/kitti06_detector_image.yaml),
@@ -20,12 +21,14 @@ cd "$(dirname "$0")/.."
 runs=5
 cases="orb00,orb00_threaded,detector06,demo"
 base=""
+run=1
 while (($#)); do
   case "$1" in
     --n) runs="$2"; shift 2 ;;
     --cases) cases="$2"; shift 2 ;;
     --base) base="$2"; shift 2 ;;
-    -h | --help) sed -n '2,18p' "$0"; exit 0 ;;
+    --no-run) run=0; shift ;;
+    -h | --help) sed -n '2,19p' "$0"; exit 0 ;;
     *) echo "bench-performance: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -54,8 +57,8 @@ column() {  # timing.csv column $2 of file $1, non-empty values
   awk -F, -v name="$2" 'NR == 1 {for (i = 1; i <= NF; i++) if ($i == name) c = i; next} c && $c != "" {print $c}' "$1"
 }
 
-json_number() {  # the number after "key": in summary.json
-  sed -n "s/^ *\"$2\": \([-0-9.e+]*\),*$/\1/p" "$1" | head -1
+json_number() {  # the number after "key": in summary.json (nothing when absent)
+  sed -n "s/^ *\"$2\": \([-0-9.e+]*\),*$/\1/p" "$1" | head -1 || true
 }
 
 IFS=, read -r -a case_list <<<"$cases"
@@ -65,7 +68,7 @@ for c in "${case_list[@]}"; do
     echo "== $c: skipped (no ../shared/data/kitti)"
     continue
   fi
-  for ((r = 1; r <= runs; r++)); do
+  for ((r = 1; r <= runs * run; r++)); do
     for b in "${builds[@]}"; do
       out="out/bench-performance/$(basename "$b")/$c/run$r"
       t0=$(date +%s.%N)
@@ -91,8 +94,8 @@ for c in "${case_list[@]}"; do
           fps) json_number "$dir/run$r/summary.json" fps ;;
           *) column "$dir/run$r/timing.csv" "$m" | median ;;
         esac
-      done | grep -v '^-$' | median)
-      printf "%14s" "$v"
+      done | awk '$1 != "-" && $1 != ""' | median)
+      if [ "$v" = "-" ]; then printf "%14s" "-"; else printf "%14.3f" "$v"; fi
     done
     echo
   done
