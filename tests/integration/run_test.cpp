@@ -162,6 +162,37 @@ TEST_F(RunTest, InterruptKeepsTheFramesDone) {
   EXPECT_NE(slurp(dir_ / "whole/summary.json").find("\"interrupted\": false"), std::string::npos);
 }
 
+// pipeline.prefetch schedules, it never changes what is computed: loading, detection and (without a motion
+// checker) the mask run ahead on a second thread, and every output is the same as with everything in turn.
+TEST_F(RunTest, PrefetchingChangesNoOutput) {
+  for (const bool motion : {false, true}) {
+    SCOPED_TRACE(motion ? "with a motion checker (mask in turn)" : "no motion checker (mask ahead)");
+    const std::string p =
+        pipeline(std::string("detector: {plugin: fixture_boxes, count: 2}\nmask_generator: {plugin: mask_box}\n") +
+                 (motion ? "motion_checker: {plugin: fixture_all_static}\n" : "") + "output: {masks: true}\n");
+    std::string reference[4];
+    for (const int prefetch : {0, 1, 3}) {
+      const fs::path out = dir_ / ("out_" + std::to_string(motion) + "_" + std::to_string(prefetch));
+      const Result r =
+          beslam("run " + p + " --set pipeline.prefetch=" + std::to_string(prefetch) + " --out " + out.string(), dir_);
+      ASSERT_EQ(r.code, 0) << r.err;
+      const std::string summary = slurp(out / "summary.json");
+      EXPECT_NE(summary.find("\"fps\": "), std::string::npos) << summary;
+      const size_t masked = summary.find("\"frames_with_masks\"");
+      ASSERT_NE(masked, std::string::npos) << summary;
+      const std::string outputs[4] = {slurp(out / "trajectory.tum"), slurp(out / "objects.txt"),
+                                      slurp(out / "masks/000004.png"), summary.substr(masked, 30)};
+      for (int k = 0; k < 4; ++k) {
+        EXPECT_FALSE(outputs[k].empty()) << k;
+        if (prefetch == 0)
+          reference[k] = outputs[k];
+        else
+          EXPECT_EQ(outputs[k], reference[k]) << "output " << k << " with prefetch " << prefetch;
+      }
+    }
+  }
+}
+
 // output.octomap: the runner hands the static map its input and writes static_map.bt (here the map-point
 // route: no LiDAR, and the replay backend has no map points, so an empty but valid tree).
 TEST_F(RunTest, OctomapIsWritten) {

@@ -195,6 +195,7 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
   json["untracked_frames"] = summary.untracked;
   json["keyframes"] = summary.keyframes;
   json["median_frame_ms"] = summary.median_frame_ms;
+  json["fps"] = summary.fps;
   for (const auto& [name, s] : spec.slots)
     json["plugins"][name] = s.plugin ? nlohmann::json(s.plugin->id + " " + s.plugin->version) : nlohmann::json(nullptr);
   json["world"] = {{"metric", summary.metric_from_frame >= 0},

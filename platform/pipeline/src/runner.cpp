@@ -4,10 +4,16 @@
 
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <exception>
 #include <filesystem>
+#include <functional>
 #include <iostream>
+#include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <thread>
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
@@ -91,9 +97,81 @@ struct FrameState {
   beslam_frame view{};  // the ABI view of `frame` (points into it)
   std::optional<Eigen::Isometry3d> T_world_cam_predicted;
   std::vector<beslam_box3d> boxes;
-  cv::Mat mask;  // CV_16UC1 labels, empty without a mask generator
+  cv::Mat mask;              // CV_16UC1 labels, empty without a mask generator
+  bool mask_marked = false;  // the mask marks some pixel
   registry::TrackOutput tracked;
   detail::TimingRow timing;
+  std::exception_ptr error;  // what preparing the frame threw (rethrown when its turn comes)
+};
+
+// Frames prepared ahead on one producer thread, handed over in order through a bounded queue. Each frame
+// is prepared by `prepare` (always from the producer thread, frame after frame), so every plugin that
+// `prepare` calls still sees the frames one at a time and in order. A frame whose preparation threw
+// carries the exception and ends production; next() rethrows it when that frame's turn comes, after the
+// frames before it were handed over, as the sequential loop would. The destructor stops the producer
+// (after the call in progress) and joins it.
+class Prefetcher {
+ public:
+  Prefetcher(size_t frames, size_t capacity, std::function<void(size_t, FrameState&)> prepare)
+      : frames_(frames), capacity_(std::max<size_t>(capacity, 1)), prepare_(std::move(prepare)) {
+    thread_ = std::thread([this] { produce(); });
+  }
+  ~Prefetcher() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  Prefetcher(const Prefetcher&) = delete;
+  Prefetcher& operator=(const Prefetcher&) = delete;
+
+  // The next frame in order (blocks until it is ready).
+  std::unique_ptr<FrameState> next() {
+    std::unique_ptr<FrameState> f;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [this] { return !queue_.empty(); });
+      f = std::move(queue_.front());
+      queue_.pop_front();
+    }
+    cv_.notify_all();
+    if (f->error) std::rethrow_exception(f->error);
+    return f;
+  }
+
+ private:
+  void produce() {
+    for (size_t i = 0; i < frames_; ++i) {
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [this] { return stop_ || queue_.size() < capacity_; });
+        if (stop_) return;
+      }
+      auto f = std::make_unique<FrameState>();
+      try {
+        prepare_(i, *f);
+      } catch (...) {
+        f->error = std::current_exception();
+      }
+      const bool failed = static_cast<bool>(f->error);
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        queue_.push_back(std::move(f));
+      }
+      cv_.notify_all();
+      if (failed) return;
+    }
+  }
+
+  const size_t frames_, capacity_;
+  std::function<void(size_t, FrameState&)> prepare_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::unique_ptr<FrameState>> queue_;
+  bool stop_ = false;
+  std::thread thread_;  // last: starts once everything above exists
 };
 
 // One run: the plugins, the dataset and what the frame loop gathers. The stages of a frame are the
@@ -120,22 +198,42 @@ class Run {
   RunSummary execute() {
     const bool tty = options_.progress && isatty(STDERR_FILENO);
     const size_t n = dataset_->size();
+    // What may run ahead of the backend: loading and detection always (they see the frame only); the
+    // mask only without a motion checker (the mask follows the motion states, which follow the backend's
+    // predicted pose once the world is metric). Everything from classify on runs here, in frame order.
+    const bool prefetch = spec_.run.prefetch > 0 && n > 1;
+    mask_ahead_ = prefetch && !motion_;
+    std::unique_ptr<Prefetcher> prefetcher;
+    if (prefetch)
+      prefetcher = std::make_unique<Prefetcher>(n, static_cast<size_t>(spec_.run.prefetch),
+                                                [this](size_t i, FrameState& f) { prepare(i, f); });
+    const auto t_loop = Clock::now();
+    size_t done = 0;
     for (size_t i = 0; i < n; ++i) {
       const auto t_frame = Clock::now();
-      FrameState f;
-      load(i, f);
+      std::unique_ptr<FrameState> fp;
+      if (prefetcher) {
+        fp = prefetcher->next();
+      } else {
+        fp = std::make_unique<FrameState>();
+        prepare(i, *fp);
+      }
+      FrameState& f = *fp;
       predict(f);
-      detect(f);
       classify(f);
-      mask(f);
+      if (!mask_ahead_) mask(f);
+      if (f.mask_marked) ++summary_.frames_with_masks;
       track(f);
       reconstruct(f);
       write(f);
+      // A frame's total is its share of the loop's wall time: with prefetching, its load, detection and
+      // mask overlapped the frame before and are not in it (their own columns still say what they cost).
       const double total = std::chrono::duration<double, std::milli>(Clock::now() - t_frame).count();
       f.timing.stages.emplace_back("total", total);
       record_.frame_ms.push_back(total);
       record_.timings.push_back(std::move(f.timing));
       summary_.last_frame = f.frame.index;
+      ++done;
       if (tty) std::cerr << "\rframe " << (i + 1) << "/" << n << std::flush;
       if (options_.after_frame) options_.after_frame(f.frame.index);
       if (options_.stop_requested && options_.stop_requested()) {
@@ -144,6 +242,9 @@ class Run {
         break;
       }
     }
+    prefetcher.reset();  // stops loading ahead (an interrupted run) and joins the producer
+    const double loop_s = std::chrono::duration<double>(Clock::now() - t_loop).count();
+    summary_.fps = loop_s > 0 ? static_cast<double>(done) / loop_s : 0;
     if (tty) std::cerr << "\n";
     backend_->finish();
     detail::writeRunOutputs(spec_, out_dir_, dataset_record_, *dataset_, *backend_, record_, static_map_.get(),
@@ -226,6 +327,15 @@ class Run {
     make("backend", backend_);
   }
 
+  // The stages that may run ahead on the producer thread: load, detect and (see execute) mask. They
+  // touch only the frame, the dataset, the detector and the mask generator, never the summary or the
+  // backend.
+  void prepare(size_t i, FrameState& f) {
+    load(i, f);
+    detect(f);
+    if (mask_ahead_) mask(f);
+  }
+
   // load: the frame from the dataset, and its ABI view.
   void load(size_t i, FrameState& f) {
     StageTimer timer(f.timing, "load");
@@ -283,7 +393,7 @@ class Run {
     beslam_mask_buffer buffer{reinterpret_cast<uint16_t*>(f.mask.data), f.mask.cols, f.mask.rows,
                               static_cast<int32_t>(f.mask.step[0]), 0};
     masker_->generate(f.view, f.boxes, buffer);
-    if (cv::countNonZero(f.mask) > 0) ++summary_.frames_with_masks;
+    f.mask_marked = cv::countNonZero(f.mask) > 0;
   }
 
   // track: the backend's pose for the frame, its stage times and counters; the world unit follows the
@@ -363,6 +473,7 @@ class Run {
   std::unique_ptr<registry::ReconstructorInstance> reconstructor_;
   std::unique_ptr<registry::BackendInstance> backend_;
   bool world_metric_ = false;  // the backend's world unit, as its last track() said (data.h)
+  bool mask_ahead_ = false;    // the mask is made on the producer thread (no motion checker)
   std::set<size_t> sample_positions_;
   std::unique_ptr<static_map::StaticMapBuilder> static_map_;  // with output.octomap
   detail::RunRecord record_;

@@ -140,6 +140,14 @@ std::vector<ConfigField> outputFields() {
   };
 }
 
+std::vector<ConfigField> runFields() {
+  return {
+      {"prefetch", BESLAM_CONFIG_INT, false, "3", 0, 16, "",
+       "frames loaded (and detected, masked when no stage needs the backend's pose) ahead of the backend on a "
+       "second thread; 0: every stage in turn on one thread"},
+  };
+}
+
 std::vector<ConfigField> evaluationFields() {
   return {
       {"enabled", BESLAM_CONFIG_BOOL, false, "true", 1, 0, "", "APE/RPE against ground truth when available"},
@@ -297,7 +305,7 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
 
   static const std::vector<std::string> top = {"name",           "description",   "dataset",  "plugin_paths",
                                                "output",         "evaluation",    "detector", "motion_checker",
-                                               "mask_generator", "reconstructor", "backend"};
+                                               "mask_generator", "reconstructor", "backend",  "pipeline"};
   for (const auto& kv : doc) {
     const std::string key = kv.first.as<std::string>();
     if (std::find(top.begin(), top.end(), key) == top.end()) {
@@ -338,6 +346,10 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
   spec.evaluation.enabled = value(evaluation, "enabled").number != 0;
   spec.evaluation.alignment = value(evaluation, "alignment").text;
   spec.evaluation.rpe_delta = static_cast<int64_t>(value(evaluation, "rpe_delta").number);
+
+  if (!doc["pipeline"].IsDefined() || doc["pipeline"].IsNull()) doc["pipeline"] = YAML::Node(YAML::NodeType::Map);
+  const PluginConfig run = validateSettings(doc["pipeline"], runFields(), "pipeline", path, "");
+  spec.run.prefetch = static_cast<int>(value(run, "prefetch").number);
 
   if (YAML::Node paths = doc["plugin_paths"]; paths.IsDefined() && !paths.IsNull()) {
     if (!paths.IsSequence()) fail(path, paths, "plugin_paths", "expected a list of folders");

@@ -18,6 +18,7 @@ void HostLog::logCallback(void* user_data, int32_t level, const char* plugin_id,
   auto* self = static_cast<HostLog*>(user_data);
   const std::string id = plugin_id ? plugin_id : "?";
   const std::string text = message ? message : "";
+  std::lock_guard<std::mutex> lock(self->mutex_);
   if (level >= BESLAM_LOG_ERROR) {
     for (auto& [pid, last] : self->last_error_)
       if (pid == id) {
@@ -33,6 +34,7 @@ void HostLog::logCallback(void* user_data, int32_t level, const char* plugin_id,
 }
 
 std::string HostLog::takeLastError(const std::string& plugin_id) {
+  std::lock_guard<std::mutex> lock(mutex_);
   for (auto it = last_error_.begin(); it != last_error_.end(); ++it)
     if (it->first == plugin_id) {
       std::string message = it->second;

@@ -24,12 +24,18 @@ FeatureGrid::FeatureGrid(const std::vector<cv::KeyPoint>& keypoints, int width, 
   for (size_t i = 0; i < keypoints.size(); ++i) index_[fill[cell_of[i]]++] = static_cast<int>(i);
 }
 
+bool FeatureGrid::cellRange(float x0, float y0, float x1, float y1, int& c0, int& c1, int& r0, int& r1) const {
+  if (start_.empty()) return false;
+  c0 = std::max(0, static_cast<int>(std::floor(x0 * inv_cell_w_)));
+  c1 = std::min(kCols - 1, static_cast<int>(std::floor(x1 * inv_cell_w_)));
+  r0 = std::max(0, static_cast<int>(std::floor(y0 * inv_cell_h_)));
+  r1 = std::min(kRows - 1, static_cast<int>(std::floor(y1 * inv_cell_h_)));
+  return c0 <= c1 && r0 <= r1;
+}
+
 void FeatureGrid::cellsInWindow(float x0, float y0, float x1, float y1, std::vector<int>& out) const {
-  if (start_.empty()) return;
-  const int c0 = std::max(0, static_cast<int>(std::floor(x0 * inv_cell_w_)));
-  const int c1 = std::min(kCols - 1, static_cast<int>(std::floor(x1 * inv_cell_w_)));
-  const int r0 = std::max(0, static_cast<int>(std::floor(y0 * inv_cell_h_)));
-  const int r1 = std::min(kRows - 1, static_cast<int>(std::floor(y1 * inv_cell_h_)));
+  int c0 = 0, c1 = -1, r0 = 0, r1 = -1;
+  if (!cellRange(x0, y0, x1, y1, c0, c1, r0, r1)) return;
   for (int r = r0; r <= r1; ++r)
     for (int c = c0; c <= c1; ++c) {
       const int cell = r * kCols + c;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <list>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -130,6 +131,104 @@ float OrbExtractor::icAngle(const cv::Mat& image, const cv::Point2f& pt) const {
   return angle;
 }
 
+void OrbExtractor::detectLevel(const cv::Mat& level_image, int level, const cv::Mat& labels, const cv::Rect& static_box,
+                               int n_level, std::vector<cv::KeyPoint>& level_kps,
+                               std::vector<uint16_t>& level_labels) const {
+  const bool has_labels = !labels.empty();
+  const int border = options_.border;
+  const int w = level_image.cols, h = level_image.rows;
+  const double s = pyramid_.scale[level];
+  // FAST at the initial threshold over the whole level; cells left without a corner are searched
+  // again at the fallback threshold; static-object regions at their own (lower) threshold.
+  const int cells_x = std::max(1, (w - 2 * border) / options_.cell_size);
+  const int cells_y = std::max(1, (h - 2 * border) / options_.cell_size);
+  const float cell_w = static_cast<float>(w - 2 * border) / cells_x;
+  const float cell_h = static_cast<float>(h - 2 * border) / cells_y;
+  auto labelAt = [&](const cv::Point2f& p) -> uint16_t {
+    if (!has_labels) return 0;
+    const int x0 = std::min(static_cast<int>((p.x + 0.5) * s), labels.cols - 1);  // level-0 pixel
+    const int y0 = std::min(static_cast<int>((p.y + 0.5) * s), labels.rows - 1);
+    return labels.at<uint16_t>(y0, x0);
+  };
+  auto inside = [&](const cv::Point2f& p) {
+    return p.x >= border && p.y >= border && p.x < w - border && p.y < h - border;
+  };
+  std::vector<cv::KeyPoint> background, objects;
+  std::vector<uint16_t> bg_label, obj_label;
+  std::vector<uint8_t> cell_found(cells_x * cells_y, 0);
+  auto cellOf = [&](const cv::Point2f& p) {
+    const int cx = std::min(static_cast<int>((p.x - border) / cell_w), cells_x - 1);
+    const int cy = std::min(static_cast<int>((p.y - border) / cell_h), cells_y - 1);
+    return cy * cells_x + cx;
+  };
+  std::vector<cv::KeyPoint> raw;
+  cv::FAST(level_image, raw, options_.fast_initial, true);
+  for (const cv::KeyPoint& kp : raw) {
+    if (!inside(kp.pt)) continue;
+    const uint16_t label = labelAt(kp.pt);
+    if (label == 1 || label >= 1000) continue;  // dynamic: dropped; static objects: searched below
+    cell_found[cellOf(kp.pt)] = 1;
+    background.push_back(kp);
+    bg_label.push_back(label);
+  }
+  for (int cy = 0; cy < cells_y; ++cy)
+    for (int cx = 0; cx < cells_x; ++cx) {
+      if (cell_found[cy * cells_x + cx]) continue;
+      const int x0 = border + static_cast<int>(cx * cell_w), y0 = border + static_cast<int>(cy * cell_h);
+      const int x1 = border + static_cast<int>((cx + 1) * cell_w), y1 = border + static_cast<int>((cy + 1) * cell_h);
+      const cv::Rect roi(x0 - 3, y0 - 3, x1 - x0 + 6, y1 - y0 + 6);
+      raw.clear();
+      cv::FAST(level_image(roi), raw, options_.fast_fallback, true);
+      for (cv::KeyPoint kp : raw) {
+        kp.pt.x += roi.x;
+        kp.pt.y += roi.y;
+        if (kp.pt.x < x0 || kp.pt.y < y0 || kp.pt.x >= x1 || kp.pt.y >= y1 || !inside(kp.pt)) continue;
+        const uint16_t label = labelAt(kp.pt);
+        if (label == 1 || label >= 1000) continue;
+        background.push_back(kp);
+        bg_label.push_back(label);
+      }
+    }
+  if (!static_box.empty()) {
+    cv::Rect roi(static_cast<int>(static_box.x / s) - 3, static_cast<int>(static_box.y / s) - 3,
+                 static_cast<int>(static_box.width / s) + 8, static_cast<int>(static_box.height / s) + 8);
+    roi &= cv::Rect(0, 0, w, h);
+    if (roi.width > 7 && roi.height > 7) {
+      raw.clear();
+      cv::FAST(level_image(roi), raw, options_.static_object_fast, true);
+      for (cv::KeyPoint kp : raw) {
+        kp.pt.x += roi.x;
+        kp.pt.y += roi.y;
+        if (!inside(kp.pt)) continue;
+        const uint16_t label = labelAt(kp.pt);
+        if (label < 1000) continue;
+        objects.push_back(kp);
+        obj_label.push_back(label);
+      }
+    }
+  }
+
+  const int n_obj_wanted = std::max(static_cast<int>(std::lround(options_.static_object_budget_share * n_level)),
+                                    n_level - static_cast<int>(background.size()));
+  const int n_obj = std::min(static_cast<int>(objects.size()), std::max(0, n_obj_wanted));
+  const int n_bg = n_level - n_obj;
+  for (int i : distributeQuadtree(background, border, border, w - border, h - border, n_bg)) {
+    level_kps.push_back(background[i]);
+    level_labels.push_back(bg_label[i]);
+  }
+  for (int i : distributeQuadtree(objects, border, border, w - border, h - border, n_obj)) {
+    level_kps.push_back(objects[i]);
+    level_labels.push_back(obj_label[i]);
+  }
+  if (level_kps.empty()) return;
+
+  for (cv::KeyPoint& kp : level_kps) {
+    kp.angle = icAngle(level_image, kp.pt);
+    kp.octave = 0;
+    kp.size = 31.f;
+  }
+}
+
 std::shared_ptr<FeatureSet> OrbExtractor::extract(const cv::Mat& image, const cv::Mat& labels, int budget) const {
   if (image.empty()) throw std::invalid_argument("OrbExtractor: empty image");
   cv::Mat grey;
@@ -155,111 +254,33 @@ std::shared_ptr<FeatureSet> OrbExtractor::extract(const cv::Mat& image, const cv
     if (cv::countNonZero(static_mask) > 0) static_box = cv::boundingRect(static_mask);
   }
 
-  cv::Mat level_image = grey;
+  // The pyramid (each level from the one before), up to the first level too small for features.
+  std::vector<cv::Mat> level_images;
   for (int level = 0; level < options_.levels; ++level) {
+    cv::Mat level_image = grey;
     if (level > 0) {
       const double s = pyramid_.scale[level];
       cv::Size size(static_cast<int>(std::lround(grey.cols / s)), static_cast<int>(std::lround(grey.rows / s)));
-      cv::Mat next;
-      cv::resize(level_image, next, size, 0, 0, cv::INTER_LINEAR);
-      level_image = next;
+      cv::resize(level_images.back(), level_image, size, 0, 0, cv::INTER_LINEAR);
     }
-    const int w = level_image.cols, h = level_image.rows;
-    if (w <= 2 * border + 8 || h <= 2 * border + 8) break;
+    if (level_image.cols <= 2 * border + 8 || level_image.rows <= 2 * border + 8) break;
+    level_images.push_back(level_image);
+  }
+  // Each level's keypoints depend on that level alone: the levels are searched in parallel (OpenCV's
+  // thread pool), each into its own slot, and gathered in level order, so the result is the same as one
+  // level after the other, whatever the threads.
+  const int n_levels = static_cast<int>(level_images.size());
+  std::vector<std::vector<cv::KeyPoint>> found(n_levels);
+  std::vector<std::vector<uint16_t>> found_labels(n_levels);
+  cv::parallel_for_(cv::Range(0, n_levels), [&](const cv::Range& range) {
+    for (int level = range.start; level < range.end; ++level)
+      detectLevel(level_images[level], level, labels, static_box, budgets[level], found[level], found_labels[level]);
+  });
+  for (int level = 0; level < n_levels; ++level) {
     const double s = pyramid_.scale[level];
+    const std::vector<cv::KeyPoint>& level_kps = found[level];
+    const std::vector<uint16_t>& level_labels = found_labels[level];
 
-    // FAST at the initial threshold over the whole level; cells left without a corner are searched
-    // again at the fallback threshold; static-object regions at their own (lower) threshold.
-    const int cells_x = std::max(1, (w - 2 * border) / options_.cell_size);
-    const int cells_y = std::max(1, (h - 2 * border) / options_.cell_size);
-    const float cell_w = static_cast<float>(w - 2 * border) / cells_x;
-    const float cell_h = static_cast<float>(h - 2 * border) / cells_y;
-    auto labelAt = [&](const cv::Point2f& p) -> uint16_t {
-      if (!has_labels) return 0;
-      const int x0 = std::min(static_cast<int>((p.x + 0.5) * s), labels.cols - 1);  // level-0 pixel
-      const int y0 = std::min(static_cast<int>((p.y + 0.5) * s), labels.rows - 1);
-      return labels.at<uint16_t>(y0, x0);
-    };
-    auto inside = [&](const cv::Point2f& p) {
-      return p.x >= border && p.y >= border && p.x < w - border && p.y < h - border;
-    };
-    std::vector<cv::KeyPoint> background, objects;
-    std::vector<uint16_t> bg_label, obj_label;
-    std::vector<uint8_t> cell_found(cells_x * cells_y, 0);
-    auto cellOf = [&](const cv::Point2f& p) {
-      const int cx = std::min(static_cast<int>((p.x - border) / cell_w), cells_x - 1);
-      const int cy = std::min(static_cast<int>((p.y - border) / cell_h), cells_y - 1);
-      return cy * cells_x + cx;
-    };
-    std::vector<cv::KeyPoint> raw;
-    cv::FAST(level_image, raw, options_.fast_initial, true);
-    for (const cv::KeyPoint& kp : raw) {
-      if (!inside(kp.pt)) continue;
-      const uint16_t label = labelAt(kp.pt);
-      if (label == 1 || label >= 1000) continue;  // dynamic: dropped; static objects: searched below
-      cell_found[cellOf(kp.pt)] = 1;
-      background.push_back(kp);
-      bg_label.push_back(label);
-    }
-    for (int cy = 0; cy < cells_y; ++cy)
-      for (int cx = 0; cx < cells_x; ++cx) {
-        if (cell_found[cy * cells_x + cx]) continue;
-        const int x0 = border + static_cast<int>(cx * cell_w), y0 = border + static_cast<int>(cy * cell_h);
-        const int x1 = border + static_cast<int>((cx + 1) * cell_w), y1 = border + static_cast<int>((cy + 1) * cell_h);
-        const cv::Rect roi(x0 - 3, y0 - 3, x1 - x0 + 6, y1 - y0 + 6);
-        raw.clear();
-        cv::FAST(level_image(roi), raw, options_.fast_fallback, true);
-        for (cv::KeyPoint kp : raw) {
-          kp.pt.x += roi.x;
-          kp.pt.y += roi.y;
-          if (kp.pt.x < x0 || kp.pt.y < y0 || kp.pt.x >= x1 || kp.pt.y >= y1 || !inside(kp.pt)) continue;
-          const uint16_t label = labelAt(kp.pt);
-          if (label == 1 || label >= 1000) continue;
-          background.push_back(kp);
-          bg_label.push_back(label);
-        }
-      }
-    if (!static_box.empty()) {
-      cv::Rect roi(static_cast<int>(static_box.x / s) - 3, static_cast<int>(static_box.y / s) - 3,
-                   static_cast<int>(static_box.width / s) + 8, static_cast<int>(static_box.height / s) + 8);
-      roi &= cv::Rect(0, 0, w, h);
-      if (roi.width > 7 && roi.height > 7) {
-        raw.clear();
-        cv::FAST(level_image(roi), raw, options_.static_object_fast, true);
-        for (cv::KeyPoint kp : raw) {
-          kp.pt.x += roi.x;
-          kp.pt.y += roi.y;
-          if (!inside(kp.pt)) continue;
-          const uint16_t label = labelAt(kp.pt);
-          if (label < 1000) continue;
-          objects.push_back(kp);
-          obj_label.push_back(label);
-        }
-      }
-    }
-
-    const int n_level = budgets[level];
-    const int n_obj_wanted = std::max(static_cast<int>(std::lround(options_.static_object_budget_share * n_level)),
-                                      n_level - static_cast<int>(background.size()));
-    const int n_obj = std::min(static_cast<int>(objects.size()), std::max(0, n_obj_wanted));
-    const int n_bg = n_level - n_obj;
-    std::vector<cv::KeyPoint> level_kps;
-    std::vector<uint16_t> level_labels;
-    for (int i : distributeQuadtree(background, border, border, w - border, h - border, n_bg)) {
-      level_kps.push_back(background[i]);
-      level_labels.push_back(bg_label[i]);
-    }
-    for (int i : distributeQuadtree(objects, border, border, w - border, h - border, n_obj)) {
-      level_kps.push_back(objects[i]);
-      level_labels.push_back(obj_label[i]);
-    }
-    if (level_kps.empty()) continue;
-
-    for (cv::KeyPoint& kp : level_kps) {
-      kp.angle = icAngle(level_image, kp.pt);
-      kp.octave = 0;
-      kp.size = 31.f;
-    }
     for (size_t i = 0; i < level_kps.size(); ++i) {
       cv::KeyPoint kp = level_kps[i];
       // Level pixel centres to level-0 pixels as cv::resize samples them: (x + 0.5) s - 0.5.

@@ -1,7 +1,8 @@
 // ORB features the ORB-SLAM way: an 8-level pyramid (scale 1.2, linear interpolation), FAST per ~30 px
 // cell (threshold 20, 7 where a cell finds nothing), quadtree spreading to each level's geometric-series
 // budget, intensity-centroid orientation and rBRIEF descriptors (OpenCV's learned pattern via
-// cv::ORB::compute on our own keypoints).
+// cv::ORB::compute on our own keypoints). The levels are searched in parallel; the result does not depend
+// on the threads.
 //
 // Label mask (CV_16UC1): pixels == 1 get no features; pixels >= 1000 (static objects) are searched with a
 // lower FAST threshold and get up to a configurable share of every level's budget.
@@ -50,6 +51,9 @@ class OrbExtractor {
 
  private:
   float icAngle(const cv::Mat& image, const cv::Point2f& pt) const;
+  // One pyramid level's keypoints (level pixels, oriented) and the labels under them, n_level at most.
+  void detectLevel(const cv::Mat& level_image, int level, const cv::Mat& labels, const cv::Rect& static_box,
+                   int n_level, std::vector<cv::KeyPoint>& level_kps, std::vector<uint16_t>& level_labels) const;
 
   ExtractorOptions options_;
   ScalePyramid pyramid_;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/core/utility.hpp>
 
 #include "map/camera_model.hpp"
 #include "map/frame.hpp"
@@ -311,20 +312,45 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
 
   std::vector<int> matched2(f2.size(), -1), dist2(f2.size(), 256);
   std::vector<int> match12(f1.size(), -1);
-  std::vector<int> stamp(f2.size(), -1), cand;
-  for (size_t i1 = 0; i1 < f1.size(); ++i1) {
-    if (kf1->points[i1]) continue;
+  // kf2's keypoints without a point, copied once into grid order (a cell's keypoints are contiguous) with
+  // their tests' thresholds. The candidates are visited as before (cell by cell, increasing index within a
+  // cell), so the matches are the same.
+  struct Candidate {
+    double x, y;
+    double line_th;     // 3.84 sigma^2 of its level: squared distance to the epipolar line, px^2
+    double epipole_th;  // 100 x its level's scale: squared distance to the epipole, px^2
+    int index;          // in kf2
+  };
+  std::vector<Candidate> c2;
+  c2.reserve(f2.size());
+  std::vector<int> cell_start(FeatureGrid::kCols * FeatureGrid::kRows + 1, 0);
+  for (int cell = 0; cell < FeatureGrid::kCols * FeatureGrid::kRows; ++cell) {
+    cell_start[cell] = static_cast<int>(c2.size());
+    for (const int *it = f2.grid.cellBegin(cell), *end = f2.grid.cellEnd(cell); it != end; ++it) {
+      if (kf2->points[*it]) continue;
+      const cv::KeyPoint& kp2 = f2.keypoints[*it];
+      c2.push_back({kp2.pt.x, kp2.pt.y, 3.84 * pyr.sigma2[kp2.octave], 100.0 * pyr.scale[kp2.octave], *it});
+    }
+  }
+  cell_start.back() = static_cast<int>(c2.size());
+  // Each keypoint of kf1 finds its nearest two along its line independently of the others: in parallel
+  // (OpenCV's thread pool, a few stripes, each with its own visit stamps), into its own slot. Which one
+  // keeps a contested keypoint of kf2 is decided afterwards in index order, as in one sequential pass, so
+  // the matches do not depend on the threads.
+  std::vector<NearestTwo> nearest(f1.size());
+  auto nearestAlongLine = [&](int i1, std::vector<int>& stamp) {
+    NearestTwo nn;
     const cv::KeyPoint& kp1 = f1.keypoints[i1];
     const Eigen::Vector3d x1(kp1.pt.x, kp1.pt.y, 1.0);
     const Eigen::Vector3d line = F21 * x1;
     const double ln = std::hypot(line.x(), line.y());
-    if (ln < 1e-12) continue;
+    if (ln < 1e-12) return nn;
     // Segment of the line between the depths d_min and d_max on kf1's ray.
     const Eigen::Vector3d ray = T21.linear() * unproject(cam, kp1.pt.x, kp1.pt.y);
     double a = d_min, b = d_max;
     const double z_a = c1_in_2.z() + ray.z() * a, z_b = c1_in_2.z() + ray.z() * b;
     const double z_eps = 1e-3 * d_min;
-    if (z_a <= z_eps && z_b <= z_eps) continue;
+    if (z_a <= z_eps && z_b <= z_eps) return nn;
     if (z_a <= z_eps) a = (z_eps - c1_in_2.z()) / ray.z();
     if (z_b <= z_eps) b = (z_eps - c1_in_2.z()) / ray.z();
     const Eigen::Vector2d pa = project(cam, c1_in_2 + ray * a), pb = project(cam, c1_in_2 + ray * b);
@@ -332,9 +358,11 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
     const double x_hi = std::min(cam.width - 1.0, std::max(pa.x(), pb.x()) + band_max);
     const double y_lo = std::max(0.0, std::min(pa.y(), pb.y()) - band_max);
     const double y_hi = std::min(cam.height - 1.0, std::max(pa.y(), pb.y()) + band_max);
-    if (x_lo > x_hi || y_lo > y_hi) continue;
+    if (x_lo > x_hi || y_lo > y_hi) return nn;
 
-    cand.clear();
+    // The epipolar test first, on the contiguous array; descriptors only for what passes it.
+    const uint8_t* d1 = f1.descriptor(i1);
+    const double ln2 = ln * ln;
     const int row0 = static_cast<int>(y_lo / cell_h), row1 = static_cast<int>(y_hi / cell_h);
     for (int row = row0; row <= row1; ++row) {
       const double ry0 = std::max(y_lo, row * static_cast<double>(cell_h));
@@ -348,24 +376,37 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
         xb = std::min(x_hi, std::max(xr0, xr1) + widen);
       }
       if (xa > xb) continue;
-      f2.grid.cellsInWindow(static_cast<float>(xa), static_cast<float>(ry0), static_cast<float>(xb),
-                            static_cast<float>(ry1), cand);
+      int gc0, gc1, gr0, gr1;
+      if (!f2.grid.cellRange(static_cast<float>(xa), static_cast<float>(ry0), static_cast<float>(xb),
+                             static_cast<float>(ry1), gc0, gc1, gr0, gr1))
+        continue;
+      for (int gr = gr0; gr <= gr1; ++gr)
+        for (int gc = gc0; gc <= gc1; ++gc) {
+          const int cell = gr * FeatureGrid::kCols + gc;
+          for (int k = cell_start[cell]; k < cell_start[cell + 1]; ++k) {
+            if (stamp[k] == static_cast<int>(i1)) continue;
+            stamp[k] = static_cast<int>(i1);
+            const Candidate& c = c2[k];
+            const double dl = line.x() * c.x + line.y() * c.y + line.z();
+            if (dl * dl / ln2 >= c.line_th) continue;
+            const double ex = epipole.x() - c.x, ey = epipole.y() - c.y;
+            if (ex * ex + ey * ey < c.epipole_th) continue;
+            const int i2 = c.index;
+            if (!node2.empty() && node2[i2] != node1[i1]) continue;  // triangulation_bow
+            nn.add(hamming(d1, f2.descriptor(i2)), i2);
+          }
+        }
     }
-    const uint8_t* d1 = f1.descriptor(i1);
-    NearestTwo nn;
-    for (int i2 : cand) {
-      if (stamp[i2] == static_cast<int>(i1)) continue;
-      stamp[i2] = static_cast<int>(i1);
-      if (kf2->points[i2]) continue;
-      if (!node2.empty() && node2[i2] != node1[i1]) continue;
-      const cv::KeyPoint& kp2 = f2.keypoints[i2];
-      const double dl = line.x() * kp2.pt.x + line.y() * kp2.pt.y + line.z();
-      if (dl * dl / (ln * ln) >= 3.84 * pyr.sigma2[kp2.octave]) continue;
-      const double ex = epipole.x() - kp2.pt.x, ey = epipole.y() - kp2.pt.y;
-      if (ex * ex + ey * ey < 100.0 * pyr.scale[kp2.octave]) continue;
-      const int d = hamming(d1, f2.descriptor(i2));
-      nn.add(d, i2);
-    }
+    return nn;
+  };
+  auto searchRange = [&](const cv::Range& range) {
+    std::vector<int> stamp(c2.size(), -1);  // by position in c2
+    for (int i1 = range.start; i1 < range.end; ++i1)
+      if (!kf1->points[i1]) nearest[i1] = nearestAlongLine(i1, stamp);
+  };
+  cv::parallel_for_(cv::Range(0, static_cast<int>(f1.size())), searchRange, 4);
+  for (size_t i1 = 0; i1 < f1.size(); ++i1) {
+    const NearestTwo& nn = nearest[i1];
     if (nn.index < 0 || nn.best > kThLow || nn.best > ratio * nn.second) continue;
     if (matched2[nn.index] >= 0) {
       if (dist2[nn.index] <= nn.best) continue;

@@ -12,6 +12,12 @@
 // error nothing partial replaces an earlier run's files. When options.stop_requested says so after a
 // frame (SIGINT/SIGTERM in the CLI), the loop ends there and the outputs of the frames done are written,
 // with summary.json "interrupted": true.
+// Scheduling (spec.run.prefetch > 0, the default): a producer thread loads the next frames and runs the
+// detector on them (and the mask generator, when no motion checker needs the backend's pose first) while
+// the backend works on the current one; at most `prefetch` frames wait. Each plugin is still called from
+// one thread at a time, frame after frame in order, with the same inputs as in the strictly sequential
+// loop (prefetch 0), so the results are the same; an interrupted run may have loaded and detected up to
+// `prefetch` frames past the last one processed, which nothing else sees.
 #pragma once
 
 #include <functional>
@@ -49,6 +55,7 @@ struct RunSummary {
   std::string evaluation_error;                // why APE could not be computed, when it could not
   double ape_sim3_rmse = 0, ape_se3_rmse = 0;  // both alignments, whatever spec.evaluation.alignment says
   double median_frame_ms = 0;
+  double fps = 0;  // frames processed per second of the frame loop's wall time (not the setup, not the writing)
   // The world unit: the first frame the backend said its world was in metres (-1: never).
   int64_t metric_from_frame = -1;
   double camera_height = 0;  // the rig value handed to the plugins (0: unknown)

@@ -4,6 +4,7 @@
 //   backend:  {plugin: backend_orb, features: 2000}
 //   detector: {plugin: detector_oracle, position_noise: 0.3}      # optional slots may be left out
 //   output:   {dir: out/run, masks: false}
+//   pipeline: {prefetch: 3}                                       # scheduling only (runner.hpp)
 //
 // loadPipeline() applies --set overrides, then validates everything the host knows at load time:
 // unknown keys, wrong types, out-of-range values and unknown choices are beslam::Error messages naming
@@ -80,6 +81,11 @@ struct EvaluationSpec {
   int64_t rpe_delta = 1;
 };
 
+// How the runner schedules the stages (never what they compute).
+struct RunSpec {
+  int prefetch = 3;  // frames prepared ahead on a producer thread (0: strictly one stage after another)
+};
+
 struct PipelineSpec {
   std::string path;      // the pipeline file
   std::string base_dir;  // its folder: relative paths resolve here
@@ -88,6 +94,7 @@ struct PipelineSpec {
   std::map<std::string, SlotSpec> slots;  // all five, possibly unused
   OutputSpec output;
   EvaluationSpec evaluation;
+  RunSpec run;
   YAML::Node document;  // after overrides, host defaults filled in
 };
 

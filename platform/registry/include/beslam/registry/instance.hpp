@@ -1,10 +1,12 @@
 // Host-side handles to plugin instances: create/destroy in RAII, typed calls per kind, and every non-OK
 // status turned into a beslam::Error that names the plugin, its library, the call and the message the
-// plugin logged. The host log sink prints plugin messages to stderr with the plugin id.
+// plugin logged. The host log sink prints plugin messages to stderr with the plugin id; it may be called
+// from several threads at once (the runner calls plugins from a producer thread too).
 #pragma once
 
 #include <Eigen/Geometry>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,6 +28,7 @@ class HostLog {
   static void logCallback(void* user_data, int32_t level, const char* plugin_id, const char* message);
   beslam_host host_{};
   int32_t min_level_;
+  std::mutex mutex_;                                             // guards last_error_ and the stderr lines
   std::vector<std::pair<std::string, std::string>> last_error_;  // plugin id -> message
 };
 
