@@ -207,6 +207,9 @@ int runCommand(const std::vector<std::string>& args) {
       if (name == "features_static") features_static = value;
       if (name == "tracked_static") tracked_static = value;
       if (name == "relocalisations" && value > 0) std::cout << "relocalisations: " << value << "\n";
+      if (name == "loop_closures" && value > 0) std::cout << "loop closures: " << value << "\n";
+      if (name == "loop_object_rejections" && value > 0)
+        std::cout << "loop candidates rejected by the parked-car check: " << value << "\n";
     }
     if (features_static > 0 || s.map_points_static > 0)
       std::cout << "static objects: " << features_static << " features, " << tracked_static

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "features/orb_extractor.hpp"
+#include "loop/loop_closer.hpp"
 #include "map/keyframe.hpp"
 #include "map/map.hpp"
 #include "map/map_point.hpp"
@@ -117,6 +118,9 @@ struct OrbSlam::Impl {
   Map map;
   LocalMapper mapper;
   Tracker tracker;
+  std::unique_ptr<LoopCloser> loop_closer;  // with a vocabulary and Options::loop_closure
+  bool loop_pending = false;                // closed on the mapping side, not yet followed by the tracker
+  int reported_object_rejections = 0;
   std::vector<ObjectLandmark> landmarks;
   Statistics stats;
   ParkedCarScale parked_scale;
@@ -140,8 +144,19 @@ struct OrbSlam::Impl {
         mapper(map, c, extractor.pyramid(), mapperOptions(o)),
         tracker(
             c, o, extractor.pyramid(), map, [this](KeyFrame* kf, bool initial) { pending.emplace_back(kf, initial); },
-            [this] { mapper.reset(); }, vocabulary.empty() ? nullptr : &vocabulary, &database) {
+            [this] {
+              mapper.reset();
+              if (loop_closer) loop_closer->reset();
+            },
+            vocabulary.empty() ? nullptr : &vocabulary, &database) {
     if (options.localisation_only) object_scale_done = true;  // the map's unit is the loaded map's
+    if (options.loop_closure && !vocabulary.empty()) {
+      LoopOptions lo;
+      lo.object_check = options.loop_object_check;
+      lo.global_ba_iterations = options.loop_global_ba_iterations;
+      lo.seed = options.seed;
+      loop_closer = std::make_unique<LoopCloser>(map, database, extractor.pyramid(), lo);
+    }
     if (options.threaded_mapping) worker = std::thread([this] { run(); });
   }
 
@@ -182,6 +197,7 @@ struct OrbSlam::Impl {
   void process(KeyFrame* kf, bool initial) {
     if (kf->bad) return;
     mapper.processKeyFrame(kf, !initial);
+    if (loop_closer && !initial && !kf->bad && loop_closer->process(kf, mapper.metric())) loop_pending = true;
   }
 
   void run() {
@@ -256,6 +272,21 @@ struct OrbSlam::Impl {
                      c->factor, c->first_kf_id, static_cast<long>(first->frame_index));
     }
     releaseCulled();
+    double loop_correction_m = -1;
+    if (loop_pending) {  // mapping closed a loop after the last frame: the tracked frames follow the map
+      loop_pending = false;
+      tracker.followCorrection(loop_closer->posesBefore());
+      parked_scale.clear();  // its stored poses are from before the correction
+      const LoopClosureEvent& e = loop_closer->stats().closures.back();
+      loop_correction_m = e.correction_m;
+      stats.loop_frames.emplace_back(e.frame_index, e.loop_frame_index);
+      if (std::getenv("BESLAM_ORB_DEBUG"))
+        std::fprintf(
+            stderr,
+            "frame %ld: loop closed, keyframe of frame %ld with frame %ld (%d matches), moved %.3f / %.2f deg\n",
+            static_cast<long>(index), static_cast<long>(e.frame_index), static_cast<long>(e.loop_frame_index),
+            e.matches, e.correction_m, e.correction_deg);
+    }
     double background_mapping_ms = 0;
     if (options.threaded_mapping) {
       std::lock_guard<std::mutex> lock(mutex);
@@ -268,6 +299,12 @@ struct OrbSlam::Impl {
     const int feature_count = static_cast<int>(features->size());
     TrackResult result = tracker.track(features, timestamp, index);
     result.world_is_metric = mapper.metric();
+    result.loop_closed = loop_correction_m >= 0;
+    result.loop_correction_m = std::max(0.0, loop_correction_m);
+    if (loop_closer) {
+      result.loop_object_rejections = loop_closer->stats().object_rejections - reported_object_rejections;
+      reported_object_rejections = loop_closer->stats().object_rejections;
+    }
     result.features = feature_count;
     result.features_static = features_static;
     result.tracked_static = tracker.trackedOnStaticObjects();
@@ -476,6 +513,12 @@ Statistics OrbSlam::statistics() const {
   s.map_points = static_cast<int>(impl_->map.points().size());
   s.resets = impl_->tracker.resets();
   s.relocalisations = impl_->tracker.relocalisations();
+  if (impl_->loop_closer) {
+    const LoopStats& l = impl_->loop_closer->stats();
+    s.loop_closures = static_cast<int>(l.closures.size());
+    s.loop_object_rejections = l.object_rejections;
+    s.loop_candidates = l.candidates_checked;
+  }
   s.initialised_at_frame = impl_->tracker.initialisedAt();
   return s;
 }

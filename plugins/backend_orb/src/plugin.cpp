@@ -73,15 +73,21 @@ const beslam::sdk::Settings<Options> kSettings{
     path(&Options::save_map, "save_map", "\"\"", "map file written at the end of the run (also when interrupted)"),
     setting(&Options::localisation_only, "localisation_only", "false",
             "track against the loaded map (load_map) without changing it: no keyframes, map points or BA"),
+    setting(&Options::loop_closure, "loop_closure", "true",
+            "close loops: BoW candidates, Sim3 (SE3 once metric), essential graph, global BA (needs a vocabulary)"),
+    setting(&Options::loop_object_check, "loop_object_check", "true",
+            "reject a loop whose parked cars disagree after the loop transform (BE-SLAM's BEV check)"),
+    setting(&Options::loop_global_ba_iterations, "loop_global_ba_iterations", "10", 0, 1000,
+            "global bundle adjustment iterations after a loop correction (0: none)"),
 };
 // clang-format on
 
 const beslam::sdk::PluginInfo kInfo(
     "backend_orb", "ORB monocular SLAM",
-    "ORB-SLAM2-class monocular tracking, local mapping and relocalisation (no loop closure); dynamic mask "
-    "labels get no features, static objects get more; optional metric scale from the camera height; map save "
-    "and load, localisation-only tracking",
-    {0, 3, 0}, kSettings);
+    "ORB-SLAM2-class monocular tracking, local mapping, relocalisation and loop closing; dynamic mask labels "
+    "get no features, static objects get more; optional metric scale from the camera height; map save and "
+    "load, localisation-only tracking",
+    {0, 4, 0}, kSettings);
 
 // The vocabulary a run uses: the setting's file, none for "none", else the default one (installed, or
 // the source tree's, see docs/place-recognition.md); without one the backend runs without bag of words.
@@ -185,7 +191,10 @@ class OrbBackend : public beslam::sdk::Backend {
     out.counters = {{"features", r.features},
                     {"features_static", r.features_static},
                     {"tracked_static", r.tracked_static},
-                    {"relocalisations", r.relocalised ? 1 : 0}};
+                    {"relocalisations", r.relocalised ? 1 : 0},
+                    {"loop_closures", r.loop_closed ? 1 : 0},
+                    {"loop_correction_m", r.loop_correction_m},
+                    {"loop_object_rejections", r.loop_object_rejections}};
     out.keypoints.reserve(r.keypoints.size());
     for (const auto& k : r.keypoints)
       out.keypoints.push_back(

@@ -60,6 +60,11 @@ struct Options {
   bool bow_matching = false;
   bool relocalisation =
       true;  // when lost: BoW candidates + PnP (with a vocabulary), else a search around the last pose
+  // Loop closing (loop/loop_closer.hpp; needs a vocabulary): detection, Sim3 (SE3 once metric), essential
+  // graph and global BA. loop_object_check: BE-SLAM's BEV check, parked cars must agree after the loop.
+  bool loop_closure = true;
+  bool loop_object_check = true;
+  int loop_global_ba_iterations = 10;  // 0: none after the essential graph
   // Local mapping.
   int triangulation_neighbours = 20;  // covisible keyframes to triangulate with
   // Epipolar matching for new points as ORB-SLAM2 does it: best under the strict threshold, no ratio
@@ -134,6 +139,9 @@ struct TrackResult {
   int tracked_static = 0;                                         // inliers on static-object map points
   std::vector<std::pair<std::string, double>> stage_ms;           // extract, track, local_map, mapping...
   bool relocalised = false;                                       // this frame recovered from Lost
+  bool loop_closed = false;        // a loop was closed before this frame was tracked (the map moved)
+  double loop_correction_m = 0;    // then: how far the loop keyframe's centre moved
+  int loop_object_rejections = 0;  // loop candidates the BEV object check refused since the last frame
   // The frame's keypoints: pixel, mask label under it, matched to a map point (pose inlier), octave.
   struct Keypoint {
     float x = 0, y = 0;
@@ -170,6 +178,8 @@ struct ObjectLandmark {
 struct Statistics {
   int frames = 0, frames_tracked = 0, keyframes = 0, keyframes_culled = 0, map_points = 0;
   int resets = 0, relocalisations = 0;
+  int loop_closures = 0, loop_object_rejections = 0, loop_candidates = 0;
+  std::vector<std::pair<int64_t, int64_t>> loop_frames;  // (frame, matched earlier frame) per closure
   int64_t initialised_at_frame = -1;
   int64_t metric_from_frame = -1;   // first frame tracked in metres (-1: never)
   double metric_scale_factor = 0;   // the factor the map was multiplied by then

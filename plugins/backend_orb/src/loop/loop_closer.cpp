@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 
+#include "loop/pose_graph.hpp"
 #include "map/frame.hpp"
 #include "map/keyframe.hpp"
 #include "map/map.hpp"
@@ -11,7 +12,6 @@
 #include "matching/matcher.hpp"
 #include "optimize/bundle_adjustment.hpp"
 #include "place/keyframe_database.hpp"
-#include "loop/pose_graph.hpp"
 
 namespace beslam::orb {
 namespace {
@@ -292,7 +292,9 @@ bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, 
     graph.edges.push_back({node.at(a->id), node.at(b->id), S_ab, 1.0});
   };
   for (const auto& [a, b] : loop_links)  // the new links hold the corrected relation
-    addEdge(a, b, graph.S_cw[static_cast<size_t>(node.at(a->id))] * graph.S_cw[static_cast<size_t>(node.at(b->id))].inverse());
+    addEdge(
+        a, b,
+        graph.S_cw[static_cast<size_t>(node.at(a->id))] * graph.S_cw[static_cast<size_t>(node.at(b->id))].inverse());
   for (KeyFrame* k : keyframes) {
     if (k->parent && !k->parent->bad && S_before.count(k->parent->id)) addEdge(k, k->parent, measured(k, k->parent));
     for (KeyFrame* l : k->loop_edges)

@@ -38,13 +38,13 @@ struct LoopOptions {
   int consistency = 3;                // keyframes in a row whose candidate groups overlap
   int min_bow_matches = 20;
   int min_sim3_inliers = 20;
-  int min_total_matches = 40;         // BoW inliers + projection matches of the loop neighbourhood
+  int min_total_matches = 40;  // BoW inliers + projection matches of the loop neighbourhood
   bool object_check = true;
-  double object_radius = 2.5;         // m (metric map) or map units: a parked car "agrees" within this
+  double object_radius = 2.5;            // m (metric map) or map units: a parked car "agrees" within this
   double object_max_disagreement = 0.5;  // reject when more than this share of shared-view cars disagree
-  int object_min_cars = 2;            // the check needs at least this many cars on both sides
+  int object_min_cars = 2;               // the check needs at least this many cars on both sides
   int pose_graph_iterations = 20;
-  int global_ba_iterations = 10;      // 0: no global BA after the pose graph
+  int global_ba_iterations = 10;  // 0: no global BA after the pose graph
   uint64_t seed = 1;
 };
 

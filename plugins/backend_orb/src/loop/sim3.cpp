@@ -38,8 +38,8 @@ std::optional<Sim3> alignPoints(const std::vector<Eigen::Vector3d>& p_a, const s
   return S;
 }
 
-std::vector<bool> sim3Inliers(const Sim3& S_21, const std::vector<PointMatch>& matches,
-                              const PinholeIntrinsics& camera, int* count) {
+std::vector<bool> sim3Inliers(const Sim3& S_21, const std::vector<PointMatch>& matches, const PinholeIntrinsics& camera,
+                              int* count) {
   constexpr double kChi2 = 9.21;  // 2 dof, 99 %
   const Sim3 S_12 = S_21.inverse();
   std::vector<bool> inliers(matches.size(), false);

@@ -67,7 +67,7 @@ std::optional<Sim3RansacResult> ransacSim3(const std::vector<PointMatch>& matche
                                            const Sim3RansacOptions& options);
 
 // Inliers of S_21 among matches (both reprojections within chi-square 9.21 x sigma^2, points in front).
-std::vector<bool> sim3Inliers(const Sim3& S_21, const std::vector<PointMatch>& matches,
-                              const PinholeIntrinsics& camera, int* count);
+std::vector<bool> sim3Inliers(const Sim3& S_21, const std::vector<PointMatch>& matches, const PinholeIntrinsics& camera,
+                              int* count);
 
 }  // namespace beslam::orb::loop

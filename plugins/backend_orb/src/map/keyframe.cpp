@@ -143,7 +143,8 @@ void KeyFrame::restoreLinks(KeyFrame* parent_kf, const std::map<KeyFrame*, int, 
 }
 
 void KeyFrame::setBad() {
-  if (this == map_->origin() || bad) return;
+  // The origin and keyframes that closed a loop (their loop edges hold the essential graph) stay, as in ORB-SLAM2.
+  if (this == map_->origin() || bad || !loop_edges.empty()) return;
   for (auto& [kf, w] : weights_) kf->eraseConnection(this);
   for (size_t i = 0; i < points.size(); ++i) {
     MapPoint* mp = points[i];

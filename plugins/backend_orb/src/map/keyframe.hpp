@@ -42,9 +42,10 @@ class KeyFrame {
   place::BowVector bow;                                    // empty without a vocabulary
   place::FeatureVector feature_vector;                     // direct index
 
-  // Spanning tree.
+  // Spanning tree, and the keyframes this one closed a loop with (essential-graph edges).
   KeyFrame* parent = nullptr;
   std::set<KeyFrame*, IdLess<KeyFrame>> children;
+  std::set<KeyFrame*, IdLess<KeyFrame>> loop_edges;
 
   // Scratch.
   int64_t track_ref_for_frame = -1;

@@ -427,44 +427,47 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
   return static_cast<int>(matches.size());
 }
 
-int fuse(KeyFrame* kf, const std::vector<MapPoint*>& points, float th) {
+int bestKeypointFor(const KeyFrame* kf, const MapPoint* mp, const Eigen::Isometry3d& T_cw, float th,
+                    const std::set<int>& taken) {
   const FeatureSet& f = *kf->features;
   const Camera& cam = kf->camera;
   const ScalePyramid& pyr = kf->pyramid;
-  const Eigen::Vector3d centre = kf->centre();
+  const Eigen::Vector3d pc = T_cw * mp->position;
+  if (pc.z() <= 0) return -1;
+  const Eigen::Vector2d uv = project(cam, pc);
+  if (!inImage(cam, uv.x(), uv.y())) return -1;
+  const Eigen::Vector3d po = mp->position - T_cw.inverse().translation();
+  const double dist = po.norm();
+  if (dist < 0.8 * mp->min_distance || dist > 1.2 * mp->max_distance) return -1;
+  if (po.dot(mp->normal) < 0.5 * dist) return -1;
+  const int level = mp->predictLevel(dist, pyr);
+  const float radius = th * static_cast<float>(pyr.scale[level]);
+  NearestTwo nn;
+  for (int j : f.query(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius)) {
+    const cv::KeyPoint& kp = f.keypoints[j];
+    if (kp.octave < level - 1 || kp.octave > level || taken.count(j)) continue;
+    const double ex = uv.x() - kp.pt.x, ey = uv.y() - kp.pt.y;
+    if ((ex * ex + ey * ey) * pyr.inv_sigma2[kp.octave] > 5.99) continue;
+    nn.add(hamming(mp->descriptor.data(), f.descriptor(j)), j);
+  }
+  return nn.index >= 0 && nn.best <= kThLow ? nn.index : -1;
+}
+
+int fuse(KeyFrame* kf, const std::vector<MapPoint*>& points, float th) {
   int n = 0;
   for (MapPoint* mp : points) {
     if (!mp || mp->bad || mp->isIn(kf)) continue;
-    const Eigen::Vector3d pc = kf->T_cw * mp->position;
-    if (pc.z() <= 0) continue;
-    const Eigen::Vector2d uv = project(cam, pc);
-    if (!inImage(cam, uv.x(), uv.y())) continue;
-    const Eigen::Vector3d po = mp->position - centre;
-    const double dist = po.norm();
-    if (dist < 0.8 * mp->min_distance || dist > 1.2 * mp->max_distance) continue;
-    if (po.dot(mp->normal) < 0.5 * dist) continue;
-    const int level = mp->predictLevel(dist, pyr);
-    const float radius = th * static_cast<float>(pyr.scale[level]);
-    const auto cand = f.query(static_cast<float>(uv.x()), static_cast<float>(uv.y()), radius);
-    NearestTwo nn;
-    for (int j : cand) {
-      const cv::KeyPoint& kp = f.keypoints[j];
-      if (kp.octave < level - 1 || kp.octave > level) continue;
-      const double ex = uv.x() - kp.pt.x, ey = uv.y() - kp.pt.y;
-      if ((ex * ex + ey * ey) * pyr.inv_sigma2[kp.octave] > 5.99) continue;
-      const int d = hamming(mp->descriptor.data(), f.descriptor(j));
-      nn.add(d, j);
-    }
-    if (nn.index < 0 || nn.best > kThLow) continue;
-    MapPoint* existing = kf->points[nn.index];
+    const int j = bestKeypointFor(kf, mp, kf->T_cw, th);
+    if (j < 0) continue;
+    MapPoint* existing = kf->points[static_cast<size_t>(j)];
     if (existing && !existing->bad) {
       if (existing->numObservations() > mp->numObservations())
         mp->replaceWith(existing);
       else
         existing->replaceWith(mp);
     } else {
-      mp->addObservation(kf, nn.index);
-      kf->addPoint(mp, nn.index);
+      mp->addObservation(kf, static_cast<size_t>(j));
+      kf->addPoint(mp, static_cast<size_t>(j));
     }
     ++n;
   }

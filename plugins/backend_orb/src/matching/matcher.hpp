@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -63,6 +64,13 @@ int searchByBoW(const KeyFrame* kf, Frame& cur, float ratio, bool check_orientat
 int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen::Matrix3d& F21,
                            std::vector<std::pair<int, int>>& matches, float ratio, bool check_orientation,
                            bool same_bow_node = false);
+
+// The keypoint of kf that map point mp matches when projected with pose T_cw (its predicted level, a
+// radius th x scale, reprojection chi-square 5.99, best under the strict threshold), skipping the
+// keypoints in `taken`; -1 if none. The point must be in front, in the image, within its distance range
+// and seen from less than 60 degrees off its mean viewing direction.
+int bestKeypointFor(const KeyFrame* kf, const MapPoint* mp, const Eigen::Isometry3d& T_cw, float th,
+                    const std::set<int>& taken = {});
 
 // Projects points into kf; a match either adds an observation or merges duplicates (the point with
 // more observations survives). Returns the number of fused points.

@@ -371,6 +371,17 @@ void Tracker::forgetCulled() {
       if (mp && mp->bad) mp = mp->latest()->bad ? nullptr : mp->latest();
 }
 
+void Tracker::followCorrection(const std::map<long, Eigen::Isometry3d>& T_cw_before) {
+  auto follow = [&](Eigen::Isometry3d& T_cw, const KeyFrame* ref) {
+    if (!ref) return;
+    const auto it = T_cw_before.find(ref->id);
+    if (it != T_cw_before.end()) T_cw = T_cw * it->second.inverse() * ref->T_cw;
+  };
+  follow(current_.T_cw, current_.reference ? current_.reference : reference_kf_);
+  follow(last_.T_cw, last_.reference ? last_.reference : reference_kf_);
+  if (last_good_pose_) follow(*last_good_pose_, reference_kf_);
+}
+
 void Tracker::reset() {
   if (map_.numKeyFrames() > 0) ++resets_;
   map_.clear();

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -71,6 +72,9 @@ class Tracker {
   // culled keyframe are re-anchored to its live ancestor, replaced points followed, culled ones dropped
   // from the frames, the local map and the reference / last keyframe.
   void forgetCulled();
+  // A loop closure moved the keyframes (T_cw_before: their poses before, by id): the frames being
+  // tracked keep their pose relative to their reference keyframe.
+  void followCorrection(const std::map<long, Eigen::Isometry3d>& T_cw_before);
   // The centre of the last tracked frame (world), the fixed point of scale corrections.
   Eigen::Vector3d lastCentre() const { return last_.T_cw.inverse().translation(); }
 
