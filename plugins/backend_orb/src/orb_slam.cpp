@@ -370,6 +370,7 @@ struct OrbSlam::Impl {
     if (!map.hasCulled()) return;
     tracker.forgetCulled();
     mapper.forgetCulled();
+    for (KeyFrame* kf : map.culledNotReleased()) database.erase(kf);
     map.releaseCulled();
   }
 

@@ -73,8 +73,9 @@ const beslam::sdk::Settings<Options> kSettings{
     path(&Options::save_map, "save_map", "\"\"", "map file written at the end of the run (also when interrupted)"),
     setting(&Options::localisation_only, "localisation_only", "false",
             "track against the loaded map (load_map) without changing it: no keyframes, map points or BA"),
-    setting(&Options::loop_closure, "loop_closure", "true",
-            "close loops: BoW candidates, Sim3 (SE3 once metric), essential graph, global BA (needs a vocabulary)"),
+    setting(&Options::loop_closure, "loop_closure", "false",
+            "close loops: BoW candidates, Sim3 (SE3 once metric), essential graph, global BA (needs a vocabulary; "
+            "off: the corrected map measured worse, docs/place-recognition.md)"),
     setting(&Options::loop_object_check, "loop_object_check", "true",
             "reject a loop whose parked cars disagree after the loop transform (BE-SLAM's BEV check)"),
     setting(&Options::loop_global_ba_iterations, "loop_global_ba_iterations", "10", 0, 1000,

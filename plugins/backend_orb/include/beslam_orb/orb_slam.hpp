@@ -62,7 +62,9 @@ struct Options {
       true;  // when lost: BoW candidates + PnP (with a vocabulary), else a search around the last pose
   // Loop closing (loop/loop_closer.hpp; needs a vocabulary): detection, Sim3 (SE3 once metric), essential
   // graph and global BA. loop_object_check: BE-SLAM's BEV check, parked cars must agree after the loop.
-  bool loop_closure = true;
+  // Off by default: it closes the loop where it should, but the corrected map is worse overall so far
+  // (docs/place-recognition.md, "Loop closing").
+  bool loop_closure = false;
   bool loop_object_check = true;
   int loop_global_ba_iterations = 10;  // 0: none after the essential graph
   // Local mapping.

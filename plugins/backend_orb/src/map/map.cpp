@@ -48,7 +48,27 @@ void Map::eraseMapPoint(MapPoint* mp) {
   if (points_.erase(mp)) culled_points_.push_back(mp->id);
 }
 
+std::vector<KeyFrame*> Map::culledNotReleased() const {
+  std::vector<KeyFrame*> out;
+  for (long id : culled_keyframes_) out.push_back(owned_keyframes_.at(id).get());
+  return out;
+}
+
 void Map::releaseCulled() {
+  // Nothing live may point at what is freed. Links the culling left behind are cut first: a keyframe slot
+  // still holding a culled point (a point matched at two keypoints of one keyframe keeps only one
+  // observation, so culling clears only that slot), a live point observing or referenced to a culled
+  // keyframe, a replacement chain through a culled point.
+  for (KeyFrame* kf : keyframes_)
+    for (MapPoint*& mp : kf->points)
+      if (mp && mp->bad) mp = nullptr;
+  for (MapPoint* mp : points_) {
+    for (auto it = mp->observations.begin(); it != mp->observations.end();)
+      it = it->first->bad ? mp->observations.erase(it) : std::next(it);
+    if (mp->reference && mp->reference->bad)
+      mp->reference = mp->observations.empty() ? nullptr : mp->observations.begin()->first;
+    mp->replaced_by = nullptr;
+  }
   for (long id : culled_points_) owned_points_.erase(id);
   for (long id : culled_keyframes_) owned_keyframes_.erase(id);
   culled_points_.clear();

@@ -31,6 +31,7 @@ class Map {
   // Frees every culled keyframe and map point. Precondition: nothing outside the map points at them
   // (live keyframes and points never do: culling unlinks them).
   void releaseCulled();
+  std::vector<KeyFrame*> culledNotReleased() const;  // culled keyframes, not yet released
   bool hasCulled() const { return !culled_keyframes_.empty() || !culled_points_.empty(); }
   // Frees everything (tracker reset: its frames and records are cleared with it).
   void clear();

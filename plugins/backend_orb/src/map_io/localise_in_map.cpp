@@ -13,6 +13,7 @@
 #include "map/map_point.hpp"
 #include "matching/matcher.hpp"
 #include "optimize/pose_optimizer.hpp"
+#include "tracking/pnp_pose.hpp"
 
 namespace beslam::orb {
 namespace {
@@ -64,36 +65,7 @@ bool tryCandidate(Frame& frame, const KeyFrame* kf, const Camera& camera, const 
   if (matching::searchByProjectionWide(frame, points, kf->T_cw, camera, pyramid, o.radius, 0.75f, matching::kThLow) <
       o.min_matches)
     return false;
-  std::vector<cv::Point3f> obj;
-  std::vector<cv::Point2f> img;
-  std::vector<size_t> idx;
-  for (size_t i = 0; i < frame.size(); ++i) {
-    const MapPoint* mp = frame.points[i];
-    if (!mp) continue;
-    obj.emplace_back(static_cast<float>(mp->position.x()), static_cast<float>(mp->position.y()),
-                     static_cast<float>(mp->position.z()));
-    img.push_back(frame.features->keypoints[i].pt);
-    idx.push_back(i);
-  }
-  cv::Mat K, rvec, tvec, inliers;
-  cv::eigen2cv(intrinsics(camera), K);
-  cv::setRNGSeed(static_cast<int>(o.seed));
-  if (!cv::solvePnPRansac(obj, img, K, cv::Mat(), rvec, tvec, false, 300, 4.0f, 0.99, inliers) ||
-      inliers.rows < o.min_matches)
-    return false;
-  std::vector<bool> keep(idx.size(), false);
-  for (int r = 0; r < inliers.rows; ++r) keep[inliers.at<int>(r)] = true;
-  for (size_t k = 0; k < idx.size(); ++k)
-    if (!keep[k]) frame.points[idx[k]] = nullptr;
-  cv::Mat R;
-  cv::Rodrigues(rvec, R);
-  Eigen::Matrix3d Re;
-  Eigen::Vector3d te;
-  cv::cv2eigen(R, Re);
-  cv::cv2eigen(tvec, te);
-  frame.T_cw = Eigen::Isometry3d::Identity();
-  frame.T_cw.linear() = Re;
-  frame.T_cw.translation() = te;
+  if (poseFromMatches(frame, camera, {o.seed, 4.0f, o.min_matches, false}) < 0) return false;
   optimize(frame, camera, pyramid, o.trusted_weight);
   dropOutliers(frame);
   // With the pose found, a narrow search brings in the neighbourhood's other points.

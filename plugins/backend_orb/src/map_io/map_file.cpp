@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "features/checksum.hpp"
 #include "features/feature_set.hpp"
 #include "map/frame.hpp"
 #include "map/keyframe.hpp"
@@ -28,15 +29,6 @@ constexpr size_t kHeaderBytes = 8 + 4 + 8, kTrailerBytes = 8;
 constexpr uint32_t kMaxKeyFrames = 10'000'000, kMaxKeypoints = 1'000'000, kMaxPoints = 100'000'000;
 constexpr uint32_t kMaxLinks = 10'000'000, kMaxLandmarks = 1'000'000, kMaxSurfacePoints = 10'000'000;
 constexpr uint32_t kMaxText = 4096;
-
-uint64_t fnv1a(const char* data, size_t n) {
-  uint64_t h = 1469598103934665603ull;
-  for (size_t i = 0; i < n; ++i) {
-    h ^= static_cast<uint8_t>(data[i]);
-    h *= 1099511628211ull;
-  }
-  return h;
-}
 
 // ------------------------------------------------------------------ encoding
 

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "features/checksum.hpp"
 #include "matching/hamming.hpp"
 
 namespace beslam::orb::place {
@@ -30,15 +31,6 @@ uint64_t splitmix(uint64_t& x) {
   return z ^ (z >> 31);
 }
 double uniform01(uint64_t& state) { return static_cast<double>(splitmix(state) >> 11) * (1.0 / 9007199254740992.0); }
-
-uint64_t fnv1a(const char* data, size_t n) {
-  uint64_t h = 1469598103934665603ull;
-  for (size_t i = 0; i < n; ++i) {
-    h ^= static_cast<uint8_t>(data[i]);
-    h *= 1099511628211ull;
-  }
-  return h;
-}
 
 template <typename T>
 void put(std::string& out, T v) {

@@ -18,6 +18,7 @@
 #include "optimize/bundle_adjustment.hpp"
 #include "optimize/pose_optimizer.hpp"
 #include "place/keyframe_database.hpp"
+#include "tracking/pnp_pose.hpp"
 
 namespace beslam::orb {
 namespace {
@@ -507,41 +508,13 @@ bool Tracker::relocaliseWith(KeyFrame* kf) {
     std::fprintf(stderr, "  keyframe %ld (frame %ld): %d BoW matches\n", kf->id, static_cast<long>(kf->frame_index),
                  bow_matches);
   if (bow_matches < 15) return false;
-  std::vector<cv::Point3f> obj;
-  std::vector<cv::Point2f> img;
-  std::vector<size_t> idx;
-  for (size_t i = 0; i < current_.size(); ++i) {
-    MapPoint* mp = current_.points[i];
-    if (!mp) continue;
-    obj.emplace_back(static_cast<float>(mp->position.x()), static_cast<float>(mp->position.y()),
-                     static_cast<float>(mp->position.z()));
-    img.push_back(current_.features->keypoints[i].pt);
-    idx.push_back(i);
-  }
-  cv::Mat K;
-  cv::eigen2cv(intrinsics(camera_), K);
-  cv::Mat rvec, tvec, inliers;
-  cv::setRNGSeed(static_cast<int>(options_.seed + static_cast<uint64_t>(kf->id)));
   // Reprojection threshold: chi-square 5.991 (2 dof) at level 0, sqrt(5.991) = 2.45 px.
-  if (!cv::solvePnPRansac(obj, img, K, cv::Mat(), rvec, tvec, false, 300, 2.45f, 0.99, inliers, cv::SOLVEPNP_EPNP) ||
-      inliers.rows < 10)
-    return false;
-  std::vector<bool> keep(idx.size(), false);
-  for (int r = 0; r < inliers.rows; ++r) keep[inliers.at<int>(r)] = true;
-  for (size_t k = 0; k < idx.size(); ++k)
-    if (!keep[k]) current_.points[idx[k]] = nullptr;
-  cv::Mat R;
-  cv::Rodrigues(rvec, R);
-  Eigen::Matrix3d Re;
-  Eigen::Vector3d te;
-  cv::cv2eigen(R, Re);
-  cv::cv2eigen(tvec, te);
-  current_.T_cw = Eigen::Isometry3d::Identity();
-  current_.T_cw.linear() = Re;
-  current_.T_cw.translation() = te;
+  const int pnp_inliers =
+      poseFromMatches(current_, camera_, {options_.seed + static_cast<uint64_t>(kf->id), 2.45f, 10, true});
+  if (pnp_inliers < 0) return false;
   int good = optimizeFramePose();
   if (std::getenv("BESLAM_ORB_DEBUG"))
-    std::fprintf(stderr, "  PnP inliers %d, after pose optimisation %d\n", inliers.rows, good);
+    std::fprintf(stderr, "  PnP inliers %d, after pose optimisation %d\n", pnp_inliers, good);
   if (good < 10) return false;
   for (size_t i = 0; i < current_.size(); ++i)
     if (current_.outlier[i]) {
@@ -606,36 +579,7 @@ bool Tracker::relocaliseNearLastPose() {
   const int n = matching::searchByProjectionWide(current_, points, *last_good_pose_, camera_, pyramid_, 80.f, 0.75f,
                                                  matching::kThLow);
   if (n < 30) return false;
-  std::vector<cv::Point3f> obj;
-  std::vector<cv::Point2f> img;
-  std::vector<size_t> idx;
-  for (size_t i = 0; i < current_.size(); ++i) {
-    MapPoint* mp = current_.points[i];
-    if (!mp) continue;
-    obj.emplace_back(static_cast<float>(mp->position.x()), static_cast<float>(mp->position.y()),
-                     static_cast<float>(mp->position.z()));
-    img.push_back(current_.features->keypoints[i].pt);
-    idx.push_back(i);
-  }
-  cv::Mat K;
-  cv::eigen2cv(intrinsics(camera_), K);
-  cv::Mat rvec, tvec, inliers;
-  cv::setRNGSeed(static_cast<int>(options_.seed));
-  if (!cv::solvePnPRansac(obj, img, K, cv::Mat(), rvec, tvec, false, 300, 4.0f, 0.99, inliers) || inliers.rows < 30)
-    return false;
-  std::vector<bool> keep(idx.size(), false);
-  for (int r = 0; r < inliers.rows; ++r) keep[inliers.at<int>(r)] = true;
-  for (size_t k = 0; k < idx.size(); ++k)
-    if (!keep[k]) current_.points[idx[k]] = nullptr;
-  cv::Mat R;
-  cv::Rodrigues(rvec, R);
-  Eigen::Matrix3d Re;
-  Eigen::Vector3d te;
-  cv::cv2eigen(R, Re);
-  cv::cv2eigen(tvec, te);
-  current_.T_cw = Eigen::Isometry3d::Identity();
-  current_.T_cw.linear() = Re;
-  current_.T_cw.translation() = te;
+  if (poseFromMatches(current_, camera_, {options_.seed, 4.0f, 30, false}) < 0) return false;
   optimizeFramePose();
   if (discardOutliers() < 50) return false;
   last_reloc_frame_ = current_.index;
