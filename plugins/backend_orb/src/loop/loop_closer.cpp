@@ -225,7 +225,7 @@ bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, 
   connected.push_back(kf);
   const Sim3 S_cw_corrected = S_cur_loop * S_before.at(loop_kf->id);
   std::map<long, Sim3> S_start = S_before;
-  std::map<long, long> corrected_by;  // map point id -> the keyframe whose correction moved it
+  std::map<long, KeyFrame*> corrected_by;  // map point id -> the keyframe whose correction moved it
   for (KeyFrame* k : connected) {
     if (k->bad) continue;
     S_start[k->id] = (S_before.at(k->id) * S_before.at(kf->id).inverse()) * S_cw_corrected;
@@ -234,7 +234,7 @@ bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, 
     if (k->bad) continue;
     const Sim3 to_corrected = S_start.at(k->id).inverse() * S_before.at(k->id);
     for (MapPoint* mp : k->validPoints())
-      if (corrected_by.emplace(mp->id, k->id).second) mp->position = to_corrected * mp->position;
+      if (corrected_by.emplace(mp->id, k).second) mp->position = to_corrected * mp->position;
     k->T_cw = S_start.at(k->id).toIsometry();
   }
 
@@ -310,11 +310,7 @@ bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, 
   for (size_t n = 0; n < keyframes.size(); ++n) keyframes[n]->T_cw = solved.S_cw[n].toIsometry();
   for (MapPoint* mp : map_.points()) {
     const auto it = corrected_by.find(mp->id);
-    KeyFrame* ref = nullptr;
-    if (it != corrected_by.end()) {
-      for (KeyFrame* k : connected)
-        if (k->id == it->second) ref = k;
-    }
+    KeyFrame* ref = it != corrected_by.end() ? it->second : nullptr;
     if (!ref || ref->bad) ref = mp->reference;
     if (!ref || ref->bad || !node.count(ref->id)) {
       ref = nullptr;
