@@ -20,13 +20,20 @@ _Static_assert(sizeof(beslam_config_value) == 48, "beslam_config_value");
 _Static_assert(sizeof(beslam_frame) == 104, "beslam_frame");
 _Static_assert(sizeof(beslam_create_info) == 192, "beslam_create_info");
 _Static_assert(offsetof(beslam_create_info, camera_height) == 184, "ABI 1.1 appends camera_height to 1.0's 184 bytes");
-_Static_assert(sizeof(beslam_track_result) == 168, "beslam_track_result");
+_Static_assert(sizeof(beslam_track_result) == 184, "beslam_track_result");
+_Static_assert(offsetof(beslam_track_result, keyframe_points) == 168,
+               "ABI 1.3 appends keyframe points to 1.2's 168 bytes");
 _Static_assert(offsetof(beslam_track_result, keypoints) == 152, "ABI 1.2 appends keypoints to 1.1's 152 bytes");
 _Static_assert(sizeof(beslam_keypoint) == 12, "beslam_keypoint");
 _Static_assert(offsetof(beslam_track_result, world_scale) == 136, "ABI 1.1 appends world_scale to 1.0's 136 bytes");
 _Static_assert(offsetof(beslam_keyframe, world_scale) == 128, "ABI 1.1 appends world_scale to 1.0's 128 bytes");
 _Static_assert(sizeof(beslam_backend_v1) == 56, "beslam_backend_v1");
-_Static_assert(sizeof(beslam_object_landmark) == 168, "beslam_object_landmark");
+_Static_assert(sizeof(beslam_object_landmark) == 208, "beslam_object_landmark");
+_Static_assert(offsetof(beslam_object_landmark, flags) == 168, "ABI 1.3 appends flags and mesh to 1.2's 168 bytes");
+_Static_assert(offsetof(beslam_keyframe, points) == 136, "ABI 1.3 appends points to 1.2's 136 bytes");
+_Static_assert(sizeof(beslam_keyframe) == 152, "beslam_keyframe");
+_Static_assert(sizeof(beslam_keyframe_point) == 48, "beslam_keyframe_point");
+_Static_assert(offsetof(beslam_reconstructor_v1, finish) == 16, "ABI 1.3 appends finish to 1.2's 16 bytes");
 
 #define ENTRY(x) (size_t)(x)
 size_t beslam_c_layout(int i) {
@@ -60,6 +67,8 @@ size_t beslam_c_layout(int i) {
       ENTRY(sizeof(beslam_map_point)),
       ENTRY(sizeof(beslam_trajectory_entry)),
       ENTRY(sizeof(beslam_mask_buffer)),
+      ENTRY(sizeof(beslam_keyframe_point)),
+      ENTRY(offsetof(beslam_keyframe, points)),
   };
   return i >= 0 && i < (int)(sizeof(values) / sizeof(values[0])) ? values[i] : (size_t)-1;
 }

@@ -43,6 +43,8 @@ TEST(AbiLayout, CAndCppAgree) {
       sizeof(beslam_map_point),
       sizeof(beslam_trajectory_entry),
       sizeof(beslam_mask_buffer),
+      sizeof(beslam_keyframe_point),
+      offsetof(beslam_keyframe, points),
   };
   for (int i = 0; i < static_cast<int>(sizeof(cpp) / sizeof(cpp[0])); ++i)
     EXPECT_EQ(beslam_c_layout(i), cpp[i]) << "layout entry " << i;

@@ -183,6 +183,53 @@ TEST(Registry, DetectAndClassifyRoundTrip) {
   EXPECT_NE(m.find("detect failed (invalid argument): frame without a grey image"), std::string::npos) << m;
 }
 
+TEST(Registry, LandmarksCrossTheAbiWithMeshesPointsAndRemovals) {
+  Registry registry;
+  registry.loadLibrary(fixture("sdk_fixtures"));
+  beslam::registry::HostLog log;
+  beslam::registry::ReconstructorInstance reconstructor(registry.find("fixture_box_objects"), createInfo(log, {}), log);
+  std::vector<uint8_t> pixels(64 * 48, 128);
+  beslam_frame frame{};
+  frame.struct_size = sizeof(frame);
+  frame.gray = {pixels.data(), 64, 48, 64, BESLAM_PIXEL_GRAY8};
+  beslam_box3d box{};
+  box.class_id = BESLAM_CLASS_CAR;
+  box.track_id = 4;
+  box.motion_state = BESLAM_MOTION_STATIC;
+  box.center_cam[2] = 10;
+  box.size[0] = 4, box.size[1] = 2, box.size[2] = 1.5;
+  std::vector<beslam_keyframe_point> points(3);
+  points[0].label = BESLAM_LABEL_STATIC_BASE + 4;
+  points[1].label = BESLAM_LABEL_STATIC_BASE + 4;
+  points[2].label = BESLAM_LABEL_BACKGROUND;
+  beslam_keyframe kf{};
+  kf.struct_size = sizeof(kf);
+  kf.world_scale = BESLAM_WORLD_SCALE_METRIC;
+  for (int i = 0; i < 3; ++i) kf.T_world_cam.m[i * 5] = 1;
+  kf.T_world_cam.m[3] = 2;  // the camera 2 m along world x
+  kf.points = points.data();
+  kf.point_count = 3;
+  kf.point_size = sizeof(beslam_keyframe_point);
+  const beslam_image_view no_mask{};
+  beslam::registry::Landmarks made = reconstructor.reconstruct(kf, frame, {box}, no_mask);
+  ASSERT_EQ(made.size(), 1u);
+  EXPECT_EQ(made[0].track_id, 4);
+  EXPECT_EQ(made[0].keyframes, 2);  // the two keyframe points on object 4 reached the plugin
+  EXPECT_NEAR(made[0].T_world_object.translation().x(), 2, 1e-12);
+  EXPECT_NEAR(made[0].T_world_object.translation().z(), 10, 1e-12);
+  EXPECT_EQ(made[0].mesh_vertices.size(), 24u);
+  EXPECT_EQ(made[0].mesh_faces.size(), 36u);
+  EXPECT_FALSE(made[0].removed());
+  // The host's copy owns its arrays: it outlives the plugin's next call.
+  const beslam::registry::Landmarks first = made;
+  box.motion_state = BESLAM_MOTION_DYNAMIC;
+  made = reconstructor.reconstruct(kf, frame, {box}, no_mask);
+  ASSERT_EQ(made.size(), 1u);
+  EXPECT_TRUE(made[0].removed());
+  EXPECT_FLOAT_EQ(first[0].mesh_vertices[0], -2.0f);
+  EXPECT_TRUE(reconstructor.finish().empty());  // nothing left: object 4 was removed
+}
+
 TEST(Registry, FindsBuiltInPluginsThroughEnvironment) {
   // ctest sets BESLAM_PLUGIN_PATH to the built-in plugin folder.
   Registry registry;

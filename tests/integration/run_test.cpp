@@ -207,6 +207,31 @@ TEST_F(RunTest, OctomapIsWritten) {
   EXPECT_NE(summary.find("\"source\": \"map_points\""), std::string::npos) << summary;
 }
 
+// A reconstructor's landmarks become objects.json, one mesh a static object (world frame) and map.ply;
+// the run summary counts them.
+TEST_F(RunTest, ReconstructedObjectsAreWritten) {
+  const Result r = beslam("run " +
+                              pipeline("detector: {plugin: fixture_boxes, count: 2}\n"
+                                       "motion_checker: {plugin: fixture_all_static}\n"
+                                       "reconstructor: {plugin: fixture_box_objects}\n") +
+                              " --out " + (dir_ / "out").string(),
+                          dir_);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string objects = slurp(dir_ / "out/objects.json");
+  EXPECT_NE(objects.find("\"track_id\": 7"), std::string::npos) << objects;
+  EXPECT_NE(objects.find("\"track_id\": 8"), std::string::npos) << objects;
+  EXPECT_NE(objects.find("\"mesh\": \"objects/object_0007.ply\""), std::string::npos) << objects;
+  EXPECT_NE(objects.find("\"cost\": 1.0"), std::string::npos) << "finish()'s updates are kept: " << objects;
+  const std::string mesh = slurp(dir_ / "out/objects/object_0008.ply");
+  EXPECT_NE(mesh.find("element vertex 8\n"), std::string::npos) << mesh;
+  EXPECT_NE(mesh.find("element face 12\n"), std::string::npos) << mesh;
+  const std::string map = slurp(dir_ / "out/map.ply");
+  EXPECT_NE(map.find("element face 24\n"), std::string::npos) << "both meshes in map.ply";
+  const std::string summary = slurp(dir_ / "out/summary.json");
+  EXPECT_NE(summary.find("\"reconstructed\": 2"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"reconstructor\": \"fixture_box_objects"), std::string::npos) << summary;
+}
+
 TEST_F(RunTest, BadDebugSignalSettingIsAUsageError) {
   const Result r =
       beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_, "BESLAM_DEBUG_SIGNAL_AT=soon ");

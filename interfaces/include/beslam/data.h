@@ -160,6 +160,18 @@ typedef struct beslam_create_info {
 } beslam_create_info;
 
 /* ---- What the backend and reconstructor exchange ---- */
+
+/* ABI 1.3: a map point a new keyframe observes, as the backend hands it on for the reconstructor: its
+ * stable id, world position, the pixel it was matched at in the keyframe and the mask label there. */
+typedef struct beslam_keyframe_point {
+  int64_t id; /* the backend's map point id, stable for the point's life */
+  double p_world[3];
+  float x, y;     /* pixel in the keyframe (full resolution) */
+  uint16_t label; /* mask label under the pixel (BESLAM_LABEL_*; 0 without a mask) */
+  uint16_t reserved;
+  int32_t observations; /* keyframes that observe the point */
+} beslam_keyframe_point;
+
 typedef struct beslam_keyframe {
   uint32_t struct_size;
   uint32_t reserved;
@@ -169,6 +181,11 @@ typedef struct beslam_keyframe {
   beslam_pose T_world_cam;
   int32_t world_scale; /* ABI 1.1: BESLAM_WORLD_SCALE_* of T_world_cam */
   int32_t reserved1;
+  /* ABI 1.3: the map points this keyframe observes (NULL from older backends); host memory for the call.
+   * point_size is sizeof(beslam_keyframe_point) as the host was built. */
+  const beslam_keyframe_point* points;
+  uint32_t point_count;
+  uint32_t point_size;
 } beslam_keyframe;
 
 typedef struct beslam_keyframe_list {
@@ -176,6 +193,9 @@ typedef struct beslam_keyframe_list {
   uint32_t count;
   uint32_t element_size;
 } beslam_keyframe_list;
+
+/* Landmark flags (ABI 1.3). */
+#define BESLAM_LANDMARK_REMOVED 0x1u /* the object is no landmark any more (it started to move): drop it */
 
 /* A reconstructed static object (parked car) used as a landmark by the backend. */
 typedef struct beslam_object_landmark {
@@ -190,6 +210,14 @@ typedef struct beslam_object_landmark {
   uint32_t reserved;
   const float* surface_points; /* x y z in the object frame, 3 floats each; may be NULL */
   uint64_t surface_point_count;
+  /* ABI 1.3 (an ABI 1.2 plugin's struct_size ends above; the host reads zeros). */
+  uint32_t flags;             /* BESLAM_LANDMARK_* */
+  int32_t keyframes;          /* keyframes whose observations the estimate uses */
+  double cost;                /* final cost of the fit (the reconstructor's energy; lower is better) */
+  const float* mesh_vertices; /* x y z in the object frame, metres, 3 floats each; may be NULL */
+  uint32_t mesh_vertex_count;
+  uint32_t mesh_face_count;
+  const uint32_t* mesh_faces; /* vertex index triples, counter-clockwise seen from outside; may be NULL */
 } beslam_object_landmark;
 
 typedef struct beslam_landmark_list {

@@ -4,6 +4,7 @@
 //   beslam plugins [--plugin-path DIR]... [--json]
 //   beslam eval --ref FILE --est FILE [...]
 //   beslam eval-motion --run DIR [...]
+//   beslam eval-objects --run DIR [...]
 //   beslam eval-static-map --run DIR [...]
 //   beslam synth --config FILE --out DIR [--set key=value]...
 //   beslam bench MATRIX.yaml [--out DIR] [--jobs N] [--emit slurm] | --merge DIR | --cell K DIR
@@ -30,6 +31,7 @@
 #include "beslam/common/interrupt.hpp"
 #include "beslam/eval/eval.hpp"
 #include "beslam/motion_score/motion_score.hpp"
+#include "beslam/object_score/object_score.hpp"
 #include "beslam/pipeline/runner.hpp"
 #include "beslam/pipeline/spec.hpp"
 #include "beslam/registry/registry.hpp"
@@ -49,6 +51,7 @@ constexpr const char* kUsage =
     "  plugins             list every plugin found, with its configuration schema\n"
     "  eval                APE/RPE of a trajectory against a reference (evo's definitions)\n"
     "  eval-motion         a run's static/dynamic calls scored against synthetic truth\n"
+    "  eval-objects        a run's reconstructed objects scored against synthetic truth (Table II)\n"
     "  eval-static-map     a run's static_map.bt (OctoMap) scored against synthetic truth\n"
     "  synth               render a synthetic sequence with full ground truth\n"
     "  bench MATRIX.yaml   pipelines x sequences x seeds: runs, tables, report (docs/benchmarks.md)\n"
@@ -216,6 +219,9 @@ int runCommand(const std::vector<std::string>& args) {
                 << " tracked map-point matches, " << s.map_points_static << " of " << s.map_points
                 << " final map points\n";
   }
+  if (s.objects_reconstructed >= 0)
+    std::cout << "objects reconstructed: " << s.objects_reconstructed << " (" << s.objects_with_mesh
+              << " with a mesh), objects.json\n";
   std::cout << "output: " << s.output_dir << "\n";
   if (s.interrupted) {
     std::cerr << "beslam: interrupted by " << s.interrupted_by << " after frame " << s.last_frame << "; outputs of the "
@@ -329,6 +335,7 @@ int main(int argc, char** argv) {
     if (command == "bench") return beslam::bench::runBenchCommand(args, std::cout, std::cerr);
     if (command == "report") return beslam::report::runReportCommand(args, std::cout, std::cerr);
     if (command == "eval-motion") return beslam::motion_score::runCommand(args, std::cout, std::cerr);
+    if (command == "eval-objects") return beslam::object_score::runCommand(args, std::cout, std::cerr);
     if (command == "eval-static-map") return beslam::static_map::runEvalCommand(args, std::cout, std::cerr);
 #ifdef BESLAM_WITH_SIM
     if (command == "synth") return beslam::sim::runSynthCommand(args, std::cout, std::cerr);

@@ -10,6 +10,7 @@
 #include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
+#include "beslam/common/run_folder.hpp"
 #include "beslam/datasets/labels.hpp"
 
 namespace beslam::motion_score {
@@ -158,23 +159,10 @@ int runCommand(const std::vector<std::string>& args, std::ostream& out, std::ost
   }
   try {
     if (!run.empty()) {
-      const std::string summary_path = run + "/summary.json";
-      std::ifstream in(summary_path);
-      if (!in) throw Error(summary_path + ": cannot open (is " + run + " a run folder?)");
-      nlohmann::json summary;
-      try {
-        summary = nlohmann::json::parse(in);
-      } catch (const nlohmann::json::exception& e) {
-        throw Error(summary_path + ": not JSON (" + e.what() + ")");
-      }
-      const std::string seq = summary.value("dataset_path", "");
-      if (seq.empty()) throw Error(summary_path + ": no dataset_path (a run of an older beslam?)");
+      const RunFolder folder = readRunFolder(run);
       if (objects.empty()) objects = run + "/objects.txt";
-      if (labels.empty()) {
-        const std::string name = summary.value("dataset_sequence", "00");
-        labels = seq + "/label_02/" + name + ".txt";
-      }
-      if (motion.empty()) motion = seq + "/objects_motion.txt";
+      if (labels.empty()) labels = folder.dataset_path + "/label_02/" + folder.dataset_sequence + ".txt";
+      if (motion.empty()) motion = folder.dataset_path + "/objects_motion.txt";
     }
     const Counts c = score(objects, labels, motion, options);
     std::ostringstream s;

@@ -207,6 +207,12 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
   json["frames_with_masks"] = summary.frames_with_masks;
   json["map_points"] = {{"total", summary.map_points}, {"on_static_objects", summary.map_points_static}};
   if (static_map) json["static_map"] = static_map_json;
+  json["objects"] = nullptr;
+  if (record.has_reconstructor) {
+    json["objects"] = writeObjectOutputs(out_dir, record.objects, points);
+    summary.objects_reconstructed = json["objects"]["reconstructed"].get<int64_t>();
+    summary.objects_with_mesh = json["objects"]["with_mesh"].get<int64_t>();
+  }
   json["backend_counters"] = nlohmann::json::object();
   for (const auto& [name, value] : summary.backend_counters) json["backend_counters"][name] = value;
   evaluate(spec, dataset, final_poses, summary, json);

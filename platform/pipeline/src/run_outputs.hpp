@@ -1,4 +1,5 @@
 // What a run writes at its end (internal to the runner): the trajectories, map_points.ply, objects.txt,
+// objects.json with objects/ and map.ply (with a reconstructor, object_outputs.hpp),
 // pipeline.resolved.yaml, timing.csv and summary.json, each atomically. The frame loop collects a
 // RunRecord; writeRunOutputs turns it into files and fills the RunSummary.
 #pragma once
@@ -12,6 +13,7 @@
 #include "beslam/pipeline/runner.hpp"
 #include "beslam/registry/instance.hpp"
 #include "beslam/static_map/static_map.hpp"
+#include "object_outputs.hpp"
 
 namespace beslam::pipeline::detail {
 
@@ -28,6 +30,8 @@ struct RunRecord {
   std::vector<int64_t> frame_indices;    // frames that went through the backend, in order
   std::vector<std::string> object_rows;  // objects.txt
   std::map<std::string, double> counter_sums;
+  ObjectMap objects;  // the reconstructor's latest landmark per object
+  bool has_reconstructor = false;
 };
 
 // Where the dataset came from, for summary.json (a synthetic sequence resolves to its cached folder).

@@ -246,6 +246,11 @@ class Run {
     const double loop_s = std::chrono::duration<double>(Clock::now() - t_loop).count();
     summary_.fps = loop_s > 0 ? static_cast<double>(done) / loop_s : 0;
     if (tty) std::cerr << "\n";
+    if (reconstructor_) {  // its last updates go to the backend before the backend's final optimisation
+      const registry::Landmarks last = reconstructor_->finish();
+      detail::applyLandmarkUpdates(record_.objects, last);
+      if (!last.empty()) backend_->addLandmarks(last);
+    }
     backend_->finish();
     detail::writeRunOutputs(spec_, out_dir_, dataset_record_, *dataset_, *backend_, record_, static_map_.get(),
                             summary_);
@@ -325,6 +330,7 @@ class Run {
     make("mask_generator", masker_);
     make("reconstructor", reconstructor_);
     make("backend", backend_);
+    record_.has_reconstructor = reconstructor_ != nullptr;
   }
 
   // The stages that may run ahead on the producer thread: load, detect and (see execute) mask. They
@@ -426,9 +432,13 @@ class Run {
     kf.timestamp = f.frame.timestamp;
     kf.T_world_cam = f.tracked.result.T_world_cam;
     kf.world_scale = BESLAM_WORLD_SCALE_METRIC;
+    kf.points = f.tracked.keyframe_points.empty() ? nullptr : f.tracked.keyframe_points.data();
+    kf.point_count = static_cast<uint32_t>(f.tracked.keyframe_points.size());
+    kf.point_size = sizeof(beslam_keyframe_point);
     const registry::Landmarks landmarks =
         reconstructor_->reconstruct(kf, f.view, f.boxes, sdk::toView(f.mask, BESLAM_PIXEL_LABEL16));
-    if (!landmarks.landmarks.empty()) backend_->addLandmarks(landmarks);
+    detail::applyLandmarkUpdates(record_.objects, landmarks);
+    if (!landmarks.empty()) backend_->addLandmarks(landmarks);
   }
 
   // write: the per-frame outputs (objects.txt rows, masks/NNNNNN.png, samples/NNNNNN.jpg) and what the

@@ -1,5 +1,6 @@
 #include "beslam/registry/instance.hpp"
 
+#include <cstddef>
 #include <cstring>
 #include <iostream>
 
@@ -100,31 +101,6 @@ void MaskGeneratorInstance::generate(const beslam_frame& frame, const std::vecto
   check(table<beslam_mask_generator_v1>().generate(handle_, &frame, &list, &mask), "generate");
 }
 
-Landmarks ReconstructorInstance::reconstruct(const beslam_keyframe& keyframe, const beslam_frame& frame,
-                                             const std::vector<beslam_box3d>& boxes, const beslam_image_view& mask) {
-  beslam_box_list list{boxes.data(), static_cast<uint32_t>(boxes.size()), sizeof(beslam_box3d)};
-  beslam_landmark_list out{};
-  check(table<beslam_reconstructor_v1>().reconstruct(handle_, &keyframe, &frame, &list, &mask, &out), "reconstruct");
-  Landmarks copy;
-  const char* base = reinterpret_cast<const char*>(out.landmarks);
-  for (uint32_t i = 0; i < out.count; ++i) {
-    beslam_object_landmark l{};
-    std::memcpy(&l, base + static_cast<size_t>(i) * out.element_size, std::min<size_t>(out.element_size, sizeof(l)));
-    copy.shape_codes.emplace_back(l.shape_code ? std::vector<float>(l.shape_code, l.shape_code + l.shape_code_size)
-                                               : std::vector<float>());
-    copy.surface_points.emplace_back(
-        l.surface_points ? std::vector<float>(l.surface_points, l.surface_points + 3 * l.surface_point_count)
-                         : std::vector<float>());
-    copy.landmarks.push_back(l);
-  }
-  for (size_t i = 0; i < copy.landmarks.size(); ++i) {  // repoint at the owned copies
-    copy.landmarks[i].struct_size = sizeof(beslam_object_landmark);
-    copy.landmarks[i].shape_code = copy.shape_codes[i].empty() ? nullptr : copy.shape_codes[i].data();
-    copy.landmarks[i].surface_points = copy.surface_points[i].empty() ? nullptr : copy.surface_points[i].data();
-  }
-  return copy;
-}
-
 namespace {
 Eigen::Isometry3d toIsometry(const beslam_pose& pose) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -132,7 +108,69 @@ Eigen::Isometry3d toIsometry(const beslam_pose& pose) {
     for (int c = 0; c < 4; ++c) T.matrix()(r, c) = pose.m[r * 4 + c];
   return T;
 }
+
+beslam_pose toPose(const Eigen::Isometry3d& T) {
+  beslam_pose pose{};
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) pose.m[r * 4 + c] = T.matrix()(r, c);
+  return pose;
+}
+
+template <class T>
+std::vector<T> copyOf(const T* data, size_t count, const char* what, const std::string& plugin) {
+  if (count == 0) return {};
+  if (data == nullptr)
+    throw Error("plugin " + plugin + ": a landmark has " + std::to_string(count) + " " + what + " without data");
+  return std::vector<T>(data, data + count);
+}
+
+// Copies the plugin's landmarks (plugin memory, element_size as the plugin was built) into host memory.
+Landmarks copyLandmarks(const beslam_landmark_list& out, const std::string& plugin) {
+  if (out.count > 0 && (out.landmarks == nullptr || out.element_size < offsetof(beslam_object_landmark, flags)))
+    throw Error("plugin " + plugin + ": returned " + std::to_string(out.count) + " landmarks without data");
+  Landmarks copy;
+  const char* base = reinterpret_cast<const char*>(out.landmarks);
+  for (uint32_t i = 0; i < out.count; ++i) {
+    beslam_object_landmark l{};
+    std::memcpy(&l, base + static_cast<size_t>(i) * out.element_size, std::min<size_t>(out.element_size, sizeof(l)));
+    ObjectLandmark o;
+    o.track_id = l.track_id;
+    o.class_id = l.class_id;
+    o.confidence = l.confidence;
+    o.flags = l.flags;
+    o.keyframes = l.keyframes;
+    o.cost = l.cost;
+    o.T_world_object = toIsometry(l.T_world_object);
+    o.size = Eigen::Vector3d(l.scale[0], l.scale[1], l.scale[2]);
+    o.shape_code = copyOf(l.shape_code, l.shape_code_size, "shape code values", plugin);
+    o.surface_points = copyOf(l.surface_points, 3 * l.surface_point_count, "surface point values", plugin);
+    o.mesh_vertices = copyOf(l.mesh_vertices, 3 * size_t(l.mesh_vertex_count), "mesh vertex values", plugin);
+    o.mesh_faces = copyOf(l.mesh_faces, 3 * size_t(l.mesh_face_count), "mesh face indices", plugin);
+    for (uint32_t index : o.mesh_faces)
+      if (index >= l.mesh_vertex_count)
+        throw Error("plugin " + plugin + ": landmark " + std::to_string(o.track_id) + " has a mesh face index " +
+                    std::to_string(index) + " past its " + std::to_string(l.mesh_vertex_count) + " vertices");
+    copy.push_back(std::move(o));
+  }
+  return copy;
+}
 }  // namespace
+
+Landmarks ReconstructorInstance::reconstruct(const beslam_keyframe& keyframe, const beslam_frame& frame,
+                                             const std::vector<beslam_box3d>& boxes, const beslam_image_view& mask) {
+  beslam_box_list list{boxes.data(), static_cast<uint32_t>(boxes.size()), sizeof(beslam_box3d)};
+  beslam_landmark_list out{};
+  check(table<beslam_reconstructor_v1>().reconstruct(handle_, &keyframe, &frame, &list, &mask, &out), "reconstruct");
+  return copyLandmarks(out, plugin().id);
+}
+
+Landmarks ReconstructorInstance::finish() {
+  const auto finish = table<beslam_reconstructor_v1>().finish;
+  if (finish == nullptr) return {};  // an ABI 1.2 plugin
+  beslam_landmark_list out{};
+  check(finish(handle_, &out), "finish");
+  return copyLandmarks(out, plugin().id);
+}
 
 std::optional<Eigen::Isometry3d> BackendInstance::predictPose(const beslam_frame& frame) {
   beslam_pose pose{};
@@ -160,8 +198,17 @@ TrackOutput BackendInstance::track(const beslam_frame& frame, const beslam_image
     for (uint32_t i = 0; i < out.result.keypoint_count; ++i)
       std::memcpy(&out.keypoints[i], bytes + size_t(i) * out.result.keypoint_size, sizeof(beslam_keypoint));
   }
+  if (out.result.keyframe_points && out.result.keyframe_point_size >= sizeof(beslam_keyframe_point)) {
+    const auto* bytes = reinterpret_cast<const uint8_t*>(out.result.keyframe_points);
+    out.keyframe_points.resize(out.result.keyframe_point_count);
+    for (uint32_t i = 0; i < out.result.keyframe_point_count; ++i)
+      std::memcpy(&out.keyframe_points[i], bytes + size_t(i) * out.result.keyframe_point_size,
+                  sizeof(beslam_keyframe_point));
+  }
   out.result.keypoints = nullptr;
   out.result.keypoint_count = 0;
+  out.result.keyframe_points = nullptr;
+  out.result.keyframe_point_count = 0;
   out.result.stage_times = nullptr;  // plugin memory: not to be kept
   out.result.stage_count = 0;
   out.result.counters = nullptr;
@@ -170,8 +217,29 @@ TrackOutput BackendInstance::track(const beslam_frame& frame, const beslam_image
 }
 
 void BackendInstance::addLandmarks(const Landmarks& landmarks) {
-  beslam_landmark_list list{landmarks.landmarks.data(), static_cast<uint32_t>(landmarks.landmarks.size()),
-                            sizeof(beslam_object_landmark)};
+  std::vector<beslam_object_landmark> views;  // C views of the host's copies, for this call only
+  for (const ObjectLandmark& o : landmarks) {
+    beslam_object_landmark l{};
+    l.struct_size = sizeof(l);
+    l.track_id = o.track_id;
+    l.class_id = o.class_id;
+    l.confidence = o.confidence;
+    l.T_world_object = toPose(o.T_world_object);
+    for (int i = 0; i < 3; ++i) l.scale[i] = o.size[i];
+    l.shape_code = o.shape_code.empty() ? nullptr : o.shape_code.data();
+    l.shape_code_size = static_cast<uint32_t>(o.shape_code.size());
+    l.surface_points = o.surface_points.empty() ? nullptr : o.surface_points.data();
+    l.surface_point_count = o.surface_points.size() / 3;
+    l.flags = o.flags;
+    l.keyframes = o.keyframes;
+    l.cost = o.cost;
+    l.mesh_vertices = o.mesh_vertices.empty() ? nullptr : o.mesh_vertices.data();
+    l.mesh_vertex_count = static_cast<uint32_t>(o.mesh_vertices.size() / 3);
+    l.mesh_faces = o.mesh_faces.empty() ? nullptr : o.mesh_faces.data();
+    l.mesh_face_count = static_cast<uint32_t>(o.mesh_faces.size() / 3);
+    views.push_back(l);
+  }
+  beslam_landmark_list list{views.data(), static_cast<uint32_t>(views.size()), sizeof(beslam_object_landmark)};
   check(table<beslam_backend_v1>().add_landmarks(handle_, &list), "add_landmarks");
 }
 

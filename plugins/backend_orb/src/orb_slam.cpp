@@ -340,6 +340,13 @@ struct OrbSlam::Impl {
     }
     result.stage_ms.emplace_back("tracking_total", msSince(t_start));
 
+    if (result.is_keyframe)  // mapping is idle: the new keyframe's points are still as tracking left them
+      for (const auto& [kf, initial] : pending)
+        if (kf->id == result.keyframe_id)
+          for (size_t i = 0; i < kf->size(); ++i)
+            if (const MapPoint* mp = kf->points[i]; mp && !mp->bad)
+              result.keyframe_points.push_back({mp->id, mp->position, kf->keypoint(i).pt.x, kf->keypoint(i).pt.y,
+                                                kf->features->labels[i], mp->numObservations()});
     auto jobs = std::move(pending);
     pending.clear();
     if (options.threaded_mapping) {

@@ -200,6 +200,9 @@ class OrbBackend : public beslam::sdk::Backend {
     for (const auto& k : r.keypoints)
       out.keypoints.push_back(
           {k.x, k.y, k.label, static_cast<uint8_t>(k.matched ? BESLAM_KEYPOINT_MATCHED : 0u), k.octave});
+    out.keyframe_points.reserve(r.keyframe_points.size());
+    for (const auto& p : r.keyframe_points)
+      out.keyframe_points.push_back({p.id, p.p_world, Eigen::Vector2f(p.x, p.y), p.label, p.observations});
     return out;
   }
 

@@ -50,6 +50,12 @@ typedef struct beslam_track_result {
   const beslam_keypoint* keypoints;
   uint32_t keypoint_count;
   uint32_t keypoint_size;
+  /* ABI 1.3. When is_keyframe: the map points the new keyframe observes (NULL otherwise or from older
+   * backends), handed to the reconstructor. Instance-owned until its next call; keyframe_point_size is
+   * sizeof(beslam_keyframe_point) as the plugin was built. */
+  const beslam_keyframe_point* keyframe_points;
+  uint32_t keyframe_point_count;
+  uint32_t keyframe_point_size;
 } beslam_track_result;
 
 #define BESLAM_TRAJECTORY_FINAL 0     /* every tracked frame, relative to its keyframe after optimisation */

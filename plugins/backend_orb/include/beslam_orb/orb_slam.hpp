@@ -152,6 +152,15 @@ struct TrackResult {
     uint8_t octave = 0;
   };
   std::vector<Keypoint> keypoints;
+  // When is_keyframe: the map points the new keyframe observes (for a reconstructor).
+  struct ObservedPoint {
+    int64_t id = -1;
+    Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
+    float x = 0, y = 0;  // pixel of the keypoint it was matched at
+    uint16_t label = 0;  // mask label under it
+    int observations = 0;
+  };
+  std::vector<ObservedPoint> keyframe_points;
 };
 
 struct FramePose {

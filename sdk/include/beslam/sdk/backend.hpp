@@ -25,6 +25,8 @@ struct TrackResult {
   std::vector<std::pair<std::string, double>> counters;
   // The frame's features (ABI 1.2), for drawing: pixel, mask label, BESLAM_KEYPOINT_* flags, octave.
   std::vector<beslam_keypoint> keypoints;
+  // When is_keyframe (ABI 1.3): the map points the new keyframe observes, for the reconstructor.
+  std::vector<KeyframePoint> keyframe_points;
 };
 
 struct TrajectoryEntry {
@@ -51,6 +53,7 @@ class Backend : public detail::Kind<Backend, BESLAM_KIND_BACKEND> {
     detail::NamedValues<beslam_stage_time> stages;
     detail::NamedValues<beslam_named_value> counters;
     std::vector<beslam_keypoint> keypoints;
+    std::vector<beslam_keyframe_point> keyframe_points;
     std::vector<beslam_trajectory_entry> trajectory;
     std::vector<beslam_map_point> points;
   } abi_;

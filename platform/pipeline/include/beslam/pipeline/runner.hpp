@@ -65,6 +65,8 @@ struct RunSummary {
   // Sums of the backend's per-frame counters ("features_static", "tracked_static", ...).
   std::vector<std::pair<std::string, double>> backend_counters;
   int64_t map_points = 0, map_points_static = 0;  // final map; on static objects (trusted)
+  // Objects the reconstructor left at the end (objects.json) and how many have a mesh; -1: no reconstructor.
+  int64_t objects_reconstructed = -1, objects_with_mesh = 0;
 };
 
 // Runs a loaded and resolved pipeline (resolvePlugins). Throws beslam::Error (naming the file or plugin)

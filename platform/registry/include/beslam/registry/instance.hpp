@@ -72,23 +72,39 @@ class MaskGeneratorInstance : public Instance {
   void generate(const beslam_frame& frame, const std::vector<beslam_box3d>& boxes, beslam_mask_buffer& mask);
 };
 
-struct Landmarks {  // a copy of what the reconstructor returned, owning its arrays
-  std::vector<beslam_object_landmark> landmarks;
-  std::vector<std::vector<float>> shape_codes, surface_points;
+// One object a reconstructor returned, owned by the host (no pointer into plugin memory or into itself).
+struct ObjectLandmark {
+  int32_t track_id = -1;
+  int32_t class_id = 0;
+  float confidence = 0;
+  uint32_t flags = 0;  // BESLAM_LANDMARK_*
+  int32_t keyframes = 0;
+  double cost = 0;
+  Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();  // x heading, y left, z up
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();                    // length, width, height
+  std::vector<float> shape_code;
+  std::vector<float> surface_points;  // x y z triples, object frame
+  std::vector<float> mesh_vertices;   // x y z triples, object frame
+  std::vector<uint32_t> mesh_faces;   // index triples
+  bool removed() const { return flags & BESLAM_LANDMARK_REMOVED; }
 };
+using Landmarks = std::vector<ObjectLandmark>;
 
 class ReconstructorInstance : public Instance {
  public:
   using Instance::Instance;
   Landmarks reconstruct(const beslam_keyframe& keyframe, const beslam_frame& frame,
                         const std::vector<beslam_box3d>& boxes, const beslam_image_view& mask);
+  // ABI 1.3: the last updates of the run; empty from a reconstructor without finish().
+  Landmarks finish();
 };
 
 struct TrackOutput {
   beslam_track_result result{};  // stage_times and counters cleared (plugin memory): read the copies below
   std::vector<std::pair<std::string, double>> stage_ms;
   std::vector<std::pair<std::string, double>> counters;
-  std::vector<beslam_keypoint> keypoints;  // ABI 1.2 (empty from older backends)
+  std::vector<beslam_keypoint> keypoints;              // ABI 1.2 (empty from older backends)
+  std::vector<beslam_keyframe_point> keyframe_points;  // ABI 1.3: what a new keyframe observes
   bool worldIsMetric() const { return result.world_scale == BESLAM_WORLD_SCALE_METRIC; }
 };
 

@@ -40,6 +40,11 @@ const void* table(Tag<Impl>, const Backend*) {
           c.keypoints = abi.keypoints.empty() ? nullptr : abi.keypoints.data();
           c.keypoint_count = static_cast<uint32_t>(abi.keypoints.size());
           c.keypoint_size = sizeof(beslam_keypoint);
+          abi.keyframe_points.clear();
+          for (const KeyframePoint& p : r.keyframe_points) abi.keyframe_points.push_back(toC(p));
+          c.keyframe_points = abi.keyframe_points.empty() ? nullptr : abi.keyframe_points.data();
+          c.keyframe_point_count = static_cast<uint32_t>(abi.keyframe_points.size());
+          c.keyframe_point_size = sizeof(beslam_keyframe_point);
           std::memcpy(result, &c, std::min<size_t>(result->struct_size ? result->struct_size : sizeof(c), sizeof(c)));
         });
       },

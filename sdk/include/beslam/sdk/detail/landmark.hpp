@@ -6,7 +6,23 @@ namespace beslam::sdk {
 inline Keyframe toKeyframe(const beslam_keyframe& kf) {
   beslam_keyframe k{};
   std::memcpy(&k, &kf, std::min<size_t>(kf.struct_size, sizeof(k)));
-  return {k.id, k.frame_index, k.timestamp, toIsometry(k.T_world_cam), k.world_scale == BESLAM_WORLD_SCALE_METRIC};
+  Keyframe out{k.id, k.frame_index, k.timestamp, toIsometry(k.T_world_cam), k.world_scale == BESLAM_WORLD_SCALE_METRIC,
+               {}};
+  if (k.points && k.point_size >= sizeof(beslam_keyframe_point))
+    for (const beslam_keyframe_point& p : copyArray(k.points, k.point_count, k.point_size))
+      out.points.push_back({p.id, Eigen::Vector3d(p.p_world[0], p.p_world[1], p.p_world[2]), Eigen::Vector2f(p.x, p.y),
+                            p.label, p.observations});
+  return out;
+}
+
+inline beslam_keyframe_point toC(const KeyframePoint& p) {
+  beslam_keyframe_point c{};
+  c.id = p.id;
+  for (int i = 0; i < 3; ++i) c.p_world[i] = p.p_world[i];
+  c.x = p.pixel.x(), c.y = p.pixel.y();
+  c.label = p.label;
+  c.observations = p.observations;
+  return c;
 }
 
 inline beslam_keyframe toC(const Keyframe& kf) {
@@ -36,6 +52,13 @@ inline std::vector<beslam_object_landmark> toC(const std::vector<Landmark>& land
     c.shape_code_size = static_cast<uint32_t>(l.shape_code.size());
     c.surface_points = l.surface_points.empty() ? nullptr : l.surface_points.data();
     c.surface_point_count = l.surface_points.size() / 3;
+    c.flags = l.removed ? BESLAM_LANDMARK_REMOVED : 0u;
+    c.keyframes = l.keyframes;
+    c.cost = l.cost;
+    c.mesh_vertices = l.mesh_vertices.empty() ? nullptr : l.mesh_vertices.data();
+    c.mesh_vertex_count = static_cast<uint32_t>(l.mesh_vertices.size() / 3);
+    c.mesh_faces = l.mesh_faces.empty() ? nullptr : l.mesh_faces.data();
+    c.mesh_face_count = static_cast<uint32_t>(l.mesh_faces.size() / 3);
     out.push_back(c);
   }
   return out;
@@ -54,6 +77,11 @@ inline std::vector<Landmark> fromC(const beslam_landmark_list* list) {
     l.scale = Eigen::Vector3d(c.scale[0], c.scale[1], c.scale[2]);
     if (c.shape_code) l.shape_code.assign(c.shape_code, c.shape_code + c.shape_code_size);
     if (c.surface_points) l.surface_points.assign(c.surface_points, c.surface_points + 3 * c.surface_point_count);
+    l.removed = c.flags & BESLAM_LANDMARK_REMOVED;
+    l.keyframes = c.keyframes;
+    l.cost = c.cost;
+    if (c.mesh_vertices) l.mesh_vertices.assign(c.mesh_vertices, c.mesh_vertices + 3 * size_t(c.mesh_vertex_count));
+    if (c.mesh_faces) l.mesh_faces.assign(c.mesh_faces, c.mesh_faces + 3 * size_t(c.mesh_face_count));
     out.push_back(std::move(l));
   }
   return out;

@@ -18,6 +18,17 @@ const void* table(Tag<Impl>, const Reconstructor*) {
           out->count = static_cast<uint32_t>(abi.c_landmarks.size());
           out->element_size = sizeof(beslam_object_landmark);
         });
+      },
+      [](void* instance, beslam_landmark_list* out) -> beslam_status {
+        return call<Impl, Reconstructor>(instance, "finish", [&](Reconstructor& r) {
+          require("finish", out);
+          auto& abi = Access::buffers(r);
+          abi.landmarks = r.finish();
+          abi.c_landmarks = toC(abi.landmarks);
+          out->landmarks = abi.c_landmarks.data();
+          out->count = static_cast<uint32_t>(abi.c_landmarks.size());
+          out->element_size = sizeof(beslam_object_landmark);
+        });
       });
 }
 

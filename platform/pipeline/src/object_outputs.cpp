@@ -1,0 +1,114 @@
+#include "object_outputs.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <ostream>
+
+#include "beslam/common/error.hpp"
+#include "beslam/common/file_io.hpp"
+#include "beslam/formats/geometry.hpp"
+
+namespace fs = std::filesystem;
+
+namespace beslam::pipeline::detail {
+
+namespace {
+
+std::string meshName(int32_t track_id) {
+  std::string digits = std::to_string(track_id);
+  if (digits.size() < 4) digits.insert(0, 4 - digits.size(), '0');
+  return "objects/object_" + digits + ".ply";
+}
+
+// The mesh's vertices in the world frame.
+std::vector<Eigen::Vector3d> worldVertices(const registry::ObjectLandmark& o) {
+  std::vector<Eigen::Vector3d> out;
+  for (size_t i = 0; i + 2 < o.mesh_vertices.size(); i += 3)
+    out.push_back(o.T_world_object *
+                  Eigen::Vector3d(o.mesh_vertices[i], o.mesh_vertices[i + 1], o.mesh_vertices[i + 2]));
+  return out;
+}
+
+void checkLandmark(const std::string& path, const registry::ObjectLandmark& o) {
+  const std::string what = "object " + std::to_string(o.track_id);
+  if (!o.T_world_object.matrix().allFinite() || !o.size.allFinite()) throwAt(path, what + " has a non-finite pose or size");
+  const size_t vertices = o.mesh_vertices.size() / 3;
+  for (uint32_t index : o.mesh_faces)
+    if (index >= vertices)
+      throwAt(path, what + " has a mesh face index " + std::to_string(index) + " past its " + std::to_string(vertices) +
+                        " vertices");
+}
+
+void writeMeshPly(const std::string& path, const std::vector<Eigen::Vector3d>& vertices,
+                  const std::vector<uint32_t>& faces, const std::string& comment) {
+  writeFileAtomic(path, [&](std::ostream& out) {
+    out << "ply\nformat ascii 1.0\ncomment " << comment << "\n"
+        << "element vertex " << vertices.size() << "\nproperty float x\nproperty float y\nproperty float z\n"
+        << "element face " << faces.size() / 3 << "\nproperty list uchar int vertex_indices\nend_header\n";
+    out << std::setprecision(7);
+    for (const Eigen::Vector3d& v : vertices) out << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+    for (size_t i = 0; i + 2 < faces.size(); i += 3) out << "3 " << faces[i] << ' ' << faces[i + 1] << ' ' << faces[i + 2] << '\n';
+  });
+}
+
+}  // namespace
+
+void applyLandmarkUpdates(ObjectMap& objects, const registry::Landmarks& updates) {
+  for (const registry::ObjectLandmark& l : updates) {
+    if (l.removed())
+      objects.erase(l.track_id);
+    else
+      objects[l.track_id] = l;
+  }
+}
+
+nlohmann::json writeObjectOutputs(const std::string& out_dir, const ObjectMap& objects,
+                                  const std::vector<beslam_map_point>& points) {
+  const fs::path dir(out_dir);
+  const std::string json_path = (dir / "objects.json").string();
+  for (const auto& [id, o] : objects) checkLandmark(json_path, o);
+  nlohmann::json list = nlohmann::json::array();
+  size_t with_mesh = 0;
+  for (const auto& [id, o] : objects) {
+    nlohmann::json entry;
+    entry["id"] = list.size();
+    entry["track_id"] = o.track_id;
+    entry["class"] = formats::className(o.class_id);
+    entry["state"] = formats::motionName(BESLAM_MOTION_STATIC);  // a landmark is a static object; one that moved was removed
+    std::vector<double> T(16);
+    const Eigen::Matrix4d M = o.T_world_object.matrix();
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) T[r * 4 + c] = M(r, c);
+    entry["T_world_obj"] = T;
+    entry["size"] = {o.size.x(), o.size.y(), o.size.z()};
+    entry["shape_code"] = o.shape_code;
+    entry["keyframes"] = o.keyframes;
+    entry["cost"] = o.cost;
+    entry["confidence"] = o.confidence;
+    entry["mesh"] = nullptr;
+    if (!o.mesh_faces.empty()) {
+      fs::create_directories(dir / "objects");
+      writeMeshPly((dir / meshName(o.track_id)).string(), worldVertices(o), o.mesh_faces,
+                   "BE-SLAM object " + std::to_string(o.track_id) + " (world frame, metres)");
+      entry["mesh"] = meshName(o.track_id);
+      ++with_mesh;
+    }
+    list.push_back(entry);
+  }
+  writeFileAtomic(json_path, nlohmann::json{{"frame", "world"}, {"unit", "metre"}, {"objects", list}}.dump(2) + "\n");
+  if (with_mesh > 0) {  // map.ply: the map points, then every object's mesh (faces index into the one vertex list)
+    std::vector<Eigen::Vector3d> vertices;
+    std::vector<uint32_t> faces;
+    for (const auto& p : points) vertices.emplace_back(p.p_world[0], p.p_world[1], p.p_world[2]);
+    for (const auto& [id, o] : objects) {
+      const auto base = static_cast<uint32_t>(vertices.size());
+      for (const Eigen::Vector3d& v : worldVertices(o)) vertices.push_back(v);
+      for (uint32_t index : o.mesh_faces) faces.push_back(base + index);
+    }
+    writeMeshPly((dir / "map.ply").string(), vertices, faces, "BE-SLAM map points and object meshes (world frame)");
+  }
+  return {{"reconstructed", objects.size()}, {"with_mesh", with_mesh}, {"file", "objects.json"}};
+}
+
+}  // namespace beslam::pipeline::detail
