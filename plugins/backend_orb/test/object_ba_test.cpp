@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
+#include <limits>
 #include <random>
 
 #include "beslam_orb/orb_slam.hpp"
@@ -340,6 +342,19 @@ TEST(ObjectLandmarks, DropObjectRemovesTheLandmark) {
   const auto left = slam.objectLandmarks();
   ASSERT_EQ(left.size(), 1u);
   EXPECT_EQ(left[0].id, 8);
+}
+
+TEST(ObjectLandmarks, NonFiniteInputIsLeftOut) {
+  OrbSlam slam(kCam, Options{});
+  ObjectLandmark bad = carLandmark(7), partly = carLandmark(8);
+  bad.T_world_object.translation().x() = std::nan("");
+  const size_t samples = partly.points_object.size();
+  partly.points_object[3] = Eigen::Vector3d(std::numeric_limits<double>::infinity(), 0, 0);
+  slam.addObjectLandmarks({bad, partly});
+  const auto kept = slam.objectLandmarks();
+  ASSERT_EQ(kept.size(), 1u) << "a landmark without a finite pose is not kept";
+  EXPECT_EQ(kept[0].id, 8);
+  EXPECT_EQ(kept[0].points_object.size(), samples - 1) << "the non-finite sample is dropped";
 }
 
 TEST(ObjectLandmarks, SurviveAMapFileRoundTrip) {
