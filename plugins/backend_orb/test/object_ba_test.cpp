@@ -10,6 +10,7 @@
 #include <limits>
 #include <random>
 
+#include "beslam/formats/align.hpp"
 #include "beslam_orb/orb_slam.hpp"
 #include "features/scale_pyramid.hpp"
 #include "map/frame.hpp"
@@ -413,6 +414,100 @@ TEST(ObjectLandmarks, OffAndNonMetricRunsAreByteIdenticalToNoObjects) {
       EXPECT_EQ(t[i].T_world_cam.matrix(), reference[i].T_world_cam.matrix());
     }
   }
+}
+
+// The whole path on the rendered corridor with metric scale (camera 1.5 m over the floor): a 8 x 2.5 m
+// patch of the left wall labelled as parked object 7, its exact box in every frame, and, once the map is
+// metric, its landmark (samples of the patch) placed with the frame's tracked pose. With `ba` the
+// keyframes' boxes and the patch's map points enter local BA, the same with threaded mapping.
+TEST(ObjectLandmarks, EnterLocalBaOfAMetricCorridorRun) {
+  const test::CorridorWorld world;
+  const Camera cam = world.camera();
+  constexpr int kFrames = 40;
+  Eigen::Isometry3d T_gt_object = Eigen::Isometry3d::Identity();  // body x along the wall, z up
+  T_gt_object.linear() << 0, -1, 0, 0, 0, -1, 1, 0, 0;
+  T_gt_object.translation() = Eigen::Vector3d(-3, -0.25, 12);
+  const double y0 = -1.5, y1 = 1.0, z0 = 8, z1 = 16;
+  ObjectLandmark truth;
+  truth.id = 7;
+  truth.confidence = 1.0;
+  truth.dimensions = Eigen::Vector3d(z1 - z0, 0.2, y1 - y0);
+  for (double y = y0; y <= y1 + 1e-9; y += 0.1)
+    for (double z = z0; z <= z1 + 1e-9; z += 0.1)
+      truth.points_object.push_back(T_gt_object.inverse() * Eigen::Vector3d(-3, y, z));
+  std::vector<cv::Mat> images, masks;
+  for (int i = 0; i < kFrames; ++i) {
+    images.push_back(world.render(i));
+    cv::Mat mask(cam.height, cam.width, CV_16UC1, cv::Scalar(0));
+    const Eigen::Isometry3d T_wc = world.pose(i);
+    for (int v = 0; v < cam.height; ++v)
+      for (int u = 0; u < cam.width; ++u) {
+        const Eigen::Vector3d d = T_wc.linear() * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1);
+        if (d.x() >= -1e-9) continue;
+        const Eigen::Vector3d p = T_wc.translation() + d * ((-3 - T_wc.translation().x()) / d.x());
+        if (p.y() > y0 && p.y() < y1 && p.z() > z0 && p.z() < z1) mask.at<uint16_t>(v, u) = 1007;
+      }
+    masks.push_back(mask);
+  }
+  struct Run {
+    double ape = 0;
+    int max_factors = 0, landmarks = 0;
+    int64_t added_at = -1;
+    std::vector<ObjectLandmark> final;
+    Eigen::Isometry3d T_slam_gt = Eigen::Isometry3d::Identity();
+  };
+  auto run = [&](ObjectLandmarkMode mode, bool threaded) {
+    Options o;
+    o.threaded_mapping = threaded;
+    o.features = 1000;
+    o.metric_scale = true;
+    o.camera_height = 1.5;
+    o.object_landmarks = mode;
+    OrbSlam slam(cam, o);
+    Run out;
+    for (int i = 0; i < kFrames; ++i) {
+      ObjectBox box;
+      box.object_id = 7;
+      box.parked = true;
+      box.T_cam_box = world.pose(i).inverse() * T_gt_object;
+      box.T_cam_box.linear() = box.T_cam_box.linear() * objects::boxToBody().transpose();
+      box.size = Eigen::Vector3d(truth.dimensions.x(), truth.dimensions.z(), truth.dimensions.y());
+      const TrackResult r = slam.track(images[i], masks[i], 0.1 * i, i, {box});
+      out.max_factors = std::max(out.max_factors, r.object_factors);
+      out.landmarks = r.object_landmarks;
+      if (r.world_is_metric && r.state == TrackingState::Ok && out.added_at < 0) {
+        out.T_slam_gt = r.T_world_cam * world.pose(i).inverse();
+        ObjectLandmark l = truth;
+        l.T_world_object = out.T_slam_gt * T_gt_object;
+        slam.addObjectLandmarks({l});
+        out.added_at = i;
+      }
+    }
+    slam.finish();
+    std::vector<Eigen::Vector3d> est, gt;
+    for (const FramePose& p : slam.trajectory()) {
+      est.push_back(p.T_world_cam.translation());
+      gt.push_back(world.pose(static_cast<int>(p.frame_index)).translation());
+    }
+    out.ape = formats::positionError(est, gt).rmse;
+    out.final = slam.objectLandmarks();
+    return out;
+  };
+  const Run off = run(ObjectLandmarkMode::Off, false), ba = run(ObjectLandmarkMode::BA, false);
+  const Run threaded = run(ObjectLandmarkMode::BA, true);
+  std::printf(
+      "corridor, metric: landmark added at frame %ld (off) / %ld (ba); APE off %.4f m, ba %.4f m; "
+      "object factors per local BA up to %d\n",
+      static_cast<long>(off.added_at), static_cast<long>(ba.added_at), off.ape, ba.ape, ba.max_factors);
+  ASSERT_GE(ba.added_at, 0) << "the corridor run became metric";
+  EXPECT_EQ(off.max_factors, 0);
+  EXPECT_GT(ba.max_factors, 10);
+  EXPECT_EQ(ba.landmarks, 1);
+  ASSERT_EQ(ba.final.size(), 1u);
+  EXPECT_LT(ba.ape, 1.5 * off.ape + 0.02) << "objects do not spoil the run";
+  EXPECT_EQ(threaded.ape, ba.ape) << "threaded mapping gives the same run";
+  ASSERT_EQ(threaded.final.size(), 1u);
+  EXPECT_EQ(threaded.final[0].T_world_object.matrix(), ba.final[0].T_world_object.matrix());
 }
 
 }  // namespace

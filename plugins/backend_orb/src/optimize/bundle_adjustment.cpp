@@ -117,9 +117,11 @@ double solve(Problem& P, bool robust, int iterations, double chi2_threshold, boo
   }
   for (auto& [mp, x] : P.positions)
     if (problem.HasParameterBlock(x)) ordering->AddElementToGroup(x, 0);
+  // Object nodes in a group of their own after the poses: within a group Ceres orders blocks by address, and
+  // the nodes' array is allocated apart from the poses' (on the mapping thread's heap when threaded).
   if (P.objects)
     for (size_t i = 0; i < P.objects->entries.size(); ++i)
-      if (problem.HasParameterBlock(P.objects->node(i))) ordering->AddElementToGroup(P.objects->node(i), 1);
+      if (problem.HasParameterBlock(P.objects->node(i))) ordering->AddElementToGroup(P.objects->node(i), 2);
   for (KeyFrame* kf : P.fixed)
     if (problem.HasParameterBlock(P.poses[kf])) problem.SetParameterBlockConstant(P.poses[kf]);
   if (fix_origin_only || origin) {
