@@ -55,6 +55,14 @@ LocalMapperOptions mapperOptions(const Options& o) {
   m.ba.refine_iterations = o.local_ba_iterations_refine;
   m.ba.max_local_keyframes = o.local_ba_max_keyframes;
   m.ba.trusted_weight = o.static_object_weight;
+  m.ba.objects.enabled = o.object_landmarks != ObjectLandmarkMode::Off;
+  m.ba.objects.pose_weight = o.object_pose_weight;
+  m.ba.objects.surface_weight = o.object_surface_weight;
+  m.ba.objects.box_sigma = o.object_box_sigma;
+  m.ba.objects.box_sigma_per_m = o.object_box_sigma_per_m;
+  m.ba.objects.yaw_sigma = o.object_yaw_sigma_deg * M_PI / 180.0;
+  m.ba.objects.surface_sigma = o.object_surface_sigma;
+  m.ba.objects.surface_gate = o.object_surface_gate;
   m.ground.enabled = o.ground_prior || o.metric_scale;
   // A metric map knows the camera height itself, which a car's load and suspension change by a few percent:
   // a plane 10 % off it is not the road under the camera (a kerb, a wall's foot, a bare road's stray points).
@@ -102,6 +110,13 @@ bool Options::validate(std::string* error) const {
   if (!(metric_max_spread > 0)) return fail("metric_max_spread must be > 0");
   if (!(object_range_sigma > 0) || !(object_range_sigma_per_m >= 0))
     return fail("object_range_sigma must be > 0 and object_range_sigma_per_m >= 0");
+  if (!(object_pose_weight >= 0) || !(object_surface_weight >= 0))
+    return fail("object_pose_weight and object_surface_weight must be >= 0");
+  if (!(object_box_sigma > 0) || !(object_box_sigma_per_m >= 0) || !(object_yaw_sigma_deg > 0) ||
+      !(object_surface_sigma > 0) || !(object_surface_gate > 0))
+    return fail(
+        "object_box_sigma, object_yaw_sigma_deg, object_surface_sigma and object_surface_gate must be > 0, "
+        "object_box_sigma_per_m >= 0");
   if (local_ba_iterations_robust < 0 || local_ba_iterations_refine < 0) return fail("BA iterations must be >= 0");
   if (local_ba_max_keyframes < 0) return fail("local_ba_max_keyframes must be >= 0");
   if (init_min_parallax_deg <= 0) return fail("init_min_parallax_deg must be > 0");
@@ -121,7 +136,6 @@ struct OrbSlam::Impl {
   std::unique_ptr<LoopCloser> loop_closer;  // with a vocabulary and Options::loop_closure
   bool loop_pending = false;                // closed on the mapping side, not yet followed by the tracker
   int reported_object_rejections = 0;
-  std::vector<ObjectLandmark> landmarks;
   Statistics stats;
   ParkedCarScale parked_scale;
   bool object_scale_done = false;
@@ -177,7 +191,7 @@ struct OrbSlam::Impl {
       throw std::logic_error("OrbSlam::loadMap: only before the first frame (map file '" + path + "')");
     std::vector<ObjectLandmark> loaded;
     const MapFileInfo info = loadMapFile(path, mapFileInfo(), extractor.pyramid(), map, loaded);
-    landmarks = std::move(loaded);
+    for (const ObjectLandmark& l : loaded) map.objects().add(l, map.lastKeyFrameId());
     if (info.metric) {  // in metres already: the mapper keeps it so, the parked cars do not rescale it
       mapper.rescale(1.0, std::max(0L, map.lastKeyFrameId()));
       object_scale_done = true;
@@ -235,10 +249,15 @@ struct OrbSlam::Impl {
     const int budget = tracker.initialising() ? options.features * options.init_features_factor : options.features;
     auto features = extractor.extract(image, labels, budget);
     if (options.object_scale && options.metric_scale && !boxes.empty()) setObjectRanges(*features, boxes);
+    if (options.object_landmarks != ObjectLandmarkMode::Off)  // kept with a keyframe for its camera-object factors
+      for (const ObjectBox& b : boxes)
+        if (b.parked && b.object_id >= 0) features->object_boxes.push_back(b);
     const double extract_ms = msSince(t0);
     t0 = Clock::now();
     waitIdle();
     const double wait_ms = msSince(t0);
+    const int object_factors =
+        mapper.lastBundleAdjustment().object_box_factors + mapper.lastBundleAdjustment().object_surface_factors;
     // Mapping is idle here in both modes: a metric scale the mapper found is applied to everything at
     // once, before this frame is tracked (the same frame in the threaded and the inline mode).
     if (const auto s = mapper.takePendingScale()) becomeMetric(*s, index);
@@ -308,6 +327,8 @@ struct OrbSlam::Impl {
     result.features = feature_count;
     result.features_static = features_static;
     result.tracked_static = tracker.trackedOnStaticObjects();
+    result.object_landmarks = static_cast<int>(map.objects().size());
+    result.object_factors = object_factors;
     {
       const std::vector<bool> matched = tracker.matchedKeypoints(index);
       result.keypoints.reserve(features->size());
@@ -440,15 +461,18 @@ TrackResult OrbSlam::track(const cv::Mat& gray, const cv::Mat& label_mask, doubl
 void OrbSlam::finish() {
   impl_->waitIdle();
   KeyFrame* last = impl_->tracker.lastKeyFrame();
-  if (!impl_->options.localisation_only && last && !last->bad && impl_->map.numKeyFrames() > 2)
-    optimize::localBundleAdjustment(last, impl_->map, mapperOptions(impl_->options).ba);
+  if (!impl_->options.localisation_only && last && !last->bad && impl_->map.numKeyFrames() > 2) {
+    optimize::BundleAdjustmentOptions ba = mapperOptions(impl_->options).ba;
+    ba.objects.enabled = ba.objects.enabled && impl_->mapper.metric();  // as in local mapping
+    optimize::localBundleAdjustment(last, impl_->map, ba);
+  }
   impl_->releaseCulled();
   if (!impl_->options.save_map.empty()) saveMap(impl_->options.save_map);
 }
 
 void OrbSlam::saveMap(const std::string& path) const {
   impl_->waitIdle();
-  saveMapFile(path, impl_->map, impl_->mapFileInfo(), impl_->landmarks);
+  saveMapFile(path, impl_->map, impl_->mapFileInfo(), impl_->map.objects().landmarks());
 }
 
 void OrbSlam::loadMap(const std::string& path) { impl_->loadMap(path); }
@@ -494,23 +518,20 @@ std::vector<CloudPoint> OrbSlam::mapPoints() const {
 
 void OrbSlam::addObjectLandmarks(const std::vector<ObjectLandmark>& landmarks) {
   if (impl_->options.localisation_only) return;  // the loaded map's landmarks stay as they are
-  for (const ObjectLandmark& l : landmarks) {
-    bool replaced = false;
-    for (ObjectLandmark& mine : impl_->landmarks)
-      if (mine.id == l.id) {
-        mine = l;
-        replaced = true;
-      }
-    if (!replaced) impl_->landmarks.push_back(l);
-  }
+  impl_->waitIdle();                             // local BA reads and moves them
+  for (const ObjectLandmark& l : landmarks) impl_->map.objects().add(l, impl_->map.lastKeyFrameId());
 }
 
-std::vector<ObjectLandmark> OrbSlam::objectLandmarks() const { return impl_->landmarks; }
+std::vector<ObjectLandmark> OrbSlam::objectLandmarks() const {
+  impl_->waitIdle();
+  return impl_->map.objects().landmarks();
+}
 
 void OrbSlam::dropObject(int32_t object_id) {
   impl_->waitIdle();
   if (impl_->options.localisation_only) return;  // the map does not change
   impl_->stats.object_points_dropped += impl_->map.dropObjectPoints(object_id);
+  impl_->map.objects().erase(object_id, impl_->map.lastKeyFrameId());  // and with it its factors
 }
 
 Statistics OrbSlam::statistics() const {

@@ -56,6 +56,24 @@ const beslam::sdk::Settings<Options> kSettings{
             "std-dev (m) of a static-object point's range from its box"),
     setting(&Options::object_range_sigma_per_m, "object_range_sigma_per_m", "0.02", 0.0, 10.0,
             "std-dev added per metre of range"),
+    beslam::sdk::choice(&Options::object_landmarks, "object_landmarks", "off",
+                        {{"off", beslam::orb::ObjectLandmarkMode::Off}, {"ba", beslam::orb::ObjectLandmarkMode::BA}},
+                        "reconstructed objects (add_landmarks) in local BA: off (stored only) or ba (pose nodes with "
+                        "box and map-point-on-surface factors, metric maps only; docs/object-ba.md)"),
+    setting(&Options::object_pose_weight, "object_pose_weight", "1.0", 0.0, 1000.0,
+            "information multiplier of the camera-object (box) factors"),
+    setting(&Options::object_surface_weight, "object_surface_weight", "1.0", 0.0, 1000.0,
+            "information multiplier of the map-point-on-surface factors"),
+    setting(&Options::object_box_sigma, "object_box_sigma", "0.2", 0.001, 100.0,
+            "std-dev (m) of a car box's centre in a keyframe"),
+    setting(&Options::object_box_sigma_per_m, "object_box_sigma_per_m", "0.05", 0.0, 10.0,
+            "box centre std-dev added per metre of range"),
+    setting(&Options::object_yaw_sigma_deg, "object_yaw_sigma_deg", "10", 0.01, 180.0,
+            "std-dev (degrees) of a car box's heading"),
+    setting(&Options::object_surface_sigma, "object_surface_sigma", "0.1", 0.001, 100.0,
+            "std-dev (m) of a map point's distance to its object's nearest surface sample"),
+    setting(&Options::object_surface_gate, "object_surface_gate", "0.5", 0.001, 100.0,
+            "map points farther (m) than this from every surface sample of their object get no factor"),
     setting(&Options::threaded_mapping, "threaded_mapping", "false",
             "local mapping on its own thread (same results, overlaps the next frame)"),
     setting(&Options::seed, "seed", "42", 0, 2147483647.0, "seed of every random choice (RANSAC)"),
@@ -195,7 +213,9 @@ class OrbBackend : public beslam::sdk::Backend {
                     {"relocalisations", r.relocalised ? 1 : 0},
                     {"loop_closures", r.loop_closed ? 1 : 0},
                     {"loop_correction_m", r.loop_correction_m},
-                    {"loop_object_rejections", r.loop_object_rejections}};
+                    {"loop_object_rejections", r.loop_object_rejections},
+                    {"object_landmarks", r.object_landmarks},
+                    {"object_factors", r.object_factors}};
     out.keypoints.reserve(r.keypoints.size());
     for (const auto& k : r.keypoints)
       out.keypoints.push_back(
@@ -211,6 +231,7 @@ class OrbBackend : public beslam::sdk::Backend {
     for (const beslam::sdk::Landmark& l : landmarks) {
       beslam::orb::ObjectLandmark o;
       o.id = l.track_id;
+      o.confidence = l.confidence;
       o.T_world_object = l.T_world_object;
       o.dimensions = l.scale;
       for (size_t i = 0; i + 2 < l.surface_points.size(); i += 3)

@@ -182,9 +182,9 @@ TEST_F(MapFileTest, TruncatedFileIsRefused) {
 
 TEST_F(MapFileTest, OtherFormatVersionIsRefused) {
   std::string bytes = readBytes(path("map.bin"));
-  bytes[8] = 2;  // the u32 version after the 8-byte magic
-  writeBytes(path("v2.bin"), bytes);
-  expectOneError(loadError(path("v2.bin")), path("v2.bin"), "format version 2; this build reads version 1");
+  bytes[8] = 3;  // the u32 version after the 8-byte magic
+  writeBytes(path("v3.bin"), bytes);
+  expectOneError(loadError(path("v3.bin")), path("v3.bin"), "format version 3; this build reads versions 1 to 2");
 }
 
 TEST_F(MapFileTest, OtherCameraIsRefused) {

@@ -54,6 +54,7 @@ std::vector<beslam_config_value> defaults(const beslam_plugin_descriptor* d, con
     c.type = f.type;
     const std::string def = f.default_value ? f.default_value : "";
     c.number = def == "true" ? 1.0 : def == "false" ? 0.0 : std::strtod(def.c_str(), nullptr);
+    if (f.type == BESLAM_CONFIG_STRING && !def.empty() && def[0] != '"') c.text = f.default_value;  // a choice
     if (key && std::strcmp(key, f.key) == 0) c.number = value;
     v.push_back(c);
   }

@@ -34,6 +34,10 @@ struct Camera {
   double fx = 0, fy = 0, cx = 0, cy = 0;
 };
 
+// Object landmarks (addObjectLandmarks) in the optimisation: Off stores them only; BA adds an object-pose node
+// per landmark with camera-object and map-point-on-surface factors to local BA (docs/object-ba.md).
+enum class ObjectLandmarkMode { Off, BA };
+
 // Every tunable with its default. validate() names the first violated constraint.
 struct Options {
   // Features (features/).
@@ -100,6 +104,15 @@ struct Options {
   bool object_scale = true;
   double object_range_sigma = 0.15;
   double object_range_sigma_per_m = 0.02;
+  // Object landmarks in local BA (objects/object_factors.hpp, docs/object-ba.md). Off by default until measured.
+  ObjectLandmarkMode object_landmarks = ObjectLandmarkMode::Off;
+  double object_pose_weight = 1.0;       // information multiplier of the camera-object (box) factors
+  double object_surface_weight = 1.0;    // information multiplier of the map-point-on-surface factors
+  double object_box_sigma = 0.2;         // box centre std-dev (m) ...
+  double object_box_sigma_per_m = 0.05;  // ... plus this per metre of range
+  double object_yaw_sigma_deg = 10.0;    // box heading std-dev
+  double object_surface_sigma = 0.1;     // map point to nearest surface sample std-dev (m)
+  double object_surface_gate = 0.5;      // points farther than this (m) from every sample get no factor
   bool threaded_mapping = false;
   // Initialisation.
   int ransac_iterations = 200;
@@ -144,6 +157,8 @@ struct TrackResult {
   bool loop_closed = false;        // a loop was closed before this frame was tracked (the map moved)
   double loop_correction_m = 0;    // then: how far the loop keyframe's centre moved
   int loop_object_rejections = 0;  // loop candidates the BEV object check refused since the last frame
+  int object_landmarks = 0;        // object landmarks in the map
+  int object_factors = 0;          // object factors (box and surface) in the last local BA before this frame
   // The frame's keypoints: pixel, mask label under it, matched to a map point (pose inlier), octave.
   struct Keypoint {
     float x = 0, y = 0;
@@ -180,8 +195,9 @@ struct CloudPoint {
 
 // An object reconstructed by another module (a parked car), in world coordinates.
 struct ObjectLandmark {
-  int64_t id = 0;  // label value on the mask is 1000 + id
-  Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();
+  int64_t id = 0;           // label value on the mask is 1000 + id
+  double confidence = 1.0;  // the reconstruction's, in (0, 1]: scales the information of its factors
+  Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();  // body x forward, y left, z up; box centre
   Eigen::Vector3d dimensions = Eigen::Vector3d::Zero();
   std::vector<Eigen::Vector3d> points_object;  // surface samples in the object frame
 };
@@ -237,12 +253,13 @@ class OrbSlam {
   std::vector<FramePose> keyframes() const;
   std::vector<CloudPoint> mapPoints() const;
 
-  // Landmarks from a reconstructor: kept (same id replaces) and returned by objectLandmarks(); they do
-  // not enter the optimisation yet. Trust comes from the mask: features on label 1000 + id.
+  // Landmarks from a reconstructor: kept (same id replaces) and returned by objectLandmarks() (their poses as
+  // local BA refined them). With Options::object_landmarks = BA they enter local BA (docs/object-ba.md);
+  // off, they are only stored. Trust comes from the mask: features on label 1000 + id.
   void addObjectLandmarks(const std::vector<ObjectLandmark>& landmarks);
   std::vector<ObjectLandmark> objectLandmarks() const;
 
-  // Object `object_id` (mask label 1000 + id) started to move: its map points leave the map.
+  // Object `object_id` (mask label 1000 + id) started to move: its map points and its landmark leave the map.
   void dropObject(int32_t object_id);
 
   Statistics statistics() const;

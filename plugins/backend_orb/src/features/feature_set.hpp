@@ -6,6 +6,8 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "beslam_orb/orb_slam.hpp"
+
 namespace beslam::orb {
 
 class FeatureGrid {
@@ -40,6 +42,9 @@ struct FeatureSet {
   // Metres from the camera to where the keypoint's ray enters the metric 3D box of the static object it
   // lies on (OrbSlam::ObjectBox), 0 where there is none. Empty when the frame had no boxes.
   std::vector<float> object_range;
+  // The frame's boxes of parked (static) tracked cars, kept with the keyframe for the camera-object factors
+  // of local BA (objects/object_factors.hpp). Filled only when object landmarks are on.
+  std::vector<ObjectBox> object_boxes;
   FeatureGrid grid;
 
   size_t size() const { return keypoints.size(); }

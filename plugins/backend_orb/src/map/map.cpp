@@ -83,6 +83,7 @@ void Map::clear() {
   owned_points_.clear();
   owned_keyframes_.clear();
   origin_ = nullptr;
+  objects_.clear();
 }
 
 KeyFrame* Map::keyFrameFrom(long id) const {
@@ -100,6 +101,7 @@ void Map::rescale(double s) {
     mp->min_distance *= static_cast<float>(s);
     mp->max_distance *= static_cast<float>(s);
   }
+  objects_.rescale(s, Eigen::Vector3d::Zero(), -1);
 }
 
 void Map::rescaleFrom(long first_kf_id, double s, const Eigen::Vector3d& c) {
@@ -115,6 +117,7 @@ void Map::rescaleFrom(long first_kf_id, double s, const Eigen::Vector3d& c) {
     mp->min_distance *= static_cast<float>(s);
     mp->max_distance *= static_cast<float>(s);
   }
+  objects_.rescale(s, c, first_kf_id);
 }
 
 int Map::dropObjectPoints(int32_t object_id) {

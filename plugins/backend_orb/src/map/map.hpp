@@ -13,6 +13,7 @@
 #include "map/id_less.hpp"
 #include "map/keyframe.hpp"
 #include "map/map_point.hpp"
+#include "objects/object_store.hpp"
 
 namespace beslam::orb {
 
@@ -44,6 +45,9 @@ class Map {
   void rescaleFrom(long first_kf_id, double s, const Eigen::Vector3d& c);
   // Marks bad every live map point made on static object `object_id` (it started to move).
   int dropObjectPoints(int32_t object_id);
+  // Object landmarks (reconstructed parked cars), world frame: rescaled with the map, cleared with it.
+  objects::ObjectStore& objects() { return objects_; }
+  const objects::ObjectStore& objects() const { return objects_; }
 
   const std::set<KeyFrame*, IdLess<KeyFrame>>& keyframes() const { return keyframes_; }
   const std::set<MapPoint*, IdLess<MapPoint>>& points() const { return points_; }
@@ -66,6 +70,7 @@ class Map {
   long next_kf_id_ = 0, next_point_id_ = 0;
   int culled_ = 0;
   KeyFrame* origin_ = nullptr;
+  objects::ObjectStore objects_;
 };
 
 }  // namespace beslam::orb

@@ -332,6 +332,7 @@ void saveMapFile(const std::string& path, const Map& map, const MapFileInfo& inf
   w.u32(static_cast<uint32_t>(landmarks.size()));
   for (const ObjectLandmark& l : landmarks) {
     w.i64(l.id);
+    w.f64(l.confidence);
     w.pose(l.T_world_object);
     w.vec3(l.dimensions);
     w.u32(static_cast<uint32_t>(l.points_object.size()));
@@ -365,9 +366,9 @@ MapFileInfo loadMapFile(const std::string& path, const MapFileInfo& expected, co
     fail(path, "truncated: " + std::to_string(data.size()) + " bytes, no complete header");
   Reader header(data.data() + sizeof(kMagic), kHeaderBytes - sizeof(kMagic));
   const uint32_t version = header.u32();
-  if (version != kMapFileVersion)
-    fail(path, "format version " + std::to_string(version) + "; this build reads version " +
-                   std::to_string(kMapFileVersion) + " only");
+  if (version < 1 || version > kMapFileVersion)
+    fail(path, "format version " + std::to_string(version) + "; this build reads versions 1 to " +
+                   std::to_string(kMapFileVersion));
   const uint64_t payload_size = header.u64();
   const uint64_t expected_size = kHeaderBytes + payload_size + kTrailerBytes;
   if (payload_size > data.size() || data.size() != expected_size)
@@ -487,10 +488,11 @@ MapFileInfo loadMapFile(const std::string& path, const MapFileInfo& expected, co
       }
     }
 
-    const uint32_t n_objects = r.count(kMaxLandmarks, 8 + 8 * 15 + 4, "object landmark count");
+    const uint32_t n_objects = r.count(kMaxLandmarks, 8 + (version >= 2 ? 8 : 0) + 8 * 15 + 4, "object landmark count");
     objects.resize(n_objects);
     for (ObjectLandmark& o : objects) {
       o.id = r.i64();
+      o.confidence = version >= 2 ? r.finite("object confidence") : 1.0;  // version 1 had none
       o.T_world_object = r.pose("object pose");
       o.dimensions = r.vec3("object size");
       const uint32_t n = r.count(kMaxSurfacePoints, 24, "object surface point count");

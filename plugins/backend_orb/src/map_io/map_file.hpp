@@ -22,7 +22,8 @@ namespace beslam::orb {
 
 class Map;
 
-constexpr uint32_t kMapFileVersion = 1;
+// 2: object landmarks carry their confidence (version 1 files still load, with confidence 1).
+constexpr uint32_t kMapFileVersion = 2;
 
 // What a map file records besides the map, and what loading checks it against.
 struct MapFileInfo {

@@ -58,6 +58,8 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
       ba.object_range_sigma = options_.object_range_sigma;
       ba.object_range_sigma_per_m = options_.object_range_sigma_per_m;
     }
+    // Object landmarks are metric (boxes, shapes): they enter only a metric map.
+    ba.objects.enabled = options_.ba.objects.enabled && metric_;
     // Once the parked cars' boxes gave the scale, their range priors hold it; the ground prior would pull it
     // towards the road fits, whose biases (bare roads, kerbs) fight the direct measurement.
     const bool ground_prior = options_.ground.enabled && !object_scaled_;

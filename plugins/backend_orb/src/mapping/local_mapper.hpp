@@ -106,6 +106,7 @@ class LocalMapper {
   // Timings (ms) of the last processKeyFrame, by stage.
   const std::vector<std::pair<std::string, double>>& lastTimings() const { return timings_; }
   int lastNewPoints() const { return last_new_points_; }
+  const optimize::BundleAdjustmentReport& lastBundleAdjustment() const { return last_ba_; }
 
   // Stages, public for tests.
   void registerKeyFrame(KeyFrame* kf);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <set>
 #include <vector>
 
 #include "map/keyframe.hpp"
@@ -43,7 +44,8 @@ struct Problem {
     std::unique_ptr<ceres::CostFunction> cost;
   };
   std::vector<GroundEdge> ground_edges;
-  std::vector<GroundEdge> range_edges;  // ObjectRangeCost, same shape
+  std::vector<GroundEdge> range_edges;              // ObjectRangeCost, same shape
+  std::unique_ptr<objects::ObjectProblem> objects;  // object landmarks' nodes and factors (or none)
 
   void allocate() {
     std::vector<KeyFrame*> kfs(moving);
@@ -97,6 +99,13 @@ double solve(Problem& P, bool robust, int iterations, double chi2_threshold, boo
     for (auto& g : *edges)
       if (problem.HasParameterBlock(g.pose) && problem.HasParameterBlock(g.point))
         problem.AddResidualBlock(g.cost.get(), &ground_huber, g.pose, g.point);
+  std::vector<std::unique_ptr<ceres::HuberLoss>> object_losses;
+  if (P.objects)
+    for (auto& f : P.objects->factors) {
+      if (!problem.HasParameterBlock(f.blocks[0])) continue;  // its point or keyframe has no edge left
+      object_losses.push_back(std::make_unique<ceres::HuberLoss>(f.huber));
+      problem.AddResidualBlock(f.cost.get(), object_losses.back().get(), f.blocks);
+    }
   // Points are eliminated first (Schur complement on the cameras).
   auto* ordering = new ceres::ParameterBlockOrdering;
   int n_poses = 0;
@@ -108,6 +117,11 @@ double solve(Problem& P, bool robust, int iterations, double chi2_threshold, boo
   }
   for (auto& [mp, x] : P.positions)
     if (problem.HasParameterBlock(x)) ordering->AddElementToGroup(x, 0);
+  // Object nodes in a group of their own after the poses: within a group Ceres orders blocks by address, and
+  // the nodes' array is allocated apart from the poses' (on the mapping thread's heap when threaded).
+  if (P.objects)
+    for (size_t i = 0; i < P.objects->entries.size(); ++i)
+      if (problem.HasParameterBlock(P.objects->node(i))) ordering->AddElementToGroup(P.objects->node(i), 2);
   for (KeyFrame* kf : P.fixed)
     if (problem.HasParameterBlock(P.poses[kf])) problem.SetParameterBlockConstant(P.poses[kf]);
   if (fix_origin_only || origin) {
@@ -152,6 +166,7 @@ void addEdges(Problem& P, double chi2_threshold, double trusted_weight) {
 
 void writeBack(Problem& P) {
   for (KeyFrame* kf : P.moving) kf->T_cw = paramsToPose(P.poses[kf]);
+  if (P.objects) P.objects->writeBack();
   for (MapPoint* mp : P.points) {
     if (mp->bad) continue;
     const double* x = P.positions[mp];
@@ -225,6 +240,13 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   addEdges(P, options.chi2_threshold, options.trusted_weight);
   if (ground && ground->reference && ground->reference->ready()) addGroundEdges(P, *ground, &report);
   if (options.object_range_sigma > 0) addObjectRangeEdges(P, options, &report);
+  if (options.objects.enabled && map.objects().size() > 0) {
+    const std::set<const KeyFrame*> moving(P.moving.begin(), P.moving.end());
+    P.objects = objects::buildObjectProblem(map.objects(), P.poses, moving, P.positions, options.objects);
+    report.object_nodes = static_cast<int>(P.objects->entries.size());
+    report.object_box_factors = P.objects->box_factors;
+    report.object_surface_factors = P.objects->surface_factors;
+  }
   report.keyframes = static_cast<int>(P.moving.size());
   report.fixed_keyframes = static_cast<int>(P.fixed.size());
   report.points = static_cast<int>(P.points.size());

@@ -7,6 +7,7 @@
 #include <atomic>
 
 #include "ground/ground_plane.hpp"
+#include "objects/object_ba.hpp"
 
 namespace beslam::orb {
 class KeyFrame;
@@ -25,11 +26,14 @@ struct BundleAdjustmentOptions {
   // sigma = object_range_sigma + object_range_sigma_per_m * range. Off while object_range_sigma is 0.
   double object_range_sigma = 0;
   double object_range_sigma_per_m = 0.02;
+  // Object landmarks of the map (Map::objects()) as 4-DoF nodes with box and surface factors (off by default).
+  objects::ObjectFactorOptions objects;
 };
 
 struct BundleAdjustmentReport {
   int keyframes = 0, fixed_keyframes = 0, points = 0, observations = 0, outliers_removed = 0;
   int ground_keyframes = 0, ground_residuals = 0, object_range_residuals = 0;
+  int object_nodes = 0, object_box_factors = 0, object_surface_factors = 0;
   double initial_cost = 0, final_cost = 0;
 };
 
