@@ -229,6 +229,10 @@ class OrbBackend : public beslam::sdk::Backend {
   void addLandmarks(const std::vector<beslam::sdk::Landmark>& landmarks) override {
     std::vector<beslam::orb::ObjectLandmark> mine;
     for (const beslam::sdk::Landmark& l : landmarks) {
+      if (l.removed) {  // the reconstructor ended it (it started to move): its landmark and points go
+        slam_.dropObject(l.track_id);
+        continue;
+      }
       beslam::orb::ObjectLandmark o;
       o.id = l.track_id;
       o.confidence = l.confidence;
