@@ -267,6 +267,10 @@ std::vector<Tri> buildCarMesh(CarShape shape, double length, double width, doubl
 namespace beslam::sim {
 using namespace detail;
 
+static_assert(static_cast<int>(CarShape::Wagon) == static_cast<int>(CarShapeClass::Wagon) &&
+                  static_cast<int>(CarShape::Van) == static_cast<int>(CarShapeClass::Van),
+              "CarShapeClass mirrors CarShape");
+
 const char* carShapeName(CarShapeClass shape) {
   static const char* kNames[] = {"sedan", "hatchback", "suv", "van", "wagon"};
   return kNames[static_cast<int>(shape)];
