@@ -185,8 +185,8 @@ static void addPrism(std::vector<Tri>& out, const std::vector<std::pair<float, f
   }
 }
 
-std::vector<Tri> buildCarMesh(CarShape shape, double length, double width, double height, int style_index,
-                              CarStyle& st) {
+std::vector<Tri> buildCarMesh(CarShape shape, double length, double width, double height, int style_index, CarStyle& st,
+                              const CarProfile* profile) {
   const float l = static_cast<float>(length), w = static_cast<float>(width), h = static_cast<float>(height);
   struct Shape {
     float hb, wb, rf, rr, rb;
@@ -197,7 +197,14 @@ std::vector<Tri> buildCarMesh(CarShape shape, double length, double width, doubl
                                       {0.58f, 0.24f, 0.10f, -0.45f, -0.49f},
                                       {0.48f, 0.44f, 0.32f, -0.48f, -0.50f},
                                       {0.60f, 0.19f, 0.03f, -0.46f, -0.49f}};
-  const Shape s = kShapes[static_cast<int>(shape)];
+  Shape s = kShapes[static_cast<int>(shape)];
+  if (profile) {
+    if (!(profile->hb > 0 && profile->hb < 1 && profile->x_rb < profile->x_rr && profile->x_rr < profile->x_rf &&
+          profile->x_rf < profile->x_wb && profile->x_rb >= -0.5 && profile->x_wb <= 0.5))
+      throw Error("car mesh: profile fractions out of order or range");
+    s = {static_cast<float>(profile->hb), static_cast<float>(profile->x_wb), static_cast<float>(profile->x_rf),
+         static_cast<float>(profile->x_rr), static_cast<float>(profile->x_rb)};
+  }
   st.l = l, st.w = w, st.h = h;
   st.hb = s.hb * h;
   st.x_wb = s.wb * l, st.x_rf = s.rf * l, st.x_rr = s.rr * l, st.x_rb = s.rb * l;
@@ -259,6 +266,51 @@ std::vector<Tri> buildCarMesh(CarShape shape, double length, double width, doubl
 
 namespace beslam::sim {
 using namespace detail;
+
+static_assert(static_cast<int>(CarShape::Wagon) == static_cast<int>(CarShapeClass::Wagon) &&
+                  static_cast<int>(CarShape::Van) == static_cast<int>(CarShapeClass::Van),
+              "CarShapeClass mirrors CarShape");
+
+const char* carShapeName(CarShapeClass shape) {
+  static const char* kNames[] = {"sedan", "hatchback", "suv", "van", "wagon"};
+  return kNames[static_cast<int>(shape)];
+}
+
+CarProfile defaultCarProfile(CarShapeClass shape) {
+  CarStyle st;
+  buildCarMesh(static_cast<CarShape>(shape), 1.0, 1.0, 1.0, 0, st);
+  CarProfile p;
+  p.hb = st.hb, p.x_wb = st.x_wb, p.x_rf = st.x_rf, p.x_rr = st.x_rr, p.x_rb = st.x_rb;
+  return p;
+}
+
+CarMesh carMesh(CarShapeClass shape, double length, double width, double height, const CarProfile* profile) {
+  if (!(length > 0 && width > 0 && height > 0 && length < 100 && width < 100 && height < 100))
+    throw Error("car mesh: size must be positive and finite");
+  CarStyle st;
+  const std::vector<Tri> tris = buildCarMesh(static_cast<CarShape>(shape), length, width, height, 0, st, profile);
+  CarMesh mesh;
+  mesh.vertices.reserve(tris.size() * 3);
+  mesh.faces.reserve(tris.size());
+  for (const Tri& t : tris) {
+    const int i = static_cast<int>(mesh.vertices.size());
+    mesh.vertices.push_back(t.a.cast<double>());
+    mesh.vertices.push_back(t.b.cast<double>());
+    mesh.vertices.push_back(t.c.cast<double>());
+    mesh.faces.push_back({i, i + 1, i + 2});
+  }
+  return mesh;
+}
+
+CarSizeRange sequenceSizeRange(CarShapeClass shape) {
+  // The ranges World::placeObjects draws from (newCar), per CarShapeClass in declaration order.
+  static constexpr CarSizeRange kRanges[] = {{4.4, 4.9, 1.74, 1.85, 1.40, 1.50},
+                                             {3.8, 4.25, 1.68, 1.78, 1.45, 1.55},
+                                             {4.4, 4.9, 1.84, 1.95, 1.65, 1.80},
+                                             {4.8, 5.4, 1.9, 2.0, 1.9, 2.2},
+                                             {4.55, 4.9, 1.76, 1.85, 1.45, 1.55}};
+  return kRanges[static_cast<int>(shape)];
+}
 
 double World::roadHalfWidth() const {
   return config.world.lanes_per_direction * config.world.lane_width + (config.world.parking_lanes ? 2.2 : 0.0);

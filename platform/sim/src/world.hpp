@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "beslam/sim/car_mesh.hpp"
 #include "beslam/sim/synth.hpp"
 
 namespace beslam::sim::detail {
@@ -196,9 +197,10 @@ struct Pose2 {
 void addQuad(std::vector<Tri>& out, const Vec3f& p0, const Vec3f& p1, const Vec3f& p2, const Vec3f& p3,
              std::uint16_t material, std::int32_t param, const Vec3f& u_axis, float u0, const Vec3f& v_axis, float v0);
 void addBox(std::vector<Tri>& out, const Vec3f& lo, const Vec3f& hi, std::uint16_t material, std::int32_t param);
-// Fills the profile fields of `style` and returns the mesh (ISO object frame) for a car of that shape.
+// Fills the profile fields of `style` and returns the mesh (ISO object frame) for a car of that shape;
+// `profile`, when given, replaces the shape's side-profile fractions (beslam/sim/car_mesh.hpp).
 std::vector<Tri> buildCarMesh(CarShape shape, double length, double width, double height, int style_index,
-                              CarStyle& style);
+                              CarStyle& style, const CarProfile* profile = nullptr);
 Vec3f kittiFromIso(const Vec3f& p);  // (x, y, z) ISO -> (x, -z, y) KITTI object frame
 
 }  // namespace beslam::sim::detail

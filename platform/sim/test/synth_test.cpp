@@ -18,6 +18,7 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
+#include "beslam/sim/car_mesh.hpp"
 
 namespace fs = std::filesystem;
 using beslam::sim::SynthConfig;
@@ -389,4 +390,31 @@ TEST(SynthCache, ConcurrentRendersOfOneSequenceBothSucceed) {
   EXPECT_GT(files, 3u);
   for (const auto& e : fs::directory_iterator(cache))
     EXPECT_EQ(e.path().filename().string().find(".partial."), std::string::npos) << e.path();
+}
+
+TEST(CarMesh, SequencesDrawTheirCarsFromSequenceSizeRange) {
+  const beslam::sim::Synthesizer synth(beslam::sim::presetConfig("urban_loop"));
+  int cars = 0;
+  for (const auto& o : synth.objects()) {
+    if (o.shape == "pedestrian") continue;
+    int cls = -1;
+    for (int c = 0; c < beslam::sim::kCarShapeClasses; ++c)
+      if (o.shape == beslam::sim::carShapeName(static_cast<beslam::sim::CarShapeClass>(c))) cls = c;
+    ASSERT_GE(cls, 0) << o.shape;
+    const auto r = beslam::sim::sequenceSizeRange(static_cast<beslam::sim::CarShapeClass>(cls));
+    EXPECT_TRUE(o.length >= r.l_min && o.length <= r.l_max) << o.shape << " l " << o.length;
+    EXPECT_TRUE(o.width - 0.008 >= r.w_min - 1e-9 && o.width - 0.008 <= r.w_max + 1e-9) << o.shape << " w " << o.width;
+    EXPECT_TRUE(o.height >= r.h_min && o.height <= r.h_max) << o.shape << " h " << o.height;
+    ++cars;
+  }
+  EXPECT_GT(cars, 10);
+  // The default profile reproduces the built-in one exactly.
+  const auto shape = beslam::sim::CarShapeClass::Wagon;
+  const auto profile = beslam::sim::defaultCarProfile(shape);
+  const auto a = beslam::sim::carMesh(shape, 4.7, 1.8, 1.5), b = beslam::sim::carMesh(shape, 4.7, 1.8, 1.5, &profile);
+  ASSERT_EQ(a.vertices.size(), b.vertices.size());
+  for (size_t i = 0; i < a.vertices.size(); ++i) EXPECT_EQ(a.vertices[i], b.vertices[i]);
+  beslam::sim::CarProfile bad = profile;
+  bad.x_rf = bad.x_wb + 0.1;
+  EXPECT_THROW(beslam::sim::carMesh(shape, 4.7, 1.8, 1.5, &bad), beslam::Error);
 }

@@ -1,0 +1,216 @@
+#include "fit/object_fit.hpp"
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include <cmath>
+#include <memory>
+
+namespace beslam::recon::fit {
+namespace {
+
+// Pose block: angle-axis (3) then translation (3) of the update D, T_world_obj = T_init * D; the point in
+// the object frame is D^-1 * p0 with p0 = T_init^-1 * p_world. Size block: log(size / size_init).
+template <int K>
+struct SurfaceResidual {
+  const shape::ShapePrior* prior;
+  Eigen::Vector3d p0, size0;
+  double scale;
+
+  template <typename T>
+  bool operator()(const T* pose, const T* code, const T* log_size, T* r) const {
+    const T d[3] = {T(p0.x()) - pose[3], T(p0.y()) - pose[4], T(p0.z()) - pose[5]};
+    const T minus_aa[3] = {-pose[0], -pose[1], -pose[2]};
+    T p_obj[3];
+    ceres::AngleAxisRotatePoint(minus_aa, d, p_obj);
+    using std::exp;
+    const T size[3] = {size0.x() * exp(log_size[0]), size0.y() * exp(log_size[1]), size0.z() * exp(log_size[2])};
+    r[0] = scale * prior->distanceSized(p_obj, size, code);
+    return true;
+  }
+};
+
+class DiagonalPrior : public ceres::CostFunction {  // r_k = w_k * x_k
+ public:
+  explicit DiagonalPrior(Eigen::VectorXd w) : w_(std::move(w)) {
+    set_num_residuals(static_cast<int>(w_.size()));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(w_.size()));
+  }
+  bool Evaluate(double const* const* x, double* r, double** J) const override {
+    const int n = static_cast<int>(w_.size());
+    for (int k = 0; k < n; ++k) r[k] = w_(k) * x[0][k];
+    if (J && J[0])
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < n; ++k) J[0][i * n + k] = i == k ? w_(k) : 0.0;
+    return true;
+  }
+
+ private:
+  Eigen::VectorXd w_;
+};
+
+template <int K>
+ceres::CostFunction* surfaceCost(const shape::ShapePrior& prior, const Eigen::Vector3d& p0,
+                                 const Eigen::Vector3d& size0, double scale) {
+  return new ceres::AutoDiffCostFunction<SurfaceResidual<K>, 1, 6, K, 3>(
+      new SurfaceResidual<K>{&prior, p0, size0, scale});
+}
+
+ceres::CostFunction* surfaceCostFor(int k, const shape::ShapePrior& prior, const Eigen::Vector3d& p0,
+                                    const Eigen::Vector3d& size0, double scale) {
+  switch (k) {
+    case 1:
+      return surfaceCost<1>(prior, p0, size0, scale);
+    case 2:
+      return surfaceCost<2>(prior, p0, size0, scale);
+    case 3:
+      return surfaceCost<3>(prior, p0, size0, scale);
+    case 4:
+      return surfaceCost<4>(prior, p0, size0, scale);
+    case 5:
+      return surfaceCost<5>(prior, p0, size0, scale);
+    case 6:
+      return surfaceCost<6>(prior, p0, size0, scale);
+    case 7:
+      return surfaceCost<7>(prior, p0, size0, scale);
+    case 8:
+      return surfaceCost<8>(prior, p0, size0, scale);
+    case 9:
+      return surfaceCost<9>(prior, p0, size0, scale);
+    case 10:
+      return surfaceCost<10>(prior, p0, size0, scale);
+    default:
+      return nullptr;
+  }
+}
+
+FitResult failed(const Eigen::Isometry3d& T, const Eigen::Vector3d& size, const Eigen::VectorXd& code,
+                 const std::string& why) {
+  FitResult r;
+  r.ok = false;
+  r.why = why;
+  r.T_world_obj = T;
+  r.size = size;
+  r.code = code;
+  return r;
+}
+
+}  // namespace
+
+bool FitOptions::validate(std::string* why) const {
+  auto bad = [&](const char* m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(lambda_surface > 0 && std::isfinite(lambda_surface))) return bad("lambda_surface must be positive");
+  if (!(lambda_code >= 0 && std::isfinite(lambda_code))) return bad("lambda_code must be 0 or more");
+  if (!(sigma_m > 0 && std::isfinite(sigma_m))) return bad("sigma_m must be positive");
+  if (!(huber_m > 0 && std::isfinite(huber_m))) return bad("huber_m must be positive");
+  if (max_iterations < 1) return bad("max_iterations must be at least 1");
+  if (fit_size && !(lambda_size > 0 && size_sigma > 0)) return bad("fit_size needs lambda_size and size_sigma > 0");
+  if (!(inlier_m > 0)) return bad("inlier_m must be positive");
+  return true;
+}
+
+FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_world_obj_init,
+                    const Eigen::Vector3d& size, const Eigen::VectorXd& code_init, const FitObservations& obs,
+                    const FitOptions& options) {
+  const int K = prior.dimensions();
+  const Eigen::VectorXd code0 = code_init.size() == 0 ? Eigen::VectorXd::Zero(K) : code_init;
+  std::string why;
+  if (!options.validate(&why)) return failed(T_world_obj_init, size, code0, "bad fit options: " + why);
+  if (K < 1 || K > kMaxFitDims)
+    return failed(
+        T_world_obj_init, size, code0,
+        "the shape prior has " + std::to_string(K) + " dimensions (1.." + std::to_string(kMaxFitDims) + " supported)");
+  if (code0.size() != K || !code0.allFinite())
+    return failed(T_world_obj_init, size, code0, "initial code must be " + std::to_string(K) + " finite values");
+  if (!(size.allFinite() && size.minCoeff() > 0)) return failed(T_world_obj_init, size, code0, "size must be positive");
+  if (!T_world_obj_init.matrix().allFinite())
+    return failed(T_world_obj_init, size, code0, "initial pose is not finite");
+  const size_t n = obs.p_world.size();
+  if (n == 0) return failed(T_world_obj_init, size, code0, "no surface observations");
+  if (!obs.weight.empty() && obs.weight.size() != n)
+    return failed(T_world_obj_init, size, code0,
+                  std::to_string(obs.weight.size()) + " weights for " + std::to_string(n) + " observations");
+  for (size_t i = 0; i < n; ++i) {
+    if (!obs.p_world[i].allFinite())
+      return failed(T_world_obj_init, size, code0, "observation " + std::to_string(i) + " is not finite");
+    if (!obs.weight.empty() && !(obs.weight[i] > 0 && obs.weight[i] <= 1))
+      return failed(T_world_obj_init, size, code0, "weight " + std::to_string(i) + " is outside (0, 1]");
+  }
+  if (n < 4) return failed(T_world_obj_init, size, code0, "fewer than 4 surface observations");
+
+  const Eigen::Isometry3d T_obj_world_init = T_world_obj_init.inverse();
+  std::vector<Eigen::Vector3d> p0(n);
+  for (size_t i = 0; i < n; ++i) p0[i] = T_obj_world_init * obs.p_world[i];
+
+  double pose[6] = {0, 0, 0, 0, 0, 0};
+  double log_size[3] = {0, 0, 0};
+  Eigen::VectorXd code = code0;
+  int iterations = 0;
+  double cost = 0;
+  try {
+    for (int stage = 0; stage < 2; ++stage) {
+      const double huber = stage == 0 ? 4 * options.huber_m : options.huber_m;
+      ceres::Problem problem;
+      for (size_t i = 0; i < n; ++i) {
+        const double w = obs.weight.empty() ? 1.0 : obs.weight[i];
+        const double scale = std::sqrt(options.lambda_surface * w) / options.sigma_m;
+        problem.AddResidualBlock(surfaceCostFor(K, prior, p0[i], size, scale), new ceres::HuberLoss(huber * scale),
+                                 pose, code.data(), log_size);
+      }
+      if (options.lambda_code > 0)
+        problem.AddResidualBlock(new DiagonalPrior(std::sqrt(options.lambda_code) * prior.codeStd().cwiseInverse()),
+                                 nullptr, code.data());
+      if (stage == 0) problem.SetParameterBlockConstant(code.data());
+      if (options.fit_size && stage > 0) {
+        problem.AddResidualBlock(
+            new DiagonalPrior(Eigen::Vector3d::Constant(std::sqrt(options.lambda_size) / options.size_sigma)), nullptr,
+            log_size);
+      } else {
+        problem.SetParameterBlockConstant(log_size);
+      }
+      if (options.yaw_only) problem.SetManifold(pose, new ceres::SubsetManifold(6, {0, 1}));
+      ceres::Solver::Options so;
+      so.linear_solver_type = ceres::DENSE_QR;
+      so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+      so.max_num_iterations = options.max_iterations;
+      so.num_threads = 1;
+      so.logging_type = ceres::SILENT;
+      ceres::Solver::Summary summary;
+      ceres::Solve(so, &problem, &summary);
+      if (!summary.IsSolutionUsable())
+        return failed(T_world_obj_init, size, code0, "solver failed: " + summary.message);
+      iterations += static_cast<int>(summary.iterations.size());
+      cost = summary.final_cost;
+    }
+  } catch (const std::exception& e) {
+    return failed(T_world_obj_init, size, code0, std::string("solver failed: ") + e.what());
+  }
+
+  FitResult r;
+  Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d aa(pose[0], pose[1], pose[2]);
+  if (aa.norm() > 0) D.linear() = Eigen::AngleAxisd(aa.norm(), aa.normalized()).toRotationMatrix();
+  D.translation() = Eigen::Vector3d(pose[3], pose[4], pose[5]);
+  r.T_world_obj = T_world_obj_init * D;
+  r.size = size.cwiseProduct(Eigen::Vector3d(std::exp(log_size[0]), std::exp(log_size[1]), std::exp(log_size[2])));
+  r.code = code;
+  r.cost = 2 * cost;  // Ceres reports half the sum of squares
+  r.iterations = iterations;
+  const Eigen::Isometry3d T_obj_world = r.T_world_obj.inverse();
+  double sum2 = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double d = prior.distance(T_obj_world * obs.p_world[i], r.size, r.code);
+    sum2 += d * d;
+    if (std::abs(d) < options.inlier_m) ++r.inliers;
+  }
+  r.rms_m = std::sqrt(sum2 / n);
+  if (!(r.T_world_obj.matrix().allFinite() && r.code.allFinite() && r.size.allFinite()))
+    return failed(T_world_obj_init, size, code0, "solver returned a non-finite result");
+  r.ok = true;
+  return r;
+}
+
+}  // namespace beslam::recon::fit

@@ -1,0 +1,68 @@
+// fitObject: one car's pose, shape code (and optionally size) from surface observations and the shape
+// prior (the surface and code terms of the paper's Algorithm 2; docs/reconstruction.md).
+//
+// Contract
+// - Inputs in the world frame, metres. T_world_obj_init maps the object frame of shape/shape_prior.hpp
+//   (x forward, y left, z up, origin at the box centre) into the world.
+// - Energy (Levenberg-Marquardt, Ceres):
+//     E = lambda_surface * sum_i w_i * huber((d_i / sigma_m)^2) + lambda_code * |z / codeStd|^2
+//       [+ lambda_size * |log(size / size_init) / size_sigma|^2 when fit_size]
+//   with d_i = prior.distance(T_obj_world * p_i, size, z) in metres. The Huber threshold is huber_m (in
+//   metres of d). A first solve with a 4x wider threshold pulls a far initial pose in; the second uses
+//   huber_m.
+// - Pose: yaw_only (default) optimises the translation and the rotation about the object's own z axis
+//   (the initial pose's up); roll and pitch stay those of the initial pose. Otherwise full 6-DoF.
+// - Data problems never throw: no observations, a non-finite point or weight, a weight outside (0, 1],
+//   fewer than 4 points, a non-positive size, a code of the wrong length, a non-finite initial pose, bad
+//   options or a failed solve give FitResult{ok = false, why = "..."} and leave the inputs as the result.
+// - Deterministic (one thread).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "shape/shape_prior.hpp"
+
+namespace beslam::recon::fit {
+
+struct FitObservations {                 // all world frame, metres
+  std::vector<Eigen::Vector3d> p_world;  // surface observations: LiDAR points in the mask, or map points on the car
+  std::vector<double> weight;            // per point, (0, 1], same size (or empty = all 1)
+};
+
+struct FitOptions {
+  double lambda_surface = 1.0;  // weight of the surface term
+  double lambda_code = 1.0;     // weight of the code prior (|z / codeStd|^2)
+  double sigma_m = 0.03;        // noise of one surface observation, metres
+  double huber_m = 0.05;        // robust threshold on a distance, metres
+  int max_iterations = 100;     // per solve (there are two)
+  bool fit_size = false;        // also refine (l, w, h)
+  double lambda_size = 1.0;     // weight of the size prior (fit_size)
+  double size_sigma = 0.08;     // std of log(size / size_init)
+  bool yaw_only = true;         // translation + yaw about the object's z; false: full 6-DoF
+  double inlier_m = 0.10;       // |d| below this counts as an inlier
+  bool validate(std::string* why) const;
+};
+
+struct FitResult {
+  bool ok = false;
+  std::string why;  // why not ok
+  Eigen::Isometry3d T_world_obj = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  Eigen::VectorXd code;
+  double cost = 0;   // final E
+  int inliers = 0;   // observations with |d| < inlier_m
+  double rms_m = 0;  // rms of d over all observations
+  int iterations = 0;
+};
+
+// Largest prior dimension fitObject supports.
+constexpr int kMaxFitDims = 10;
+
+FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_world_obj_init,
+                    const Eigen::Vector3d& size, const Eigen::VectorXd& code_init, const FitObservations& observations,
+                    const FitOptions& options);
+
+}  // namespace beslam::recon::fit

@@ -1,0 +1,276 @@
+#include "shape/mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <memory>
+#include <ostream>
+#include <sstream>
+
+#include "beslam/formats/error.hpp"
+#include "beslam/formats/file.hpp"
+
+namespace beslam::recon::shape {
+
+Random::Random(std::uint64_t seed) : state_(seed ^ 0x9e3779b97f4a7c15ull) {}
+
+double Random::uniform() {  // splitmix64, top 53 bits
+  std::uint64_t z = (state_ += 0x9e3779b97f4a7c15ull);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * (1.0 / 9007199254740992.0);
+}
+
+Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c) {
+  // Regions of the triangle's plane: three vertices, three edges, the face (barycentric tests).
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const double sum = va + vb + vc;
+  if (!(std::abs(sum) > 0)) return a;  // degenerate triangle
+  return a + ab * (vb / sum) + ac * (vc / sum);
+}
+
+MeshDistance::MeshDistance(const Mesh& mesh) : mesh_(mesh) {
+  for (const auto& f : mesh.faces) {
+    a_.push_back(mesh.vertices[f[0]]);
+    b_.push_back(mesh.vertices[f[1]]);
+    c_.push_back(mesh.vertices[f[2]]);
+  }
+}
+
+double MeshDistance::unsignedDistance(const Eigen::Vector3d& p) const {
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < a_.size(); ++i)
+    best = std::min(best, (closestPointOnTriangle(p, a_[i], b_[i], c_[i]) - p).squaredNorm());
+  return std::sqrt(best);
+}
+
+double MeshDistance::windingNumber(const Eigen::Vector3d& p) const {
+  // Sum of the signed solid angles of the triangles seen from p (Van Oosterom and Strackee), over 4 pi.
+  double sum = 0;
+  for (size_t i = 0; i < a_.size(); ++i) {
+    const Eigen::Vector3d a = a_[i] - p, b = b_[i] - p, c = c_[i] - p;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    const double num = a.dot(b.cross(c));
+    const double den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+    sum += 2 * std::atan2(num, den);
+  }
+  return sum / (4 * M_PI);
+}
+
+double MeshDistance::solidSignedDistance(const Eigen::Vector3d& p, int samples) const {
+  if (windingNumber(p) <= 0.5) return unsignedDistance(p);
+  std::vector<std::pair<double, size_t>> near(a_.size());
+  for (size_t i = 0; i < a_.size(); ++i)
+    near[i] = {(closestPointOnTriangle(p, a_[i], b_[i], c_[i]) - p).squaredNorm(), i};
+  const size_t k = std::min<size_t>(4, near.size());
+  std::partial_sort(near.begin(), near.begin() + k, near.end());
+  for (size_t j = 0; j < k; ++j) {
+    const size_t i = near[j].second;
+    const Eigen::Vector3d c = closestPointOnTriangle(p, a_[i], b_[i], c_[i]);
+    const Eigen::Vector3d n = (b_[i] - a_[i]).cross(c_[i] - a_[i]).normalized();
+    if (windingNumber(c + 1e-3 * n) <= 0.5) return -std::sqrt(near[j].first);
+  }
+  if (exterior_.empty()) exterior_ = surfaceSamples(mesh_, samples, 7, true);
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& s : exterior_) best = std::min(best, (s - p).squaredNorm());
+  return -std::sqrt(best);
+}
+
+bool MeshDistance::segmentHits(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double slack) const {
+  const Eigen::Vector3d dir = to - from;
+  const double len = dir.norm();
+  if (!(len > slack)) return false;
+  const Eigen::Vector3d u = dir / len;
+  const double t_max = len - slack;
+  for (size_t i = 0; i < a_.size(); ++i) {  // Moller-Trumbore, both sides
+    const Eigen::Vector3d e1 = b_[i] - a_[i], e2 = c_[i] - a_[i];
+    const Eigen::Vector3d h = u.cross(e2);
+    const double det = e1.dot(h);
+    if (std::abs(det) < 1e-12) continue;
+    const Eigen::Vector3d s = from - a_[i];
+    const double bu = s.dot(h) / det;
+    if (bu < 0 || bu > 1) continue;
+    const Eigen::Vector3d q = s.cross(e1);
+    const double bv = u.dot(q) / det;
+    if (bv < 0 || bu + bv > 1) continue;
+    const double t = e2.dot(q) / det;
+    if (t > 1e-9 && t < t_max) return true;
+  }
+  return false;
+}
+
+double MeshDistance::signedDistance(const Eigen::Vector3d& p) const {
+  const double d = unsignedDistance(p);
+  return windingNumber(p) > 0.5 ? -d : d;
+}
+
+int orientOutward(Mesh& mesh) {
+  // Union-find over faces joined by vertices at the same position.
+  const int nf = static_cast<int>(mesh.faces.size());
+  std::vector<int> parent(nf);
+  for (int i = 0; i < nf; ++i) parent[i] = i;
+  auto find = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  std::map<std::array<double, 3>, int> first_face;
+  for (int f = 0; f < nf; ++f)
+    for (int v : mesh.faces[f]) {
+      const Eigen::Vector3d& p = mesh.vertices[v];
+      const auto [it, fresh] = first_face.emplace(std::array<double, 3>{p.x(), p.y(), p.z()}, f);
+      if (!fresh) parent[find(f)] = find(it->second);
+    }
+  std::map<int, Eigen::Vector3d> centroid;
+  std::map<int, int> count;
+  for (int f = 0; f < nf; ++f) {
+    const int r = find(f);
+    auto [it, fresh] = centroid.emplace(r, Eigen::Vector3d::Zero());
+    for (int v : mesh.faces[f]) it->second += mesh.vertices[v];
+    count[r] += 3;
+  }
+  std::map<int, double> volume;
+  for (int f = 0; f < nf; ++f) {
+    const int r = find(f);
+    const Eigen::Vector3d c = centroid[r] / count[r];
+    const auto& t = mesh.faces[f];
+    volume[r] += (mesh.vertices[t[0]] - c).dot((mesh.vertices[t[1]] - c).cross(mesh.vertices[t[2]] - c)) / 6;
+  }
+  for (int f = 0; f < nf; ++f)
+    if (volume[find(f)] < 0) std::swap(mesh.faces[f][1], mesh.faces[f][2]);
+  int reversed = 0;
+  for (const auto& [r, v] : volume) reversed += v < 0;
+  return reversed;
+}
+
+std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, int n, std::uint64_t seed, bool exterior_only) {
+  std::vector<double> cumulative;
+  double total = 0;
+  for (const auto& f : mesh.faces) {
+    total += 0.5 * (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]).norm();
+    cumulative.push_back(total);
+  }
+  std::vector<Eigen::Vector3d> out;
+  if (n <= 0 || !(total > 0)) return out;
+  std::unique_ptr<MeshDistance> inside;
+  if (exterior_only) inside = std::make_unique<MeshDistance>(mesh);
+  Random rng(seed);
+  const int max_tries = 50 * n;
+  for (int tries = 0; static_cast<int>(out.size()) < n && tries < max_tries; ++tries) {
+    const double r = rng.uniform() * total;
+    const size_t i =
+        std::min(cumulative.size() - 1,
+                 static_cast<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), r) - cumulative.begin()));
+    const auto& f = mesh.faces[i];
+    double u = rng.uniform(), v = rng.uniform();
+    if (u + v > 1) u = 1 - u, v = 1 - v;
+    const Eigen::Vector3d &a = mesh.vertices[f[0]], &b = mesh.vertices[f[1]], &c = mesh.vertices[f[2]];
+    const Eigen::Vector3d p = a + u * (b - a) + v * (c - a);
+    if (inside) {
+      const Eigen::Vector3d nrm = (b - a).cross(c - a).normalized();
+      if (inside->windingNumber(p + 0.01 * nrm) > 0.5) continue;  // a buried face
+    }
+    out.push_back(p);
+  }
+  return out;
+}
+
+double chamferDistance(const Mesh& a, const Mesh& b, int n, std::uint64_t seed) {
+  const MeshDistance da(a), db(b);
+  const auto sa = surfaceSamples(a, n, seed, false), sb = surfaceSamples(b, n, seed + 1, true);
+  if (sa.empty() || sb.empty()) return std::numeric_limits<double>::infinity();
+  double ab = 0, ba = 0;
+  for (const auto& p : sa) ab += db.unsignedDistance(p);
+  for (const auto& p : sb) ba += da.unsignedDistance(p);
+  return 0.5 * (ab / sa.size() + ba / sb.size());
+}
+
+void writePly(const std::string& path, const Mesh& mesh, const Eigen::Isometry3d& T_world_obj) {
+  writeFileAtomic(path, [&](std::ostream& out) {
+    out << "ply\nformat binary_little_endian 1.0\ncomment BE-SLAM object mesh, metres\nelement vertex "
+        << mesh.vertices.size() << "\nproperty float x\nproperty float y\nproperty float z\nelement face "
+        << mesh.faces.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+    for (const auto& v : mesh.vertices) {
+      const Eigen::Vector3f w = (T_world_obj * v).cast<float>();
+      out.write(reinterpret_cast<const char*>(w.data()), 3 * sizeof(float));  // x86/ARM: little endian
+    }
+    for (const auto& f : mesh.faces) {
+      const unsigned char three = 3;
+      const std::int32_t idx[3] = {f[0], f[1], f[2]};
+      out.write(reinterpret_cast<const char*>(&three), 1);
+      out.write(reinterpret_cast<const char*>(idx), sizeof(idx));
+    }
+  });
+}
+
+Mesh readPly(const std::string& path) {
+  const std::string data = readFile(path);
+  const size_t end = data.find("end_header\n");
+  if (data.compare(0, 4, "ply\n") != 0 || end == std::string::npos) throwAt(path, "not a PLY file");
+  std::istringstream header(data.substr(0, end));
+  std::string line, format;
+  long nv = -1, nf = -1;
+  while (std::getline(header, line)) {
+    std::istringstream ls(line);
+    std::string key, a, b;
+    ls >> key >> a >> b;
+    if (key == "format") format = a;
+    if (key == "element" && a == "vertex") nv = std::stol(b);
+    if (key == "element" && a == "face") nf = std::stol(b);
+  }
+  if (nv < 0 || nf < 0) throwAt(path, "PLY header without vertex or face counts");
+  Mesh mesh;
+  const char* p = data.data() + end + 11;
+  const char* stop = data.data() + data.size();
+  if (format == "binary_little_endian") {
+    if (stop - p < nv * 12 + nf * 13) throwAt(path, "PLY file truncated");
+    for (long i = 0; i < nv; ++i, p += 12) {
+      float v[3];
+      std::memcpy(v, p, 12);
+      mesh.vertices.emplace_back(v[0], v[1], v[2]);
+    }
+    for (long i = 0; i < nf; ++i, p += 13) {
+      if (static_cast<unsigned char>(*p) != 3) throwAt(path, "PLY face " + std::to_string(i) + " is not a triangle");
+      std::int32_t idx[3];
+      std::memcpy(idx, p + 1, 12);
+      mesh.faces.push_back({idx[0], idx[1], idx[2]});
+    }
+  } else if (format == "ascii") {
+    std::istringstream body(std::string(p, stop));
+    for (long i = 0; i < nv; ++i) {
+      Eigen::Vector3d v;
+      if (!(body >> v.x() >> v.y() >> v.z())) throwAt(path, "PLY file truncated");
+      mesh.vertices.push_back(v);
+    }
+    for (long i = 0; i < nf; ++i) {
+      int k, a, b, c;
+      if (!(body >> k >> a >> b >> c) || k != 3) throwAt(path, "PLY face " + std::to_string(i) + " unreadable");
+      mesh.faces.push_back({a, b, c});
+    }
+  } else {
+    throwAt(path, "PLY format '" + format + "' not supported");
+  }
+  for (const auto& f : mesh.faces)
+    for (int i : f)
+      if (i < 0 || i >= static_cast<int>(mesh.vertices.size())) throwAt(path, "PLY face index out of range");
+  return mesh;
+}
+
+}  // namespace beslam::recon::shape

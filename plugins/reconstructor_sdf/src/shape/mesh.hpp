@@ -1,0 +1,83 @@
+// Triangle meshes for the shape prior: exact point-to-mesh distance, inside tests that survive open
+// meshes, area-weighted surface samples, Chamfer distance and PLY files.
+//
+// Contract
+// - Mesh: vertices (metres) and faces as index triples, counter-clockwise seen from outside.
+// - MeshDistance::signedDistance: exact distance to the nearest triangle, negative inside. Inside means a
+//   generalised winding number above 0.5, so overlapping closed parts (wheels in the body) and small
+//   holes (the synthetic cars' missing cabin floor) still give the right sign. The faces must face
+//   outwards; orientOutward makes them so per connected part.
+// - orientOutward: splits the mesh into parts (faces sharing a vertex position) and reverses every face
+//   of a part whose signed volume about its own centroid is negative; returns the number of parts
+//   reversed. For meshes whose parts are each consistently oriented (the synthetic cars are not
+//   oriented alike: bodies face inwards, wheels outwards).
+// - surfaceSamples: n points drawn area-weighted with the given seed (same seed, same points);
+//   exterior_only drops points on faces buried inside the mesh (their outside neighbour is inside).
+// - chamferDistance(estimate, truth, n, seed): the symmetric mean surface distance, metres: (mean over n
+//   samples of estimate of the distance to truth + mean over n exterior samples of truth of the distance
+//   to estimate) / 2. Exact point-to-triangle distances; infinity when either mesh has no area.
+// - writePly: binary little-endian PLY (float x y z, uchar-count int faces), vertices mapped by
+//   T_world_obj, written atomically; readPly reads that format back (and ASCII PLY of the same layout).
+//   Errors throw beslam::Error naming the file.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace beslam::recon::shape {
+
+struct Mesh {
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<std::array<int, 3>> faces;
+};
+
+class MeshDistance {
+ public:
+  explicit MeshDistance(const Mesh& mesh);
+  double unsignedDistance(const Eigen::Vector3d& p) const;
+  double windingNumber(const Eigen::Vector3d& p) const;
+  double signedDistance(const Eigen::Vector3d& p) const;
+  // The same, but inside the distance is to the EXTERIOR surface: faces buried inside other parts (the
+  // body's top under the cabin, wheel rims inside the body) do not count. The nearest of the four
+  // nearest triangles whose closest point is exterior, else the nearest of `samples` exterior surface
+  // samples (made once, on first use; spacing about sqrt(area / samples)).
+  double solidSignedDistance(const Eigen::Vector3d& p, int samples = 6000) const;
+  // First hit of the segment from -> to (excluding its last `slack` metres); false when there is none.
+  bool segmentHits(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double slack = 0.01) const;
+
+ private:
+  std::vector<Eigen::Vector3d> a_, b_, c_;
+  Mesh mesh_;
+  mutable std::vector<Eigen::Vector3d> exterior_;
+};
+
+// Closest point on triangle (a, b, c) to p.
+Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c);
+
+int orientOutward(Mesh& mesh);
+
+std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, int n, std::uint64_t seed, bool exterior_only = false);
+
+double chamferDistance(const Mesh& estimate, const Mesh& truth, int n, std::uint64_t seed);
+
+void writePly(const std::string& path, const Mesh& mesh,
+              const Eigen::Isometry3d& T_world_obj = Eigen::Isometry3d::Identity());
+Mesh readPly(const std::string& path);
+
+// Deterministic uniform numbers in [0, 1) (the same on every platform; std:: distributions are not).
+class Random {
+ public:
+  explicit Random(std::uint64_t seed);
+  double uniform();
+  double uniform(double a, double b) { return a + (b - a) * uniform(); }
+
+ private:
+  std::uint64_t state_;
+};
+
+}  // namespace beslam::recon::shape
