@@ -1,0 +1,104 @@
+#include "objects/object_store.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "beslam/sdk/views.hpp"
+
+namespace beslam::recon {
+
+bool isCarLike(int32_t class_id) { return class_id == BESLAM_CLASS_CAR || class_id == BESLAM_CLASS_VAN; }
+
+Eigen::Isometry3d ObjectRecord::boxPose() const {
+  // Median of each centre coordinate (robust to one bad box); heading: circular mean of the x axes in the
+  // plane of the newest box's up axis (boxes are level in the camera frame, so all share it).
+  const Eigen::Isometry3d& newest = boxes.back().T_world_obj;
+  const Eigen::Vector3d up = newest.linear().col(2);
+  Eigen::Vector3d centre;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<double> v;
+    for (const BoxObservation& b : boxes) v.push_back(b.T_world_obj.translation()[k]);
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    centre[k] = v[v.size() / 2];
+  }
+  // Heading: boxes may flip front and back between detections; align each to the newest before averaging.
+  const Eigen::Vector3d ref = newest.linear().col(0);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const BoxObservation& b : boxes) {
+    Eigen::Vector3d x = b.T_world_obj.linear().col(0);
+    x -= up * up.dot(x);
+    sum += x.dot(ref) < 0 ? -x : x;
+  }
+  Eigen::Vector3d x = sum.norm() > 1e-9 ? sum.normalized() : ref;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear().col(0) = x;
+  T.linear().col(1) = up.cross(x).normalized();
+  T.linear().col(2) = up;
+  T.translation() = centre;
+  return T;
+}
+
+Eigen::Vector3d ObjectRecord::boxSize() const {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const BoxObservation& b : boxes) sum += b.size;
+  return sum / double(boxes.size());
+}
+
+std::vector<Eigen::Vector3d> ObjectRecord::surfaceObservations() const {
+  if (!lidar_points.empty()) return lidar_points;
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& [id, p] : map_points) out.push_back(p);
+  return out;
+}
+
+std::set<int32_t> ObjectStore::observe(const KeyframeInput& input, std::vector<int32_t>& ended) {
+  std::set<int32_t> updated;
+  if (input.boxes == nullptr) return updated;
+  for (const beslam_box3d& box : *input.boxes) {
+    if (box.track_id < 0 || !isCarLike(box.class_id)) continue;
+    if (box.motion_state == BESLAM_MOTION_DYNAMIC) {
+      if (objects_.erase(box.track_id)) ended.push_back(box.track_id);
+      continue;
+    }
+    if (box.motion_state != BESLAM_MOTION_STATIC) continue;
+    const Eigen::Vector3d centre_cam(box.center_cam[0], box.center_cam[1], box.center_cam[2]);
+    const double range = centre_cam.norm();
+    if (!centre_cam.allFinite() || range > options_.max_range) continue;
+    ObjectRecord& o = objects_[box.track_id];
+    o.track_id = box.track_id;
+    o.class_id = box.class_id;
+    o.last_keyframe = input.keyframe_id;
+    const Eigen::Isometry3d T_cam_obj = sdk::objectPose(box);
+    o.boxes.push_back({input.keyframe_id, input.T_world_cam * T_cam_obj, Eigen::Vector3d(box.size[0], box.size[1], box.size[2]), range});
+    const uint16_t label = static_cast<uint16_t>(BESLAM_LABEL_STATIC_BASE + box.track_id);
+    for (const KeyframeInput::Point& p : input.points)
+      if (p.label == label && p.p_world.allFinite()) o.map_points[p.id] = p.p_world;
+    if (!input.lidar_cam.empty()) {  // returns inside the grown box, above the road
+      const Eigen::Isometry3d T_obj_cam = T_cam_obj.inverse();
+      const Eigen::Vector3d half(box.size[0] / 2 + options_.box_margin, box.size[1] / 2 + options_.box_margin,
+                                 box.size[2] / 2 + options_.box_margin);
+      const double floor = -box.size[2] / 2 + options_.road_clearance;
+      for (const Eigen::Vector3d& p_cam : input.lidar_cam) {
+        const Eigen::Vector3d p_obj = T_obj_cam * p_cam;
+        if (std::abs(p_obj.x()) <= half.x() && std::abs(p_obj.y()) <= half.y() && p_obj.z() <= half.z() &&
+            p_obj.z() >= floor)
+          o.lidar_points.push_back(input.T_world_cam * p_cam);
+      }
+      if (static_cast<int>(o.lidar_points.size()) > options_.max_lidar_points) {  // keep every k-th
+        const size_t k = (o.lidar_points.size() + options_.max_lidar_points - 1) / options_.max_lidar_points;
+        std::vector<Eigen::Vector3d> thinned;
+        for (size_t i = 0; i < o.lidar_points.size(); i += k) thinned.push_back(o.lidar_points[i]);
+        o.lidar_points.swap(thinned);
+      }
+    }
+    updated.insert(box.track_id);
+  }
+  return updated;
+}
+
+const ObjectRecord* ObjectStore::find(int32_t track_id) const {
+  const auto it = objects_.find(track_id);
+  return it == objects_.end() ? nullptr : &it->second;
+}
+
+}  // namespace beslam::recon

@@ -1,0 +1,85 @@
+// The reconstructor's memory of parked cars (Algorithm 2's bookkeeping): per motion-checker track, what
+// the keyframes so far observed of it, in the world frame (metres).
+//
+// Contract
+// - observe() takes one keyframe: its pose, its boxes (motion states and track ids from the motion
+//   checker), the map points it observes with their mask labels, and the frame's LiDAR scan if any.
+//   A car-like box called static within max_range adds a box observation, the keyframe's map points
+//   labelled BESLAM_LABEL_STATIC_BASE + its track id, and the LiDAR returns inside the box (grown by
+//   box_margin, without its lowest road_clearance metres). A box called dynamic ends its object: the
+//   track id is returned in `ended` (a parked car that drives away stops being a landmark).
+// - Association is by track id: a new id is a new object, a known id adds to it. Boxes without a track
+//   id, of other classes or unknown motion are ignored.
+// - Memory is bounded: map points are kept by id (their latest position), LiDAR points per object up to
+//   max_lidar_points (a deterministic thinning keeps every k-th point when over).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <set>
+#include <vector>
+
+#include "beslam/data.h"
+
+namespace beslam::recon {
+
+struct StoreOptions {
+  double max_range = 30.0;       // m: farther boxes add nothing (their depth is poor)
+  double box_margin = 0.15;      // m: LiDAR returns this far outside a box still count
+  double road_clearance = 0.12;  // m: returns this close to the box bottom are road
+  int max_lidar_points = 2000;   // per object
+};
+
+// One keyframe's box of an object, in the world frame (landmark frame: x heading, y left, z up, centre).
+struct BoxObservation {
+  int64_t keyframe_id = -1;
+  Eigen::Isometry3d T_world_obj = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();  // length, width, height
+  double range = 0;                                // m from the camera
+};
+
+struct ObjectRecord {
+  int32_t track_id = -1;
+  int32_t class_id = BESLAM_CLASS_CAR;
+  std::vector<BoxObservation> boxes;
+  std::map<int64_t, Eigen::Vector3d> map_points;  // backend id -> p_world
+  std::vector<Eigen::Vector3d> lidar_points;      // p_world
+  int64_t last_keyframe = -1;
+  // The box observations' consensus: median centre, heading by circular mean, mean size.
+  Eigen::Isometry3d boxPose() const;
+  Eigen::Vector3d boxSize() const;
+  std::vector<Eigen::Vector3d> surfaceObservations() const;  // LiDAR points if any, else map points
+};
+
+struct KeyframeInput {
+  int64_t keyframe_id = -1;
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
+  const std::vector<beslam_box3d>* boxes = nullptr;
+  struct Point {
+    int64_t id;
+    Eigen::Vector3d p_world;
+    uint16_t label;
+  };
+  std::vector<Point> points;
+  std::vector<Eigen::Vector3d> lidar_cam;  // the scan in the camera frame (empty: no scan)
+};
+
+class ObjectStore {
+ public:
+  explicit ObjectStore(const StoreOptions& options) : options_(options) {}
+  // Adds a keyframe; returns the track ids of objects it updated and fills `ended` with objects it ended.
+  std::set<int32_t> observe(const KeyframeInput& input, std::vector<int32_t>& ended);
+  const ObjectRecord* find(int32_t track_id) const;
+  const std::map<int32_t, ObjectRecord>& objects() const { return objects_; }
+
+ private:
+  StoreOptions options_;
+  std::map<int32_t, ObjectRecord> objects_;
+};
+
+// True for the classes the shape prior describes (cars and vans).
+bool isCarLike(int32_t class_id);
+
+}  // namespace beslam::recon

@@ -1,0 +1,168 @@
+// reconstructor_sdf: the paper's Algorithm 2 with a shape prior the project learns itself. On each
+// keyframe of a metric world: parked cars (boxes the motion checker calls static, by track id) collect
+// observations (objects/object_store.hpp: LiDAR returns in the box when the frame has a scan, else the
+// backend's map points labelled on the car); each car seen again is refitted (fit/object_fit.hpp: pose,
+// shape code, optionally size, from the box consensus or the last fit) and returned as a landmark with
+// surface samples and a mesh; a car called dynamic is returned as removed. finish() refits every object
+// once with all it gathered. docs/reconstruction.md describes the prior, the energy and the settings.
+#include <filesystem>
+
+#include "beslam/sdk/sdk.hpp"
+#include "fit/object_fit.hpp"
+#include "objects/object_store.hpp"
+#include "shape/shape_prior.hpp"
+
+namespace {
+
+namespace recon = beslam::recon;
+using beslam::sdk::path;
+using beslam::sdk::setting;
+
+struct Options {
+  std::string prior;
+  recon::StoreOptions store;
+  recon::fit::FitOptions fit;
+  int min_map_points = 8;
+  int min_lidar_points = 30;
+  int surface_samples = 300;
+  bool meshes = true;
+};
+
+const beslam::sdk::Settings<Options> kSettings{
+    path(&Options::prior, "prior", "\"\"", "shape prior file (.bsdf); empty: the shipped car prior"),
+    beslam::sdk::nested(&Options::store, setting(&recon::StoreOptions::max_range, "max_range", "30.0", 1.0, 200.0,
+                                                 "m: parked cars farther from the camera add no observation")),
+    beslam::sdk::nested(&Options::store, setting(&recon::StoreOptions::box_margin, "box_margin", "0.15", 0.0, 2.0,
+                                                 "m: LiDAR returns this far outside a box still count")),
+    beslam::sdk::nested(&Options::store, setting(&recon::StoreOptions::road_clearance, "road_clearance", "0.12", 0.0,
+                                                 1.0, "m: returns this close to a box's bottom are road")),
+    beslam::sdk::nested(&Options::store, setting(&recon::StoreOptions::max_lidar_points, "max_lidar_points", "2000",
+                                                 50, 100000, "LiDAR returns kept per object")),
+    setting(&Options::min_map_points, "min_map_points", "8", 4, 10000,
+            "map points on a car before it is fitted without LiDAR"),
+    setting(&Options::min_lidar_points, "min_lidar_points", "30", 4, 100000,
+            "LiDAR returns on a car before it is fitted with them"),
+    beslam::sdk::nested(&Options::fit, setting(&recon::fit::FitOptions::lambda_code, "lambda_code", "1.0", 0.0, 1e6,
+                                               "weight of the shape-code prior |z / std|^2")),
+    beslam::sdk::nested(&Options::fit, setting(&recon::fit::FitOptions::sigma_m, "sigma_m", "0.03", 0.001, 1.0,
+                                               "m: noise of one surface observation")),
+    beslam::sdk::nested(&Options::fit, setting(&recon::fit::FitOptions::huber_m, "huber_m", "0.05", 0.001, 2.0,
+                                               "m: robust (Huber) threshold of a surface distance")),
+    beslam::sdk::nested(&Options::fit, setting(&recon::fit::FitOptions::fit_size, "fit_size", "false",
+                                               "also refine length, width and height")),
+    setting(&Options::surface_samples, "surface_samples", "300", 0, 100000,
+            "surface points per landmark handed to the backend"),
+    setting(&Options::meshes, "meshes", "true", "return each object's mesh (objects/ and map.ply)"),
+};
+
+const beslam::sdk::PluginInfo kInfo("reconstructor_sdf", "SDF shape-prior reconstructor",
+                                    "Parked cars as shape-and-pose landmarks: a learnt PCA signed-distance prior "
+                                    "fitted to LiDAR returns or map points (Algorithm 2)",
+                                    {1, 0, 0}, kSettings);
+
+std::string resolvePrior(const std::string& setting) {
+  if (!setting.empty()) return setting;
+  for (const char* candidate : {BESLAM_SHAPE_PRIOR_INSTALLED, BESLAM_SHAPE_PRIOR_SOURCE}) {
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(candidate, ec)) return candidate;
+  }
+  throw beslam::sdk::ConfigError("prior: no shape prior found (looked for " +
+                                 std::string(BESLAM_SHAPE_PRIOR_INSTALLED) + " and " + BESLAM_SHAPE_PRIOR_SOURCE +
+                                 "); set reconstructor.prior");
+}
+
+class SdfReconstructor : public beslam::sdk::Reconstructor {
+ public:
+  SdfReconstructor(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
+      : context_(context),
+        options_(kSettings.read(config)),
+        prior_(recon::shape::ShapePrior::load(resolvePrior(options_.prior))),
+        store_(options_.store) {}
+
+  std::vector<beslam::sdk::Landmark> reconstruct(const beslam::sdk::Keyframe& keyframe,
+                                                 const beslam::sdk::Frame& frame,
+                                                 const std::vector<beslam_box3d>& boxes, const cv::Mat&) override {
+    recon::KeyframeInput input;
+    input.keyframe_id = keyframe.id;
+    input.T_world_cam = keyframe.T_world_cam;
+    input.boxes = &boxes;
+    for (const beslam::sdk::KeyframePoint& p : keyframe.points) input.points.push_back({p.id, p.p_world, p.label});
+    if (frame.hasLidar() && context_.T_cam_lidar()) {
+      const auto scan = frame.lidarPoints();
+      input.lidar_cam.reserve(scan.cols());
+      for (Eigen::Index i = 0; i < scan.cols(); ++i) {
+        const Eigen::Vector3d p_cam = *context_.T_cam_lidar() * scan.col(i).head<3>().cast<double>();
+        if (p_cam.allFinite()) input.lidar_cam.push_back(p_cam);
+      }
+    }
+    std::vector<int32_t> ended;
+    const std::set<int32_t> updated = store_.observe(input, ended);
+    std::vector<beslam::sdk::Landmark> out;
+    for (int32_t id : ended) {
+      fits_.erase(id);
+      beslam::sdk::Landmark l;
+      l.track_id = id;
+      l.removed = true;
+      out.push_back(std::move(l));
+    }
+    for (int32_t id : updated)
+      if (auto l = refit(*store_.find(id))) out.push_back(std::move(*l));
+    return out;
+  }
+
+  std::vector<beslam::sdk::Landmark> finish() override {
+    std::vector<beslam::sdk::Landmark> out;
+    for (const auto& [id, record] : store_.objects())
+      if (auto l = refit(record)) out.push_back(std::move(*l));
+    return out;
+  }
+
+ private:
+  // Fits one object from its observations (starting from its last fit, else from its boxes); nothing
+  // when it has too few observations or the fit fails (the object waits for more keyframes).
+  std::optional<beslam::sdk::Landmark> refit(const recon::ObjectRecord& record) {
+    recon::fit::FitObservations obs;
+    obs.p_world = record.surfaceObservations();
+    const int needed = record.lidar_points.empty() ? options_.min_map_points : options_.min_lidar_points;
+    if (static_cast<int>(obs.p_world.size()) < needed) return std::nullopt;
+    const auto last = fits_.find(record.track_id);
+    const Eigen::Isometry3d T_init = last != fits_.end() ? last->second.T_world_obj : record.boxPose();
+    const Eigen::Vector3d size = last != fits_.end() ? last->second.size : record.boxSize();
+    const Eigen::VectorXd code = last != fits_.end() ? last->second.code : Eigen::VectorXd::Zero(prior_.dimensions());
+    recon::fit::FitResult r = recon::fit::fitObject(prior_, T_init, size, code, obs, options_.fit);
+    if (!r.ok) {
+      context_.log(BESLAM_LOG_DEBUG, "object " + std::to_string(record.track_id) + " not fitted: " + r.why);
+      return std::nullopt;
+    }
+    fits_[record.track_id] = r;
+    beslam::sdk::Landmark l;
+    l.track_id = record.track_id;
+    l.class_id = record.class_id;
+    l.T_world_object = r.T_world_obj;
+    l.scale = r.size;
+    l.shape_code.assign(r.code.data(), r.code.data() + r.code.size());
+    l.keyframes = static_cast<int32_t>(record.boxes.size());
+    l.cost = r.cost;
+    // Confidence: the share of observations on the fitted surface.
+    l.confidence = obs.p_world.empty() ? 0.0f : static_cast<float>(double(r.inliers) / double(obs.p_world.size()));
+    for (const Eigen::Vector3d& p : prior_.surfaceSamples(r.code, r.size, options_.surface_samples))
+      l.surface_points.insert(l.surface_points.end(), {float(p.x()), float(p.y()), float(p.z())});
+    if (options_.meshes) {
+      const recon::shape::Mesh mesh = prior_.mesh(r.code, r.size);
+      for (const auto& v : mesh.vertices) l.mesh_vertices.insert(l.mesh_vertices.end(), {float(v.x()), float(v.y()), float(v.z())});
+      for (const auto& f : mesh.faces)
+        l.mesh_faces.insert(l.mesh_faces.end(), {uint32_t(f[0]), uint32_t(f[1]), uint32_t(f[2])});
+    }
+    return l;
+  }
+
+  const beslam::sdk::Context& context_;
+  Options options_;
+  recon::shape::ShapePrior prior_;
+  recon::ObjectStore store_;
+  std::map<int32_t, recon::fit::FitResult> fits_;
+};
+
+}  // namespace
+
+BESLAM_EXPORT_PLUGINS(beslam::sdk::describe<SdfReconstructor>(kInfo))

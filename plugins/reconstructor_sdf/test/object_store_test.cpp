@@ -1,0 +1,126 @@
+// ObjectStore: association by track id, what each keyframe adds (boxes, labelled map points, LiDAR returns
+// inside the box above the road), objects ended by a dynamic call, bounded LiDAR memory, the box consensus.
+#include "objects/object_store.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "beslam/sdk/views.hpp"
+
+namespace beslam::recon {
+namespace {
+
+// A parked car 10 m ahead (geometric centre), heading along camera +x.
+beslam_box3d carBox(int32_t track, int32_t state, double z = 10.0, double yaw = 0.0) {
+  beslam_box3d b = sdk::newBox();
+  b.class_id = BESLAM_CLASS_CAR;
+  b.track_id = track;
+  b.motion_state = state;
+  b.center_cam[0] = 2, b.center_cam[1] = 0.9, b.center_cam[2] = z;
+  b.size[0] = 4.4, b.size[1] = 1.8, b.size[2] = 1.5;
+  b.yaw = yaw;
+  return b;
+}
+
+KeyframeInput keyframe(int64_t id, const std::vector<beslam_box3d>& boxes) {
+  KeyframeInput in;
+  in.keyframe_id = id;
+  in.T_world_cam.translation() = Eigen::Vector3d(0, 0, double(id));  // 1 m forward a keyframe
+  in.boxes = &boxes;
+  return in;
+}
+
+TEST(ObjectStore, AssociatesByTrackIdAndCollectsLabelledPoints) {
+  ObjectStore store(StoreOptions{});
+  const std::vector<beslam_box3d> boxes = {carBox(3, BESLAM_MOTION_STATIC), carBox(4, BESLAM_MOTION_UNKNOWN),
+                                           carBox(-1, BESLAM_MOTION_STATIC)};
+  KeyframeInput in = keyframe(0, boxes);
+  in.points = {{11, {2, 1, 10}, BESLAM_LABEL_STATIC_BASE + 3},
+               {12, {2, 1, 11}, BESLAM_LABEL_STATIC_BASE + 4},
+               {13, {0, 0, 30}, BESLAM_LABEL_BACKGROUND}};
+  std::vector<int32_t> ended;
+  EXPECT_EQ(store.observe(in, ended), std::set<int32_t>{3});  // unknown motion and no track id add nothing
+  KeyframeInput again = keyframe(1, boxes);
+  again.points = {{11, {2, 1, 10.5}, BESLAM_LABEL_STATIC_BASE + 3}, {14, {2, 0.5, 9}, BESLAM_LABEL_STATIC_BASE + 3}};
+  store.observe(again, ended);
+  const ObjectRecord* o = store.find(3);
+  ASSERT_NE(o, nullptr);
+  EXPECT_EQ(o->boxes.size(), 2u);
+  ASSERT_EQ(o->map_points.size(), 2u);               // point 11 once, at its latest position
+  EXPECT_DOUBLE_EQ(o->map_points.at(11).z(), 10.5);
+  EXPECT_EQ(o->surfaceObservations().size(), 2u);     // no LiDAR: the map points
+  EXPECT_TRUE(ended.empty());
+  EXPECT_EQ(store.find(4), nullptr);
+}
+
+TEST(ObjectStore, ADynamicCallEndsTheObject) {
+  ObjectStore store(StoreOptions{});
+  std::vector<int32_t> ended;
+  const std::vector<beslam_box3d> parked = {carBox(5, BESLAM_MOTION_STATIC)};
+  store.observe(keyframe(0, parked), ended);
+  const std::vector<beslam_box3d> moving = {carBox(5, BESLAM_MOTION_DYNAMIC), carBox(6, BESLAM_MOTION_DYNAMIC)};
+  EXPECT_TRUE(store.observe(keyframe(1, moving), ended).empty());
+  EXPECT_EQ(ended, std::vector<int32_t>{5});  // 6 was never an object
+  EXPECT_EQ(store.find(5), nullptr);
+}
+
+TEST(ObjectStore, FarBoxesAndOtherClassesAddNothing) {
+  StoreOptions options;
+  options.max_range = 20;
+  ObjectStore store(options);
+  beslam_box3d person = carBox(8, BESLAM_MOTION_STATIC);
+  person.class_id = BESLAM_CLASS_PEDESTRIAN;
+  const std::vector<beslam_box3d> boxes = {carBox(7, BESLAM_MOTION_STATIC, 35.0), person};
+  std::vector<int32_t> ended;
+  EXPECT_TRUE(store.observe(keyframe(0, boxes), ended).empty());
+}
+
+TEST(ObjectStore, LidarReturnsInsideTheBoxAboveTheRoadInTheWorldFrame) {
+  StoreOptions options;
+  options.max_lidar_points = 100;
+  ObjectStore store(options);
+  const std::vector<beslam_box3d> boxes = {carBox(2, BESLAM_MOTION_STATIC)};
+  KeyframeInput in = keyframe(3, boxes);
+  // The box spans x 2 +- 2.2, y 0.9 +- 0.75 (y down: the road is at y = 1.65), z 10 +- 0.9.
+  in.lidar_cam = {{2, 0.5, 9.2},    // on the car's side
+                  {3.5, 1.0, 10},   // inside
+                  {2, 1.62, 10},    // road under the car
+                  {2, 0.5, 12.5},   // behind the car
+                  {9, 0.5, 10}};    // beside it
+  std::vector<int32_t> ended;
+  store.observe(in, ended);
+  const ObjectRecord* o = store.find(2);
+  ASSERT_NE(o, nullptr);
+  ASSERT_EQ(o->lidar_points.size(), 2u);
+  EXPECT_NEAR(o->lidar_points[0].z(), 12.2, 1e-9);  // camera 3 m along world z
+  EXPECT_EQ(o->surfaceObservations().size(), 2u);
+  // Over the cap, every k-th return is kept.
+  for (int i = 0; i < 300; ++i) in.lidar_cam.push_back({2.0 + 0.001 * i, 0.5, 9.2});
+  store.observe(in, ended);
+  EXPECT_LE(static_cast<int>(store.find(2)->lidar_points.size()), options.max_lidar_points);
+  EXPECT_GT(static_cast<int>(store.find(2)->lidar_points.size()), options.max_lidar_points / 2);
+}
+
+TEST(ObjectStore, BoxConsensusIsRobustToOneBadBoxAndToAFlippedHeading) {
+  ObjectStore store(StoreOptions{});
+  std::vector<int32_t> ended;
+  for (int k = 0; k < 5; ++k) {
+    // The camera moves 1 m a keyframe: the box's z in the camera shrinks by 1 so the car stays put.
+    double yaw = k == 2 ? M_PI : 0.05;        // one detection faces the other way
+    double z = 10.0 - k + (k == 4 ? 3.0 : 0);  // one is 3 m off
+    const std::vector<beslam_box3d> boxes = {carBox(1, BESLAM_MOTION_STATIC, z, yaw)};
+    store.observe(keyframe(k, boxes), ended);
+  }
+  const ObjectRecord* o = store.find(1);
+  const Eigen::Isometry3d T = o->boxPose();
+  EXPECT_NEAR(T.translation().z(), 10.0, 1e-9);  // the median ignores the 3 m outlier
+  EXPECT_NEAR(T.translation().x(), 2.0, 1e-9);
+  // Heading along camera x (world x here), up along -y: the flipped box does not turn the average.
+  EXPECT_GT(std::abs(T.linear().col(0).x()), 0.99);
+  EXPECT_NEAR(T.linear().col(2).y(), -1.0, 1e-9);
+  EXPECT_NEAR(o->boxSize().x(), 4.4, 1e-9);
+}
+
+}  // namespace
+}  // namespace beslam::recon
