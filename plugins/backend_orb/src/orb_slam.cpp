@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <deque>
 #include <mutex>
+#include <set>
 #include <stdexcept>
 #include <thread>
 
@@ -361,13 +362,9 @@ struct OrbSlam::Impl {
     }
     result.stage_ms.emplace_back("tracking_total", msSince(t_start));
 
-    if (result.is_keyframe)  // mapping is idle: the new keyframe's points are still as tracking left them
+    if (result.is_keyframe)  // mapping is idle: the map is as tracking left it
       for (const auto& [kf, initial] : pending)
-        if (kf->id == result.keyframe_id)
-          for (size_t i = 0; i < kf->size(); ++i)
-            if (const MapPoint* mp = kf->points[i]; mp && !mp->bad)
-              result.keyframe_points.push_back({mp->id, mp->position, kf->keypoint(i).pt.x, kf->keypoint(i).pt.y,
-                                                kf->features->labels[i], mp->numObservations()});
+        if (kf->id == result.keyframe_id) result.keyframe_points = observedPoints(*kf);
     auto jobs = std::move(pending);
     pending.clear();
     if (options.threaded_mapping) {
@@ -390,6 +387,32 @@ struct OrbSlam::Impl {
     }
     result.stage_ms.emplace_back("total", msSince(t_start));
     return result;
+  }
+
+  // What a new keyframe hands the reconstructor: the map points it matched (with the label under their
+  // keypoint), then the points made on static objects that lie in its view but it did not match (most
+  // of a parked car's points are triangulated by later keyframes), with their object's label at their
+  // projection. Static-object points are labelled by their object id, not by the pixel they project to,
+  // so background points behind a car never pass for the car's.
+  std::vector<TrackResult::ObservedPoint> observedPoints(const KeyFrame& kf) const {
+    std::vector<TrackResult::ObservedPoint> out;
+    std::set<long> seen;
+    for (size_t i = 0; i < kf.size(); ++i)
+      if (const MapPoint* mp = kf.points[i]; mp && !mp->bad) {
+        out.push_back({mp->id, mp->position, kf.keypoint(i).pt.x, kf.keypoint(i).pt.y, kf.features->labels[i],
+                       mp->numObservations()});
+        seen.insert(mp->id);
+      }
+    for (const MapPoint* mp : map.points()) {
+      if (mp->bad || mp->object_id < 0 || seen.count(mp->id)) continue;
+      const Eigen::Vector3d p_cam = kf.T_cw * mp->position;
+      if (p_cam.z() <= 0.1) continue;
+      const double u = camera.fx * p_cam.x() / p_cam.z() + camera.cx, v = camera.fy * p_cam.y() / p_cam.z() + camera.cy;
+      if (u < 0 || v < 0 || u >= camera.width || v >= camera.height) continue;
+      out.push_back({mp->id, mp->position, static_cast<float>(u), static_cast<float>(v),
+                     static_cast<uint16_t>(1000 + mp->object_id), mp->numObservations()});
+    }
+    return out;
   }
 
   // Frees the keyframes and map points culled since the last call, once the tracker and the mapper have let

@@ -5,6 +5,8 @@
 // shape code, optionally size, from the box consensus or the last fit) and returned as a landmark with
 // surface samples and a mesh; a car called dynamic is returned as removed. finish() refits every object
 // once with all it gathered. docs/reconstruction.md describes the prior, the energy and the settings.
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 #include "beslam/sdk/sdk.hpp"
@@ -26,6 +28,8 @@ struct Options {
   int min_lidar_points = 30;
   int surface_samples = 300;
   bool meshes = true;
+  double map_sigma_m = 0.15, map_huber_m = 0.3;  // map points: noisier than LiDAR returns
+  double box_sigma_yaw_deg = 20;
 };
 
 const beslam::sdk::Settings<Options> kSettings{
@@ -36,8 +40,11 @@ const beslam::sdk::Settings<Options> kSettings{
                                                  "m: LiDAR returns this far outside a box still count")),
     beslam::sdk::nested(&Options::store, setting(&recon::StoreOptions::road_clearance, "road_clearance", "0.12", 0.0,
                                                  1.0, "m: returns this close to a box's bottom are road")),
-    beslam::sdk::nested(&Options::store, setting(&recon::StoreOptions::max_lidar_points, "max_lidar_points", "2000",
-                                                 50, 100000, "LiDAR returns kept per object")),
+    beslam::sdk::nested(&Options::store, setting(&recon::StoreOptions::max_lidar_points, "max_lidar_points", "2000", 50,
+                                                 100000, "LiDAR returns kept per object")),
+    beslam::sdk::nested(&Options::store,
+                        setting(&recon::StoreOptions::map_point_margin, "map_point_margin", "0.5", 0.0, 10.0,
+                                "m: map points labelled on a car but farther outside its boxes are not used")),
     setting(&Options::min_map_points, "min_map_points", "8", 4, 10000,
             "map points on a car before it is fitted without LiDAR"),
     setting(&Options::min_lidar_points, "min_lidar_points", "30", 4, 100000,
@@ -50,6 +57,13 @@ const beslam::sdk::Settings<Options> kSettings{
                                                "m: robust (Huber) threshold of a surface distance")),
     beslam::sdk::nested(&Options::fit, setting(&recon::fit::FitOptions::fit_size, "fit_size", "false",
                                                "also refine length, width and height")),
+    setting(&Options::map_sigma_m, "map_sigma_m", "0.15", 0.001, 2.0,
+            "m: noise of one map point on a car (without LiDAR; monocular depth is coarse)"),
+    setting(&Options::map_huber_m, "map_huber_m", "0.3", 0.001, 5.0, "m: robust threshold for map points"),
+    beslam::sdk::nested(&Options::fit, setting(&recon::fit::FitOptions::box_sigma_m, "box_sigma_m", "0.5", 0.01, 100.0,
+                                               "m: how far the fit may pull the centre from the boxes' consensus")),
+    setting(&Options::box_sigma_yaw_deg, "box_sigma_yaw_deg", "20", 0.1, 1000.0,
+            "degrees: the same for the heading (front and back of a box are not told apart)"),
     setting(&Options::surface_samples, "surface_samples", "300", 0, 100000,
             "surface points per landmark handed to the backend"),
     setting(&Options::meshes, "meshes", "true", "return each object's mesh (objects/ and map.ply)"),
@@ -59,6 +73,12 @@ const beslam::sdk::PluginInfo kInfo("reconstructor_sdf", "SDF shape-prior recons
                                     "Parked cars as shape-and-pose landmarks: a learnt PCA signed-distance prior "
                                     "fitted to LiDAR returns or map points (Algorithm 2)",
                                     {1, 0, 0}, kSettings);
+
+Options readOptions(const beslam::sdk::Config& config) {
+  Options o = kSettings.read(config);
+  o.fit.box_sigma_yaw = o.box_sigma_yaw_deg * M_PI / 180.0;
+  return o;
+}
 
 std::string resolvePrior(const std::string& setting) {
   if (!setting.empty()) return setting;
@@ -75,12 +95,11 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
  public:
   SdfReconstructor(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
       : context_(context),
-        options_(kSettings.read(config)),
+        options_(readOptions(config)),
         prior_(recon::shape::ShapePrior::load(resolvePrior(options_.prior))),
         store_(options_.store) {}
 
-  std::vector<beslam::sdk::Landmark> reconstruct(const beslam::sdk::Keyframe& keyframe,
-                                                 const beslam::sdk::Frame& frame,
+  std::vector<beslam::sdk::Landmark> reconstruct(const beslam::sdk::Keyframe& keyframe, const beslam::sdk::Frame& frame,
                                                  const std::vector<beslam_box3d>& boxes, const cv::Mat&) override {
     recon::KeyframeInput input;
     input.keyframe_id = keyframe.id;
@@ -105,8 +124,13 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
       l.removed = true;
       out.push_back(std::move(l));
     }
-    for (int32_t id : updated)
+    for (int32_t id : updated) {
+      if (std::getenv("BESLAM_RECON_DEBUG"))
+        std::fprintf(stderr, "kf %ld frame %ld: object %d boxes %zu points %zu lidar %zu (kf points %zu)\n",
+                     (long)keyframe.id, (long)keyframe.frame_index, id, store_.find(id)->boxes.size(),
+                     store_.find(id)->map_points.size(), store_.find(id)->lidar_points.size(), keyframe.points.size());
       if (auto l = refit(*store_.find(id))) out.push_back(std::move(*l));
+    }
     return out;
   }
 
@@ -122,14 +146,19 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
   // when it has too few observations or the fit fails (the object waits for more keyframes).
   std::optional<beslam::sdk::Landmark> refit(const recon::ObjectRecord& record) {
     recon::fit::FitObservations obs;
-    obs.p_world = record.surfaceObservations();
-    const int needed = record.lidar_points.empty() ? options_.min_map_points : options_.min_lidar_points;
-    if (static_cast<int>(obs.p_world.size()) < needed) return std::nullopt;
+    obs.p_world = record.surfaceObservations(options_.store.map_point_margin);
+    obs.T_world_obj_boxes = record.boxPose();
+    const bool lidar = !record.lidar_points.empty();
+    if (static_cast<int>(obs.p_world.size()) < (lidar ? options_.min_lidar_points : options_.min_map_points))
+      return std::nullopt;
+    recon::fit::FitOptions fit = options_.fit;
+    if (!lidar)
+      fit.sigma_m = options_.map_sigma_m, fit.huber_m = options_.map_huber_m, fit.inlier_m = options_.map_huber_m;
     const auto last = fits_.find(record.track_id);
     const Eigen::Isometry3d T_init = last != fits_.end() ? last->second.T_world_obj : record.boxPose();
     const Eigen::Vector3d size = last != fits_.end() ? last->second.size : record.boxSize();
     const Eigen::VectorXd code = last != fits_.end() ? last->second.code : Eigen::VectorXd::Zero(prior_.dimensions());
-    recon::fit::FitResult r = recon::fit::fitObject(prior_, T_init, size, code, obs, options_.fit);
+    recon::fit::FitResult r = recon::fit::fitObject(prior_, T_init, size, code, obs, fit);
     if (!r.ok) {
       context_.log(BESLAM_LOG_DEBUG, "object " + std::to_string(record.track_id) + " not fitted: " + r.why);
       return std::nullopt;
@@ -149,7 +178,8 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
       l.surface_points.insert(l.surface_points.end(), {float(p.x()), float(p.y()), float(p.z())});
     if (options_.meshes) {
       const recon::shape::Mesh mesh = prior_.mesh(r.code, r.size);
-      for (const auto& v : mesh.vertices) l.mesh_vertices.insert(l.mesh_vertices.end(), {float(v.x()), float(v.y()), float(v.z())});
+      for (const auto& v : mesh.vertices)
+        l.mesh_vertices.insert(l.mesh_vertices.end(), {float(v.x()), float(v.y()), float(v.z())});
       for (const auto& f : mesh.faces)
         l.mesh_faces.insert(l.mesh_faces.end(), {uint32_t(f[0]), uint32_t(f[1]), uint32_t(f[2])});
     }

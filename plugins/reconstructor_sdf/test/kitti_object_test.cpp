@@ -71,9 +71,9 @@ TEST(KittiObject000008, LidarFitsLandNearTheLabels) {
     const ObjectRecord* o = store.find(track);
     ASSERT_NE(o, nullptr);
     fit::FitObservations obs;
-    obs.p_world = o->surfaceObservations();
-    const fit::FitResult r = fit::fitObject(prior, o->boxPose(), o->boxSize(), Eigen::VectorXd::Zero(prior.dimensions()),
-                                            obs, fit::FitOptions{});
+    obs.p_world = o->surfaceObservations(0.5);
+    const fit::FitResult r = fit::fitObject(prior, o->boxPose(), o->boxSize(),
+                                            Eigen::VectorXd::Zero(prior.dimensions()), obs, fit::FitOptions{});
     const Eigen::Isometry3d T_true = sdk::objectPose(truth);
     const double centre = (r.T_world_obj.translation() - T_true.translation()).norm();
     const double yaw = headingErrorDeg(r.T_world_obj, T_true);

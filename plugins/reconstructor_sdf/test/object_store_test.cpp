@@ -41,15 +41,19 @@ TEST(ObjectStore, AssociatesByTrackIdAndCollectsLabelledPoints) {
                {13, {0, 0, 30}, BESLAM_LABEL_BACKGROUND}};
   std::vector<int32_t> ended;
   EXPECT_EQ(store.observe(in, ended), std::set<int32_t>{3});  // unknown motion and no track id add nothing
-  KeyframeInput again = keyframe(1, boxes);
-  again.points = {{11, {2, 1, 10.5}, BESLAM_LABEL_STATIC_BASE + 3}, {14, {2, 0.5, 9}, BESLAM_LABEL_STATIC_BASE + 3}};
+  const std::vector<beslam_box3d> closer = {carBox(3, BESLAM_MOTION_STATIC, 9.0)};  // the camera moved 1 m
+  KeyframeInput again = keyframe(1, closer);
+  again.points = {{11, {2, 1, 10.5}, BESLAM_LABEL_STATIC_BASE + 3},
+                  {14, {2, 0.5, 9}, BESLAM_LABEL_STATIC_BASE + 3},
+                  {15, {2, 1, 13}, BESLAM_LABEL_STATIC_BASE + 3}};  // mask bleed: 3 m behind the car
   store.observe(again, ended);
   const ObjectRecord* o = store.find(3);
   ASSERT_NE(o, nullptr);
   EXPECT_EQ(o->boxes.size(), 2u);
-  ASSERT_EQ(o->map_points.size(), 2u);               // point 11 once, at its latest position
+  ASSERT_EQ(o->map_points.size(), 3u);  // point 11 once, at its latest position
   EXPECT_DOUBLE_EQ(o->map_points.at(11).z(), 10.5);
-  EXPECT_EQ(o->surfaceObservations().size(), 2u);     // no LiDAR: the map points
+  EXPECT_EQ(o->surfaceObservations(0.5).size(), 2u);  // no LiDAR: the map points in the box, not 15
+  EXPECT_EQ(o->surfaceObservations(5.0).size(), 3u);
   EXPECT_TRUE(ended.empty());
   EXPECT_EQ(store.find(4), nullptr);
 }
@@ -83,18 +87,18 @@ TEST(ObjectStore, LidarReturnsInsideTheBoxAboveTheRoadInTheWorldFrame) {
   const std::vector<beslam_box3d> boxes = {carBox(2, BESLAM_MOTION_STATIC)};
   KeyframeInput in = keyframe(3, boxes);
   // The box spans x 2 +- 2.2, y 0.9 +- 0.75 (y down: the road is at y = 1.65), z 10 +- 0.9.
-  in.lidar_cam = {{2, 0.5, 9.2},    // on the car's side
-                  {3.5, 1.0, 10},   // inside
-                  {2, 1.62, 10},    // road under the car
-                  {2, 0.5, 12.5},   // behind the car
-                  {9, 0.5, 10}};    // beside it
+  in.lidar_cam = {{2, 0.5, 9.2},   // on the car's side
+                  {3.5, 1.0, 10},  // inside
+                  {2, 1.62, 10},   // road under the car
+                  {2, 0.5, 12.5},  // behind the car
+                  {9, 0.5, 10}};   // beside it
   std::vector<int32_t> ended;
   store.observe(in, ended);
   const ObjectRecord* o = store.find(2);
   ASSERT_NE(o, nullptr);
   ASSERT_EQ(o->lidar_points.size(), 2u);
   EXPECT_NEAR(o->lidar_points[0].z(), 12.2, 1e-9);  // camera 3 m along world z
-  EXPECT_EQ(o->surfaceObservations().size(), 2u);
+  EXPECT_EQ(o->surfaceObservations(0.5).size(), 2u);
   // Over the cap, every k-th return is kept.
   for (int i = 0; i < 300; ++i) in.lidar_cam.push_back({2.0 + 0.001 * i, 0.5, 9.2});
   store.observe(in, ended);
@@ -107,7 +111,7 @@ TEST(ObjectStore, BoxConsensusIsRobustToOneBadBoxAndToAFlippedHeading) {
   std::vector<int32_t> ended;
   for (int k = 0; k < 5; ++k) {
     // The camera moves 1 m a keyframe: the box's z in the camera shrinks by 1 so the car stays put.
-    double yaw = k == 2 ? M_PI : 0.05;        // one detection faces the other way
+    double yaw = k == 2 ? M_PI : 0.05;         // one detection faces the other way
     double z = 10.0 - k + (k == 4 ? 3.0 : 0);  // one is 3 m off
     const std::vector<beslam_box3d> boxes = {carBox(1, BESLAM_MOTION_STATIC, z, yaw)};
     store.observe(keyframe(k, boxes), ended);

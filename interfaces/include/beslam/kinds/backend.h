@@ -51,8 +51,9 @@ typedef struct beslam_track_result {
   uint32_t keypoint_count;
   uint32_t keypoint_size;
   /* ABI 1.3. When is_keyframe: the map points the new keyframe observes (NULL otherwise or from older
-   * backends), handed to the reconstructor. Instance-owned until its next call; keyframe_point_size is
-   * sizeof(beslam_keyframe_point) as the plugin was built. */
+   * backends), handed to the reconstructor: at least those it matched; a backend may add points it did
+   * not match but knows to lie on an object in its view (label: that object's). Instance-owned until its next call;
+   * keyframe_point_size is sizeof(beslam_keyframe_point) as the plugin was built. */
   const beslam_keyframe_point* keyframe_points;
   uint32_t keyframe_point_count;
   uint32_t keyframe_point_size;

@@ -167,7 +167,8 @@ struct TrackResult {
     uint8_t octave = 0;
   };
   std::vector<Keypoint> keypoints;
-  // When is_keyframe: the map points the new keyframe observes (for a reconstructor).
+  // When is_keyframe: the map points the new keyframe observes (for a reconstructor): those it matched,
+  // and the static-object points in its view (labelled by their object).
   struct ObservedPoint {
     int64_t id = -1;
     Eigen::Vector3d p_world = Eigen::Vector3d::Zero();

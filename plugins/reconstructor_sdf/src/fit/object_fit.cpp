@@ -49,6 +49,23 @@ class DiagonalPrior : public ceres::CostFunction {  // r_k = w_k * x_k
   Eigen::VectorXd w_;
 };
 
+// The boxes' pose as a prior on the update D (pose block): D_boxes = T_init^-1 * T_boxes. Residuals: the
+// centre offset in the initial object frame over sigma_m, and the yaw about the object's z over
+// sigma_yaw, wrapped into (-pi/2, pi/2] so a box facing backwards is no error.
+struct BoxPriorResidual {
+  Eigen::Vector3d t_boxes;
+  double yaw_boxes, sigma_m, sigma_yaw;
+
+  template <typename T>
+  bool operator()(const T* pose, T* r) const {
+    for (int k = 0; k < 3; ++k) r[k] = (pose[3 + k] - t_boxes[k]) / sigma_m;
+    T dyaw = pose[2] - yaw_boxes;
+    dyaw -= M_PI * std::round(shape::scalarPart(dyaw) / M_PI);
+    r[3] = dyaw / sigma_yaw;
+    return true;
+  }
+};
+
 template <int K>
 ceres::CostFunction* surfaceCost(const shape::ShapePrior& prior, const Eigen::Vector3d& p0,
                                  const Eigen::Vector3d& size0, double scale) {
@@ -109,6 +126,7 @@ bool FitOptions::validate(std::string* why) const {
   if (max_iterations < 1) return bad("max_iterations must be at least 1");
   if (fit_size && !(lambda_size > 0 && size_sigma > 0)) return bad("fit_size needs lambda_size and size_sigma > 0");
   if (!(inlier_m > 0)) return bad("inlier_m must be positive");
+  if (!(box_sigma_m > 0 && box_sigma_yaw > 0)) return bad("box_sigma_m and box_sigma_yaw must be positive");
   return true;
 }
 
@@ -128,6 +146,8 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
   if (!(size.allFinite() && size.minCoeff() > 0)) return failed(T_world_obj_init, size, code0, "size must be positive");
   if (!T_world_obj_init.matrix().allFinite())
     return failed(T_world_obj_init, size, code0, "initial pose is not finite");
+  if (obs.T_world_obj_boxes && !obs.T_world_obj_boxes->matrix().allFinite())
+    return failed(T_world_obj_init, size, code0, "the boxes' pose is not finite");
   const size_t n = obs.p_world.size();
   if (n == 0) return failed(T_world_obj_init, size, code0, "no surface observations");
   if (!obs.weight.empty() && obs.weight.size() != n)
@@ -159,6 +179,13 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
         const double scale = std::sqrt(options.lambda_surface * w) / options.sigma_m;
         problem.AddResidualBlock(surfaceCostFor(K, prior, p0[i], size, scale), new ceres::HuberLoss(huber * scale),
                                  pose, code.data(), log_size);
+      }
+      if (obs.T_world_obj_boxes) {
+        const Eigen::Isometry3d D_boxes = T_obj_world_init * *obs.T_world_obj_boxes;
+        const double yaw = std::atan2(D_boxes.linear()(1, 0), D_boxes.linear()(0, 0));
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BoxPriorResidual, 4, 6>(new BoxPriorResidual{
+                                     D_boxes.translation(), yaw, options.box_sigma_m, options.box_sigma_yaw}),
+                                 nullptr, pose);
       }
       if (options.lambda_code > 0)
         problem.AddResidualBlock(new DiagonalPrior(std::sqrt(options.lambda_code) * prior.codeStd().cwiseInverse()),

@@ -7,6 +7,7 @@
 // - Energy (Levenberg-Marquardt, Ceres):
 //     E = lambda_surface * sum_i w_i * huber((d_i / sigma_m)^2) + lambda_code * |z / codeStd|^2
 //       [+ lambda_size * |log(size / size_init) / size_sigma|^2 when fit_size]
+//       [+ |dt / box_sigma_m|^2 + (dyaw mod pi / box_sigma_yaw)^2 against the boxes' pose, when given]
 //   with d_i = prior.distance(T_obj_world * p_i, size, z) in metres. The Huber threshold is huber_m (in
 //   metres of d). A first solve with a 4x wider threshold pulls a far initial pose in; the second uses
 //   huber_m.
@@ -20,6 +21,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +33,8 @@ namespace beslam::recon::fit {
 struct FitObservations {                 // all world frame, metres
   std::vector<Eigen::Vector3d> p_world;  // surface observations: LiDAR points in the mask, or map points on the car
   std::vector<double> weight;            // per point, (0, 1], same size (or empty = all 1)
+  // Where the detector's boxes put the car (their consensus), as a pose prior; none: no prior term.
+  std::optional<Eigen::Isometry3d> T_world_obj_boxes;
 };
 
 struct FitOptions {
@@ -43,6 +48,11 @@ struct FitOptions {
   double size_sigma = 0.08;     // std of log(size / size_init)
   bool yaw_only = true;         // translation + yaw about the object's z; false: full 6-DoF
   double inlier_m = 0.10;       // |d| below this counts as an inlier
+  // Box prior (with FitObservations::T_world_obj_boxes): centre offset / box_sigma_m and heading
+  // difference / box_sigma_yaw, the heading taken modulo 180 degrees (a box's front and back may be
+  // swapped; the surface decides which end is the nose).
+  double box_sigma_m = 0.5;
+  double box_sigma_yaw = 20.0 * M_PI / 180.0;
   bool validate(std::string* why) const;
 };
 

@@ -44,10 +44,14 @@ Eigen::Vector3d ObjectRecord::boxSize() const {
   return sum / double(boxes.size());
 }
 
-std::vector<Eigen::Vector3d> ObjectRecord::surfaceObservations() const {
+std::vector<Eigen::Vector3d> ObjectRecord::surfaceObservations(double map_point_margin) const {
   if (!lidar_points.empty()) return lidar_points;
   std::vector<Eigen::Vector3d> out;
-  for (const auto& [id, p] : map_points) out.push_back(p);
+  if (boxes.empty()) return out;
+  const Eigen::Isometry3d T_obj_world = boxPose().inverse();
+  const Eigen::Vector3d half = boxSize() / 2 + Eigen::Vector3d::Constant(map_point_margin);
+  for (const auto& [id, p] : map_points)
+    if (((T_obj_world * p).cwiseAbs() - half).maxCoeff() <= 0) out.push_back(p);
   return out;
 }
 
@@ -69,7 +73,8 @@ std::set<int32_t> ObjectStore::observe(const KeyframeInput& input, std::vector<i
     o.class_id = box.class_id;
     o.last_keyframe = input.keyframe_id;
     const Eigen::Isometry3d T_cam_obj = sdk::objectPose(box);
-    o.boxes.push_back({input.keyframe_id, input.T_world_cam * T_cam_obj, Eigen::Vector3d(box.size[0], box.size[1], box.size[2]), range});
+    o.boxes.push_back({input.keyframe_id, input.T_world_cam * T_cam_obj,
+                       Eigen::Vector3d(box.size[0], box.size[1], box.size[2]), range});
     const uint16_t label = static_cast<uint16_t>(BESLAM_LABEL_STATIC_BASE + box.track_id);
     for (const KeyframeInput::Point& p : input.points)
       if (p.label == label && p.p_world.allFinite()) o.map_points[p.id] = p.p_world;

@@ -12,6 +12,8 @@
 //   id, of other classes or unknown motion are ignored.
 // - Memory is bounded: map points are kept by id (their latest position), LiDAR points per object up to
 //   max_lidar_points (a deterministic thinning keeps every k-th point when over).
+// - Fits see LiDAR returns when the object has any, else its map points inside the boxes' consensus box
+//   grown by map_point_margin.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -26,10 +28,11 @@
 namespace beslam::recon {
 
 struct StoreOptions {
-  double max_range = 30.0;       // m: farther boxes add nothing (their depth is poor)
-  double box_margin = 0.15;      // m: LiDAR returns this far outside a box still count
-  double road_clearance = 0.12;  // m: returns this close to the box bottom are road
-  int max_lidar_points = 2000;   // per object
+  double max_range = 30.0;        // m: farther boxes add nothing (their depth is poor)
+  double box_margin = 0.15;       // m: LiDAR returns this far outside a box still count
+  double road_clearance = 0.12;   // m: returns this close to the box bottom are road
+  int max_lidar_points = 2000;    // per object
+  double map_point_margin = 0.5;  // m: map points farther outside the consensus box are not the car's
 };
 
 // One keyframe's box of an object, in the world frame (landmark frame: x heading, y left, z up, centre).
@@ -50,7 +53,9 @@ struct ObjectRecord {
   // The box observations' consensus: median centre, heading by circular mean, mean size.
   Eigen::Isometry3d boxPose() const;
   Eigen::Vector3d boxSize() const;
-  std::vector<Eigen::Vector3d> surfaceObservations() const;  // LiDAR points if any, else map points
+  // LiDAR points if any, else the map points inside the boxes' consensus box grown by map_point_margin
+  // (a car's surface lies in its box: points labelled on it outside are mask bleed onto the background).
+  std::vector<Eigen::Vector3d> surfaceObservations(double map_point_margin) const;
 };
 
 struct KeyframeInput {
