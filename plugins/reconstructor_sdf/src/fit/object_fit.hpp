@@ -15,6 +15,7 @@
 // - Data problems never throw: no observations, a non-finite point or weight, a weight outside (0, 1],
 //   fewer than 4 points, a non-positive size, a code of the wrong length, a non-finite initial pose, bad
 //   options or a failed solve give FitResult{ok = false, why = "..."} and leave the inputs as the result.
+// - code_init: prior.dimensions() values, or empty for the mean shape (z = 0).
 // - Deterministic (one thread).
 #pragma once
 
