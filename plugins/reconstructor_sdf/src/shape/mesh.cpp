@@ -94,27 +94,29 @@ double MeshDistance::solidSignedDistance(const Eigen::Vector3d& p, int samples) 
   return -std::sqrt(best);
 }
 
-bool MeshDistance::segmentHits(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double slack) const {
-  const Eigen::Vector3d dir = to - from;
-  const double len = dir.norm();
-  if (!(len > slack)) return false;
-  const Eigen::Vector3d u = dir / len;
-  const double t_max = len - slack;
+double MeshDistance::rayHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& u) const {
+  double best = std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < a_.size(); ++i) {  // Moller-Trumbore, both sides
     const Eigen::Vector3d e1 = b_[i] - a_[i], e2 = c_[i] - a_[i];
     const Eigen::Vector3d h = u.cross(e2);
     const double det = e1.dot(h);
     if (std::abs(det) < 1e-12) continue;
-    const Eigen::Vector3d s = from - a_[i];
+    const Eigen::Vector3d s = origin - a_[i];
     const double bu = s.dot(h) / det;
     if (bu < 0 || bu > 1) continue;
     const Eigen::Vector3d q = s.cross(e1);
     const double bv = u.dot(q) / det;
     if (bv < 0 || bu + bv > 1) continue;
     const double t = e2.dot(q) / det;
-    if (t > 1e-9 && t < t_max) return true;
+    if (t > 1e-9) best = std::min(best, t);
   }
-  return false;
+  return best;
+}
+
+bool MeshDistance::segmentHits(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double slack) const {
+  const double len = (to - from).norm();
+  if (!(len > slack)) return false;
+  return rayHit(from, (to - from) / len) < len - slack;
 }
 
 double MeshDistance::signedDistance(const Eigen::Vector3d& p) const {

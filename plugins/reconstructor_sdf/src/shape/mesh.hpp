@@ -48,6 +48,8 @@ class MeshDistance {
   double solidSignedDistance(const Eigen::Vector3d& p, int samples = 6000) const;
   // First hit of the segment from -> to (excluding its last `slack` metres); false when there is none.
   bool segmentHits(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double slack = 0.01) const;
+  // Distance along the unit direction to the first triangle the ray from origin meets; infinity if none.
+  double rayHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const;
 
  private:
   std::vector<Eigen::Vector3d> a_, b_, c_;
