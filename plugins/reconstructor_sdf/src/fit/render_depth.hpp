@@ -59,7 +59,7 @@ bool renderDepth(const shape::ShapePrior& prior, const T origin[3], const T dire
   if (!hit) return false;
   const double h = 1e-4;
   const double slope = (dist(t) - dist(t - h)) / h;  // one-sided, outside (the distance has a kink at 0)
-  if (!(slope < -0.05)) return false;  // grazing
+  if (!(slope < -0.05)) return false;                // grazing
   const T p[3] = {origin[0] + t * direction[0], origin[1] + t * direction[1], origin[2] + t * direction[2]};
   *depth = T(t) - prior.distanceSized(p, size, code) / slope;
   return true;
