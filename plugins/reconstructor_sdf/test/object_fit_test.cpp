@@ -2,11 +2,13 @@
 // points after a perturbed start, and bad observations rejected without a crash.
 #include "fit/object_fit.hpp"
 
+#include <ceres/jet.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "car_set.hpp"
+#include "fit/render_depth.hpp"
 
 using namespace beslam::recon;
 
@@ -145,8 +147,97 @@ TEST(ObjectFit, BadObservationsGiveAClearErrorNotACrash) {
   obs.weight.clear();
   EXPECT_EQ(why(obs, Eigen::Vector3d(4.5, 0, 1.5)), "size must be positive");
   EXPECT_NE(why(obs, size, Eigen::VectorXd::Zero(prior.dimensions() + 1)).find("initial code"), std::string::npos);
+  fit::FitObservations with_ray = obs;
+  with_ray.rays.push_back({Eigen::Vector3d(10, 0, 0), Eigen::Vector3d(-1, 0, 0), -2.0, 1.0});
+  EXPECT_EQ(why(with_ray), "ray 0 is not finite, has no positive depth or no unit direction");
+  with_ray.rays[0].depth_m = 7.75;
+  with_ray.rays[0].direction_world = Eigen::Vector3d(-2, 0, 0);
+  EXPECT_EQ(why(with_ray), "ray 0 is not finite, has no positive depth or no unit direction");
   fit::FitObservations few;
   few.p_world.assign(3, Eigen::Vector3d(2.25, 0, 0));
   EXPECT_EQ(why(few), "fewer than 4 surface observations");
   EXPECT_TRUE(fit::fitObject(prior, T, size, z, obs, opt).ok);  // the same points, all finite
+}
+
+TEST(RenderDepth, AutodiffGradientMatchesNumeric) {
+  const auto& prior = shipped();
+  const int K = prior.dimensions();
+  ASSERT_LE(K, 8);
+  using J = ceres::Jet<double, 14>;  // origin 3, direction 3, code up to 8
+  const double size[3] = {4.5, 1.8, 1.5};
+  shape::Random rng(2);
+  int hits = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const double bearing = rng.uniform(-M_PI, M_PI);
+    const Eigen::Vector3d o(8 * std::cos(bearing), 8 * std::sin(bearing), 0.9);
+    const Eigen::Vector3d target(rng.uniform(-1.8, 1.8), rng.uniform(-0.6, 0.6), rng.uniform(-0.5, 0.5));
+    const Eigen::Vector3d u = (target - o).normalized();
+    std::vector<double> z(K);
+    for (int k = 0; k < K; ++k) z[k] = rng.uniform(-1, 1) * prior.codeStd()(k);
+    auto render = [&](const Eigen::Vector3d& oo, const Eigen::Vector3d& uu, const std::vector<double>& zz, double* t) {
+      const double ov[3] = {oo.x(), oo.y(), oo.z()}, uv[3] = {uu.x(), uu.y(), uu.z()};
+      return fit::renderDepth(prior, ov, uv, size, zz.data(), t);
+    };
+    double t0;
+    if (!render(o, u, z, &t0)) continue;
+    J oj[3], uj[3], zj[8], sj[3], tj;
+    for (int a = 0; a < 3; ++a) oj[a] = J(o(a), a), uj[a] = J(u(a), 3 + a), sj[a] = J(size[a]);
+    for (int k = 0; k < K; ++k) zj[k] = J(z[k], 6 + k);
+    ASSERT_TRUE(fit::renderDepth(prior, oj, uj, sj, zj, &tj));
+    EXPECT_NEAR(tj.a, t0, 1e-6);
+    const double h = 1e-5;
+    for (int a = 0; a < 3; ++a) {
+      double tp, tm;
+      const Eigen::Vector3d e = Eigen::Vector3d::Unit(a) * h;
+      if (!render(o + e, u, z, &tp) || !render(o - e, u, z, &tm)) continue;
+      EXPECT_NEAR(tj.v[a], (tp - tm) / (2 * h), 2e-3) << "trial " << trial << " origin " << a;
+      if (!render(o, u + e, z, &tp) || !render(o, u - e, z, &tm)) continue;
+      EXPECT_NEAR(tj.v[3 + a], (tp - tm) / (2 * h), 2e-2 * std::max(1.0, std::abs(tj.v[3 + a])))
+          << "trial " << trial << " direction " << a;
+    }
+    for (int k = 0; k < K; ++k) {
+      std::vector<double> zp = z, zm = z;
+      zp[k] += h, zm[k] -= h;
+      double tp, tm;
+      if (!render(o, u, zp, &tp) || !render(o, u, zm, &tm)) continue;
+      EXPECT_NEAR(tj.v[6 + k], (tp - tm) / (2 * h), 2e-3) << "trial " << trial << " code " << k;
+    }
+    ++hits;
+  }
+  EXPECT_GE(hits, 20);
+}
+
+TEST(ObjectFit, RecoversACarFromADepthMap) {
+  // A 24 x 12 pixel patch of a depth map over the car (rays that hit it: the mask), 2 cm depth noise,
+  // no points: the rendering term alone.
+  for (int i = 0; i < 2; ++i) {
+    Scenario s = scenario(8 + i, 0, 0.0, i ? 2.4 : -0.8, 8.0);
+    const shape::MeshDistance md(s.car.body.mesh);
+    const Eigen::Vector3d size = s.car.body.size;
+    const double bearing = i ? 2.4 : -0.8;
+    const Eigen::Vector3d cam_obj(8 * std::cos(bearing), 8 * std::sin(bearing), 1.7 - size.z() / 2);
+    shape::Random rng(40 + i);
+    for (int r = 0; r < 12; ++r)
+      for (int c = 0; c < 24; ++c) {
+        // Aim at a grid over the box's silhouette from the camera.
+        const Eigen::Vector3d side = Eigen::Vector3d::UnitZ().cross(-cam_obj).normalized();
+        const Eigen::Vector3d target = side * (c - 11.5) / 11.5 * 2.6 + Eigen::Vector3d(0, 0, (r - 5.5) / 5.5 * 0.9);
+        const Eigen::Vector3d u = (target - cam_obj).normalized();
+        const double t = md.rayHit(cam_obj, u);
+        if (!std::isfinite(t)) continue;
+        fit::DepthRay ray;
+        ray.origin_world = s.T_world_obj * cam_obj;
+        ray.direction_world = s.T_world_obj.linear() * u;
+        ray.depth_m = t + 0.02 * (rng.uniform() + rng.uniform() + rng.uniform() - 1.5) * 2;
+        s.obs.rays.push_back(ray);
+      }
+    ASSERT_GT(s.obs.rays.size(), 80u);
+    const fit::FitResult r = fit::fitObject(shipped(), s.T_init, size, Eigen::VectorXd::Zero(shipped().dimensions()),
+                                            s.obs, fit::FitOptions());
+    ASSERT_TRUE(r.ok) << r.why;
+    const Errors e = errors(s, r);
+    EXPECT_LT(e.centre, 0.15) << "car " << i << " " << s.car.shape;
+    EXPECT_LT(e.yaw_deg, 5.0) << "car " << i << " " << s.car.shape;
+    EXPECT_LT(e.chamfer, 0.10) << "car " << i << " " << s.car.shape;
+  }
 }

@@ -92,3 +92,27 @@ std::vector<Eigen::Vector3d> visibleSurfacePoints(const shape::Mesh& mesh, const
 }
 
 }  // namespace beslam::recon::tools
+
+namespace beslam::recon::tools {
+
+std::vector<ObjectRay> depthPatch(const shape::Mesh& mesh, const Eigen::Vector3d& camera_obj,
+                                  const Eigen::Vector3d& size, int cols, int rows, double noise_m, std::uint64_t seed) {
+  const shape::MeshDistance md(mesh);
+  const Eigen::Vector3d side = Eigen::Vector3d::UnitZ().cross(-camera_obj).normalized();
+  const double half_width = 0.5 * std::hypot(size.x(), size.y()) + 0.3, half_height = 0.5 * size.z() + 0.15;
+  shape::Random rng(seed);
+  std::vector<ObjectRay> out;
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      const double fc = cols > 1 ? 2.0 * c / (cols - 1) - 1 : 0, fr = rows > 1 ? 2.0 * r / (rows - 1) - 1 : 0;
+      const Eigen::Vector3d target = side * fc * half_width + Eigen::Vector3d(0, 0, fr * half_height);
+      const Eigen::Vector3d u = (target - camera_obj).normalized();
+      const double t = md.rayHit(camera_obj, u);
+      if (!std::isfinite(t)) continue;
+      const double noise = 2 * (rng.uniform() + rng.uniform() + rng.uniform() - 1.5);  // std 1
+      out.push_back({u, t + noise_m * noise});
+    }
+  return out;
+}
+
+}  // namespace beslam::recon::tools

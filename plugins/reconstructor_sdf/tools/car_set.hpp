@@ -41,3 +41,17 @@ std::vector<Eigen::Vector3d> visibleSurfacePoints(const shape::Mesh& mesh, const
                                                   double noise_m, std::uint64_t seed);
 
 }  // namespace beslam::recon::tools
+
+namespace beslam::recon::tools {
+
+// A simulated depth-map patch (object frame): rays from camera_obj through a cols x rows grid spanning
+// the box as seen from the camera; those that hit the car, with their depth along the ray plus uniform-sum
+// noise of standard deviation noise_m.
+struct ObjectRay {
+  Eigen::Vector3d direction;
+  double depth;
+};
+std::vector<ObjectRay> depthPatch(const shape::Mesh& mesh, const Eigen::Vector3d& camera_obj,
+                                  const Eigen::Vector3d& size, int cols, int rows, double noise_m, std::uint64_t seed);
+
+}  // namespace beslam::recon::tools

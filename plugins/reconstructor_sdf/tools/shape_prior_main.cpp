@@ -7,8 +7,8 @@
 // PCA; same options give a byte-identical file. eval: held-out cars from the sequences' ranges, each
 // reconstructed by least squares in code space (projection of its grid); prints the median and 90th
 // percentile Chamfer distance in metres. --fit also fits each held-out car from simulated LiDAR-like and
-// map-point-like observations (tools/car_set.hpp) and prints centre, yaw and Chamfer errors and the fit
-// time. Errors: one line "beslam-shape-prior: error: ...", exit 1 (2 for usage).
+// map-point-like observations and from a depth-map patch alone (tools/car_set.hpp) and prints centre, yaw and Chamfer
+// errors and the fit time. Errors: one line "beslam-shape-prior: error: ...", exit 1 (2 for usage).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -168,7 +168,7 @@ int eval(const Args& a) {
   if (!a.has("--fit")) return 0;
   struct Case {
     const char* name;
-    int points;
+    int points;  // 0: a 16 x 8 depth-map patch instead of points
     double noise;
     fit::FitOptions opt;
   };
@@ -176,7 +176,8 @@ int eval(const Args& a) {
   sparse.sigma_m = 0.05;
   sparse.huber_m = 0.10;
   const Case cases[] = {{"LiDAR-like (200 pts, 2 cm)", 200, 0.02, lidar},
-                        {"map points (50 pts, 5 cm)", 50, 0.05, sparse}};
+                        {"map points (50 pts, 5 cm)", 50, 0.05, sparse},
+                        {"a depth-map patch (16 x 8 rays, 5 cm)", 0, 0.05, sparse}};
   for (const Case& c : cases) {
     std::vector<double> centre, yaw, ch, ms;
     int failed = 0;
@@ -187,11 +188,15 @@ int eval(const Args& a) {
       const double bearing = rng.uniform(-M_PI, M_PI), range = rng.uniform(6, 10);
       const Eigen::Vector3d sensor(range * std::cos(bearing), range * std::sin(bearing), 1.7 - car.size.z() / 2);
       const auto pts = tools::visibleSurfacePoints(car.mesh, sensor, c.points, c.noise, seed * 7919 + i);
+      const auto rays = c.points ? std::vector<tools::ObjectRay>()
+                                 : tools::depthPatch(car.mesh, sensor, car.size, 16, 8, c.noise, seed * 7919 + i);
       Eigen::Isometry3d T_true = Eigen::Isometry3d::Identity();
       T_true.linear() = Eigen::AngleAxisd(rng.uniform(-M_PI, M_PI), Eigen::Vector3d::UnitZ()).toRotationMatrix();
       T_true.translation() = Eigen::Vector3d(rng.uniform(-20, 20), rng.uniform(-20, 20), car.size.z() / 2);
       fit::FitObservations obs;
       for (const auto& p : pts) obs.p_world.push_back(T_true * p);
+      for (const auto& ray : rays)
+        obs.rays.push_back({T_true * sensor, T_true.linear() * ray.direction, ray.depth, 1.0});
       const double a0 = rng.uniform(0, 2 * M_PI);
       Eigen::Isometry3d T_init = T_true;
       T_init.translation() += 0.5 * Eigen::Vector3d(std::cos(a0), std::sin(a0), 0);

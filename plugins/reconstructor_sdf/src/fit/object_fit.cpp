@@ -6,6 +6,8 @@
 #include <cmath>
 #include <memory>
 
+#include "fit/render_depth.hpp"
+
 namespace beslam::recon::fit {
 namespace {
 
@@ -29,6 +31,67 @@ struct SurfaceResidual {
     return true;
   }
 };
+
+template <int K>
+struct DepthResidual {
+  const shape::ShapePrior* prior;
+  Eigen::Vector3d o0, u0, size0;  // ray in the initial object frame
+  double depth, scale;
+
+  template <typename T>
+  bool operator()(const T* pose, const T* code, const T* log_size, T* r) const {
+    const T d[3] = {T(o0.x()) - pose[3], T(o0.y()) - pose[4], T(o0.z()) - pose[5]};
+    const T u[3] = {T(u0.x()), T(u0.y()), T(u0.z())};
+    const T minus_aa[3] = {-pose[0], -pose[1], -pose[2]};
+    T o_obj[3], u_obj[3];
+    ceres::AngleAxisRotatePoint(minus_aa, d, o_obj);
+    ceres::AngleAxisRotatePoint(minus_aa, u, u_obj);
+    using std::exp;
+    const T size[3] = {size0.x() * exp(log_size[0]), size0.y() * exp(log_size[1]), size0.z() * exp(log_size[2])};
+    T rendered;
+    if (!renderDepth(*prior, o_obj, u_obj, size, code, &rendered)) {
+      r[0] = T(0.0);  // a miss: no information in this iteration
+      return true;
+    }
+    r[0] = scale * (rendered - depth);
+    return true;
+  }
+};
+
+template <int K>
+ceres::CostFunction* depthCost(const shape::ShapePrior& prior, const Eigen::Vector3d& o0, const Eigen::Vector3d& u0,
+                               const Eigen::Vector3d& size0, double depth, double scale) {
+  return new ceres::AutoDiffCostFunction<DepthResidual<K>, 1, 6, K, 3>(
+      new DepthResidual<K>{&prior, o0, u0, size0, depth, scale});
+}
+
+ceres::CostFunction* depthCostFor(int k, const shape::ShapePrior& prior, const Eigen::Vector3d& o0,
+                                  const Eigen::Vector3d& u0, const Eigen::Vector3d& size0, double depth, double scale) {
+  switch (k) {
+    case 1:
+      return depthCost<1>(prior, o0, u0, size0, depth, scale);
+    case 2:
+      return depthCost<2>(prior, o0, u0, size0, depth, scale);
+    case 3:
+      return depthCost<3>(prior, o0, u0, size0, depth, scale);
+    case 4:
+      return depthCost<4>(prior, o0, u0, size0, depth, scale);
+    case 5:
+      return depthCost<5>(prior, o0, u0, size0, depth, scale);
+    case 6:
+      return depthCost<6>(prior, o0, u0, size0, depth, scale);
+    case 7:
+      return depthCost<7>(prior, o0, u0, size0, depth, scale);
+    case 8:
+      return depthCost<8>(prior, o0, u0, size0, depth, scale);
+    case 9:
+      return depthCost<9>(prior, o0, u0, size0, depth, scale);
+    case 10:
+      return depthCost<10>(prior, o0, u0, size0, depth, scale);
+    default:
+      return nullptr;
+  }
+}
 
 class DiagonalPrior : public ceres::CostFunction {  // r_k = w_k * x_k
  public:
@@ -127,6 +190,8 @@ bool FitOptions::validate(std::string* why) const {
   if (fit_size && !(lambda_size > 0 && size_sigma > 0)) return bad("fit_size needs lambda_size and size_sigma > 0");
   if (!(inlier_m > 0)) return bad("inlier_m must be positive");
   if (!(box_sigma_m > 0 && box_sigma_yaw > 0)) return bad("box_sigma_m and box_sigma_yaw must be positive");
+  if (!(lambda_render >= 0 && sigma_depth_m > 0 && huber_depth_m > 0))
+    return bad("lambda_render must be 0 or more, sigma_depth_m and huber_depth_m positive");
   return true;
 }
 
@@ -149,7 +214,7 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
   if (obs.T_world_obj_boxes && !obs.T_world_obj_boxes->matrix().allFinite())
     return failed(T_world_obj_init, size, code0, "the boxes' pose is not finite");
   const size_t n = obs.p_world.size();
-  if (n == 0) return failed(T_world_obj_init, size, code0, "no surface observations");
+  if (n == 0 && obs.rays.empty()) return failed(T_world_obj_init, size, code0, "no surface observations");
   if (!obs.weight.empty() && obs.weight.size() != n)
     return failed(T_world_obj_init, size, code0,
                   std::to_string(obs.weight.size()) + " weights for " + std::to_string(n) + " observations");
@@ -159,7 +224,16 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
     if (!obs.weight.empty() && !(obs.weight[i] > 0 && obs.weight[i] <= 1))
       return failed(T_world_obj_init, size, code0, "weight " + std::to_string(i) + " is outside (0, 1]");
   }
-  if (n < 4) return failed(T_world_obj_init, size, code0, "fewer than 4 surface observations");
+  for (size_t j = 0; j < obs.rays.size(); ++j) {
+    const DepthRay& ray = obs.rays[j];
+    if (!(ray.origin_world.allFinite() && ray.direction_world.allFinite() && std::isfinite(ray.depth_m) &&
+          ray.depth_m > 0 && std::abs(ray.direction_world.norm() - 1) < 1e-6))
+      return failed(T_world_obj_init, size, code0,
+                    "ray " + std::to_string(j) + " is not finite, has no positive depth or no unit direction");
+    if (!(ray.weight > 0 && ray.weight <= 1))
+      return failed(T_world_obj_init, size, code0, "ray " + std::to_string(j) + " weight is outside (0, 1]");
+  }
+  if (n + obs.rays.size() < 4) return failed(T_world_obj_init, size, code0, "fewer than 4 surface observations");
 
   const Eigen::Isometry3d T_obj_world_init = T_world_obj_init.inverse();
   std::vector<Eigen::Vector3d> p0(n);
@@ -187,6 +261,14 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
                                      D_boxes.translation(), yaw, options.box_sigma_m, options.box_sigma_yaw}),
                                  nullptr, pose);
       }
+      if (options.lambda_render > 0)
+        for (const DepthRay& ray : obs.rays) {
+          const double scale = std::sqrt(options.lambda_render * ray.weight) / options.sigma_depth_m;
+          problem.AddResidualBlock(
+              depthCostFor(K, prior, T_obj_world_init * ray.origin_world,
+                           T_obj_world_init.linear() * ray.direction_world, size, ray.depth_m, scale),
+              new ceres::HuberLoss((stage == 0 ? 4 : 1) * options.huber_depth_m * scale), pose, code.data(), log_size);
+        }
       if (options.lambda_code > 0)
         problem.AddResidualBlock(new DiagonalPrior(std::sqrt(options.lambda_code) * prior.codeStd().cwiseInverse()),
                                  nullptr, code.data());
@@ -233,7 +315,7 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
     sum2 += d * d;
     if (std::abs(d) < options.inlier_m) ++r.inliers;
   }
-  r.rms_m = std::sqrt(sum2 / n);
+  r.rms_m = n ? std::sqrt(sum2 / n) : 0.0;
   if (!(r.T_world_obj.matrix().allFinite() && r.code.allFinite() && r.size.allFinite()))
     return failed(T_world_obj_init, size, code0, "solver returned a non-finite result");
   r.ok = true;

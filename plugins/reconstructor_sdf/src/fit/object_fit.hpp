@@ -7,15 +7,20 @@
 // - Energy (Levenberg-Marquardt, Ceres):
 //     E = lambda_surface * sum_i w_i * huber((d_i / sigma_m)^2) + lambda_code * |z / codeStd|^2
 //       [+ lambda_size * |log(size / size_init) / size_sigma|^2 when fit_size]
+//       + lambda_render * sum_j w_j * huber(((D_j - depth_j) / sigma_depth_m)^2)
 //       [+ |dt / box_sigma_m|^2 + (dyaw mod pi / box_sigma_yaw)^2 against the boxes' pose, when given]
-//   with d_i = prior.distance(T_obj_world * p_i, size, z) in metres. The Huber threshold is huber_m (in
+//   with d_i = prior.distance(T_obj_world * p_i, size, z) in metres and D_j the depth rendered along ray j
+//   (fit/render_depth.hpp). A ray that misses the shape at the current estimate adds nothing in that
+//   iteration (no silhouette term). The Huber threshold is huber_m (in
 //   metres of d). A first solve with a 4x wider threshold pulls a far initial pose in; the second uses
 //   huber_m.
 // - Pose: yaw_only (default) optimises the translation and the rotation about the object's own z axis
 //   (the initial pose's up); roll and pitch stay those of the initial pose. Otherwise full 6-DoF.
-// - Data problems never throw: no observations, a non-finite point or weight, a weight outside (0, 1],
-//   fewer than 4 points, a non-positive size, a code of the wrong length, a non-finite initial pose, bad
-//   options or a failed solve give FitResult{ok = false, why = "..."} and leave the inputs as the result.
+// - Data problems never throw: no observations, a non-finite point, ray or weight, a weight outside
+//   (0, 1], a non-positive depth, fewer than 4 points and rays together, a non-positive size, a code of the wrong
+//   length, a non-finite initial pose, bad options or a failed solve give FitResult{ok = false, why = "..."} and leave
+//   the inputs as the result.
+// - code_init: prior.dimensions() values, or empty for the mean shape (z = 0).
 // - Deterministic (one thread).
 #pragma once
 
@@ -30,11 +35,20 @@
 
 namespace beslam::recon::fit {
 
+// One observed depth: the distance along a camera ray (a pixel in the car's mask) to the car's surface.
+struct DepthRay {
+  Eigen::Vector3d origin_world;     // the camera centre
+  Eigen::Vector3d direction_world;  // unit length
+  double depth_m = 0;               // along the ray (not the camera z), > 0
+  double weight = 1;                // (0, 1]
+};
+
 struct FitObservations {                 // all world frame, metres
   std::vector<Eigen::Vector3d> p_world;  // surface observations: LiDAR points in the mask, or map points on the car
   std::vector<double> weight;            // per point, (0, 1], same size (or empty = all 1)
   // Where the detector's boxes put the car (their consensus), as a pose prior; none: no prior term.
   std::optional<Eigen::Isometry3d> T_world_obj_boxes;
+  std::vector<DepthRay> rays;            // observed depths for the rendering term (may be empty)
 };
 
 struct FitOptions {
@@ -53,6 +67,9 @@ struct FitOptions {
   // swapped; the surface decides which end is the nose).
   double box_sigma_m = 0.5;
   double box_sigma_yaw = 20.0 * M_PI / 180.0;
+  double lambda_render = 1.0;   // weight of the rendering term (rays)
+  double sigma_depth_m = 0.05;  // noise of one observed depth
+  double huber_depth_m = 0.10;  // robust threshold on a depth difference
   bool validate(std::string* why) const;
 };
 

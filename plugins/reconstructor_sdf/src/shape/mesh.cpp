@@ -94,27 +94,29 @@ double MeshDistance::solidSignedDistance(const Eigen::Vector3d& p, int samples) 
   return -std::sqrt(best);
 }
 
-bool MeshDistance::segmentHits(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double slack) const {
-  const Eigen::Vector3d dir = to - from;
-  const double len = dir.norm();
-  if (!(len > slack)) return false;
-  const Eigen::Vector3d u = dir / len;
-  const double t_max = len - slack;
+double MeshDistance::rayHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& u) const {
+  double best = std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < a_.size(); ++i) {  // Moller-Trumbore, both sides
     const Eigen::Vector3d e1 = b_[i] - a_[i], e2 = c_[i] - a_[i];
     const Eigen::Vector3d h = u.cross(e2);
     const double det = e1.dot(h);
     if (std::abs(det) < 1e-12) continue;
-    const Eigen::Vector3d s = from - a_[i];
+    const Eigen::Vector3d s = origin - a_[i];
     const double bu = s.dot(h) / det;
     if (bu < 0 || bu > 1) continue;
     const Eigen::Vector3d q = s.cross(e1);
     const double bv = u.dot(q) / det;
     if (bv < 0 || bu + bv > 1) continue;
     const double t = e2.dot(q) / det;
-    if (t > 1e-9 && t < t_max) return true;
+    if (t > 1e-9) best = std::min(best, t);
   }
-  return false;
+  return best;
+}
+
+bool MeshDistance::segmentHits(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double slack) const {
+  const double len = (to - from).norm();
+  if (!(len > slack)) return false;
+  return rayHit(from, (to - from) / len) < len - slack;
 }
 
 double MeshDistance::signedDistance(const Eigen::Vector3d& p) const {
@@ -123,41 +125,69 @@ double MeshDistance::signedDistance(const Eigen::Vector3d& p) const {
 }
 
 int orientOutward(Mesh& mesh) {
-  // Union-find over faces joined by vertices at the same position.
+  // Weld vertices by position, then walk each part across shared edges, turning every face to agree with
+  // the face it was reached from (neighbours traverse a shared edge in opposite directions).
   const int nf = static_cast<int>(mesh.faces.size());
-  std::vector<int> parent(nf);
-  for (int i = 0; i < nf; ++i) parent[i] = i;
-  auto find = [&](int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  std::map<std::array<double, 3>, int> first_face;
-  for (int f = 0; f < nf; ++f)
-    for (int v : mesh.faces[f]) {
-      const Eigen::Vector3d& p = mesh.vertices[v];
-      const auto [it, fresh] = first_face.emplace(std::array<double, 3>{p.x(), p.y(), p.z()}, f);
-      if (!fresh) parent[find(f)] = find(it->second);
+  std::map<std::array<double, 3>, int> weld;
+  std::vector<std::array<int, 3>> f(nf);
+  for (int i = 0; i < nf; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector3d& p = mesh.vertices[mesh.faces[i][c]];
+      f[i][c] = weld.emplace(std::array<double, 3>{p.x(), p.y(), p.z()}, static_cast<int>(weld.size())).first->second;
     }
-  std::map<int, Eigen::Vector3d> centroid;
-  std::map<int, int> count;
-  for (int f = 0; f < nf; ++f) {
-    const int r = find(f);
-    auto [it, fresh] = centroid.emplace(r, Eigen::Vector3d::Zero());
-    for (int v : mesh.faces[f]) it->second += mesh.vertices[v];
-    count[r] += 3;
+  std::map<std::pair<int, int>, std::vector<int>> edge_faces;
+  for (int i = 0; i < nf; ++i)
+    for (int c = 0; c < 3; ++c) edge_faces[std::minmax(f[i][c], f[i][(c + 1) % 3])].push_back(i);
+  auto hasDirected = [&](int face, int a, int b) {
+    for (int c = 0; c < 3; ++c)
+      if (f[face][c] == a && f[face][(c + 1) % 3] == b) return true;
+    return false;
+  };
+  std::vector<int> part(nf, -1);
+  std::vector<bool> flip(nf, false);
+  std::vector<double> volume;
+  int parts = 0;
+  for (int seed = 0; seed < nf; ++seed) {
+    if (part[seed] >= 0) continue;
+    std::vector<int> members{seed}, stack{seed};
+    part[seed] = parts;
+    while (!stack.empty()) {
+      const int i = stack.back();
+      stack.pop_back();
+      for (int c = 0; c < 3; ++c) {
+        int a = f[i][c], b = f[i][(c + 1) % 3];
+        if (flip[i]) std::swap(a, b);  // the edge as face i runs it after its flip
+        for (int j : edge_faces[std::minmax(a, b)]) {
+          if (part[j] >= 0) continue;
+          part[j] = parts;
+          flip[j] = hasDirected(j, a, b);  // same direction as i: j must turn
+          members.push_back(j);
+          stack.push_back(j);
+        }
+      }
+    }
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int i : members)
+      for (int v : mesh.faces[i]) centroid += mesh.vertices[v];
+    centroid /= 3.0 * members.size();
+    double vol = 0;
+    for (int i : members) {
+      const auto& t = mesh.faces[i];
+      const double v =
+          (mesh.vertices[t[0]] - centroid).dot((mesh.vertices[t[1]] - centroid).cross(mesh.vertices[t[2]] - centroid)) /
+          6;
+      vol += flip[i] ? -v : v;
+    }
+    volume.push_back(vol);
+    ++parts;
   }
-  std::map<int, double> volume;
-  for (int f = 0; f < nf; ++f) {
-    const int r = find(f);
-    const Eigen::Vector3d c = centroid[r] / count[r];
-    const auto& t = mesh.faces[f];
-    volume[r] += (mesh.vertices[t[0]] - c).dot((mesh.vertices[t[1]] - c).cross(mesh.vertices[t[2]] - c)) / 6;
-  }
-  for (int f = 0; f < nf; ++f)
-    if (volume[find(f)] < 0) std::swap(mesh.faces[f][1], mesh.faces[f][2]);
-  int reversed = 0;
-  for (const auto& [r, v] : volume) reversed += v < 0;
-  return reversed;
+  int changed = 0;
+  for (int i = 0; i < nf; ++i)
+    if (flip[i] != (volume[part[i]] < 0)) {
+      std::swap(mesh.faces[i][1], mesh.faces[i][2]);
+      ++changed;
+    }
+  return changed;
 }
 
 std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, int n, std::uint64_t seed, bool exterior_only) {

@@ -7,10 +7,10 @@
 //   generalised winding number above 0.5, so overlapping closed parts (wheels in the body) and small
 //   holes (the synthetic cars' missing cabin floor) still give the right sign. The faces must face
 //   outwards; orientOutward makes them so per connected part.
-// - orientOutward: splits the mesh into parts (faces sharing a vertex position) and reverses every face
-//   of a part whose signed volume about its own centroid is negative; returns the number of parts
-//   reversed. For meshes whose parts are each consistently oriented (the synthetic cars are not
-//   oriented alike: bodies face inwards, wheels outwards).
+// - orientOutward: splits the mesh into parts (faces joined by edges, vertices welded by position),
+//   makes the faces of each part agree across their shared edges, then turns a part whose signed volume
+//   about its own centroid is negative; returns the number of faces reversed. The synthetic cars need it:
+//   their faces follow the renderer (bodies wind inwards, one side's wheel rims against its caps).
 // - surfaceSamples: n points drawn area-weighted with the given seed (same seed, same points);
 //   exterior_only drops points on faces buried inside the mesh (their outside neighbour is inside).
 // - chamferDistance(estimate, truth, n, seed): the symmetric mean surface distance, metres: (mean over n
@@ -48,6 +48,8 @@ class MeshDistance {
   double solidSignedDistance(const Eigen::Vector3d& p, int samples = 6000) const;
   // First hit of the segment from -> to (excluding its last `slack` metres); false when there is none.
   bool segmentHits(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double slack = 0.01) const;
+  // Distance along the unit direction to the first triangle the ray from origin meets; infinity if none.
+  double rayHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const;
 
  private:
   std::vector<Eigen::Vector3d> a_, b_, c_;

@@ -5,7 +5,7 @@
 // - carMesh(shape, l, w, h) returns the same triangles the sequences use for that shape and size
 //   (World builds its cars with the same function), as an indexed triangle soup: three vertices per
 //   face, in the renderer's order: the faces are NOT consistently oriented (the body and cabin wind
-//   clockwise seen from outside, the wheels counter-clockwise).
+//   clockwise seen from outside; on one side the wheel rims disagree with their caps).
 // - Frame: ISO vehicle frame, metres: x forward, y left, z up, origin at the bottom centre of the box,
 //   so the mesh spans x in [-l/2, l/2], z in [0, h] and y in [-w/2 - 0.004, w/2 + 0.004] (the tyres
 //   stand 4 mm proud of the body; the sequences' labelled width is w + 0.008).
