@@ -10,8 +10,10 @@
 
 #include "beslam/formats/align.hpp"
 #include "beslam/formats/error.hpp"
+#include "beslam/formats/file.hpp"
 #include "beslam/formats/geometry.hpp"
 #include "beslam/formats/labels.hpp"
+#include "beslam/formats/ply.hpp"
 #include "beslam/formats/trajectory.hpp"
 #include "beslam/test/scratch_dir.hpp"
 
@@ -57,6 +59,40 @@ TEST_F(Files, KittiAndTumRowsReadAndRoundTripExactly) {
   EXPECT_EQ(back.poses[1].translation(), t.poses[1].translation());
   writeKitti(write("out.kitti", ""), k);
   EXPECT_EQ(readKitti(path("out.kitti")).poses[1].matrix(), k.poses[1].matrix());
+}
+
+TEST_F(Files, PlyMeshesRoundTripAndBadFilesNameTheFile) {
+  TriangleMesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  m.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(10, 0, -2);
+  writePlyMesh(path("m.ply"), m, T);
+  const TriangleMesh back = readPlyMesh(path("m.ply"));
+  ASSERT_EQ(back.vertices.size(), 4u);
+  EXPECT_EQ(back.faces, m.faces);
+  EXPECT_EQ(back.vertices[1], Eigen::Vector3d(11, 0, -2));  // written through T, exact in float
+  // ASCII with extra vertex properties (a map with colours) reads its x y z.
+  const std::string ascii =
+      write("a.ply",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+            "property float z\nproperty uchar red\nelement face 1\n"
+            "property list uchar int vertex_indices\nend_header\n0 0 0 9\n1 0 0 9\n0 1 0 9\n3 0 1 2\n");
+  EXPECT_EQ(readPlyMesh(ascii).vertices[2], Eigen::Vector3d(0, 1, 0));
+  // Truncated, not PLY, a quad, an index past the vertices: one error each, naming the file.
+  const std::string bytes = readFile(path("m.ply"));
+  const std::string cut = write("cut.ply", bytes.substr(0, bytes.size() - 5));
+  EXPECT_NE(errorOf([&] { readPlyMesh(cut); }).find("cut.ply: PLY file truncated"), std::string::npos);
+  EXPECT_NE(errorOf([&] { readPlyMesh(write("x.ply", "solid x\n")); }).find("x.ply: not a PLY file"),
+            std::string::npos);
+  const std::string quad = write("q.ply",
+                                 "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement face 1\nend_header\n0 0 0\n4 0 0 0 0\n");
+  EXPECT_NE(errorOf([&] { readPlyMesh(quad); }).find("q.ply: PLY face 0 unreadable"), std::string::npos);
+  const std::string past = write("p.ply",
+                                 "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement face 1\nend_header\n0 0 0\n3 0 0 5\n");
+  EXPECT_NE(errorOf([&] { readPlyMesh(past); }).find("p.ply: PLY face index out of range"), std::string::npos);
 }
 
 TEST_F(Files, BadTrajectoryRowsNameTheFileAndLine) {

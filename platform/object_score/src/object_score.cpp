@@ -15,6 +15,7 @@
 #include "beslam/common/file_io.hpp"
 #include "beslam/common/run_folder.hpp"
 #include "beslam/formats/labels.hpp"
+#include "beslam/formats/ply.hpp"
 #include "beslam/formats/trajectory.hpp"
 
 namespace fs = std::filesystem;
@@ -23,61 +24,7 @@ namespace beslam::object_score {
 
 namespace {
 
-struct Mesh {
-  std::vector<Eigen::Vector3d> vertices;
-  std::vector<std::array<int, 3>> faces;
-};
-
-// An ASCII PLY mesh as beslam writes them (vertex x y z first, then faces as vertex index lists).
-Mesh readPly(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open");
-  std::string line;
-  size_t vertices = 0, faces = 0, vertex_properties = 0;
-  bool in_vertex = false, ascii = false;
-  while (std::getline(in, line)) {
-    std::istringstream s(line);
-    std::string word;
-    s >> word;
-    if (word == "format") {
-      std::string kind;
-      s >> kind;
-      ascii = kind == "ascii";
-    } else if (word == "element") {
-      std::string name;
-      size_t count = 0;
-      s >> name >> count;
-      in_vertex = name == "vertex";
-      if (name == "vertex") vertices = count;
-      if (name == "face") faces = count;
-    } else if (word == "property" && in_vertex) {
-      ++vertex_properties;
-    } else if (word == "end_header") {
-      break;
-    }
-  }
-  if (!ascii) throw Error(path + ": not an ASCII PLY file");
-  if (vertex_properties < 3) throw Error(path + ": vertices have fewer than 3 properties");
-  Mesh mesh;
-  for (size_t i = 0; i < vertices; ++i) {
-    if (!std::getline(in, line)) throw Error(path + ": ends after " + std::to_string(i) + " of " + std::to_string(vertices) + " vertices");
-    std::istringstream s(line);
-    Eigen::Vector3d v;
-    if (!(s >> v.x() >> v.y() >> v.z()) || !v.allFinite()) throw Error(path + ": vertex " + std::to_string(i) + " is not three numbers");
-    mesh.vertices.push_back(v);
-  }
-  for (size_t i = 0; i < faces; ++i) {
-    if (!std::getline(in, line)) throw Error(path + ": ends after " + std::to_string(i) + " of " + std::to_string(faces) + " faces");
-    std::istringstream s(line);
-    long n = 0, a = 0, b = 0, c = 0;
-    if (!(s >> n >> a >> b >> c) || n != 3) throw Error(path + ": face " + std::to_string(i) + " is not a triangle");
-    for (long k : {a, b, c})
-      if (k < 0 || k >= static_cast<long>(vertices)) throw Error(path + ": face " + std::to_string(i) + " indexes past the vertices");
-    mesh.faces.push_back({int(a), int(b), int(c)});
-  }
-  if (mesh.faces.empty()) throw Error(path + ": a mesh without faces");
-  return mesh;
-}
+using Mesh = formats::TriangleMesh;
 
 // Area-weighted samples on a mesh's surface, transformed by T (seeded: the same mesh gives the same samples).
 std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, const Eigen::Isometry3d& T, int n) {
@@ -92,8 +39,9 @@ std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, const Eigen::Isome
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(0, 1);
   for (int i = 0; i < n; ++i) {
-    const size_t k = std::min(mesh.faces.size() - 1,
-                              size_t(std::lower_bound(cumulative.begin(), cumulative.end(), u(rng) * total) - cumulative.begin()));
+    const size_t k =
+        std::min(mesh.faces.size() - 1,
+                 size_t(std::lower_bound(cumulative.begin(), cumulative.end(), u(rng) * total) - cumulative.begin()));
     double a = u(rng), b = u(rng);
     if (a + b > 1) a = 1 - a, b = 1 - b;
     const auto& f = mesh.faces[k];
@@ -134,7 +82,7 @@ struct TruthObject {
   int32_t track_id = -1;
   std::string type, behaviour;
   double length = 0, width = 0, height = 0;
-  bool parked = true;  // standing in every frame
+  bool parked = true;                                 // standing in every frame
   std::map<int64_t, Eigen::Isometry3d> T_world_kobj;  // per frame
 };
 
@@ -145,7 +93,8 @@ Eigen::Isometry3d rowPose(std::istringstream& s) {
   return T;
 }
 
-std::map<int32_t, TruthObject> readTruthObjects(const std::string& seq, const std::map<std::pair<int64_t, int64_t>, bool>& motion) {
+std::map<int32_t, TruthObject> readTruthObjects(const std::string& seq,
+                                                const std::map<std::pair<int64_t, int64_t>, bool>& motion) {
   std::map<int32_t, TruthObject> objects;
   const std::string info_path = seq + "/objects/objects.txt";
   std::ifstream info(info_path);
@@ -177,7 +126,9 @@ std::map<int32_t, TruthObject> readTruthObjects(const std::string& seq, const st
     if (!s || !T.matrix().allFinite())
       throw Error(poses_path + ":" + std::to_string(line_no) + ": expected frame track_id and 12 numbers");
     auto it = objects.find(id);
-    if (it == objects.end()) throw Error(poses_path + ":" + std::to_string(line_no) + ": track " + std::to_string(id) + " is not in objects.txt");
+    if (it == objects.end())
+      throw Error(poses_path + ":" + std::to_string(line_no) + ": track " + std::to_string(id) +
+                  " is not in objects.txt");
     it->second.T_world_kobj[frame] = T;
   }
   for (const auto& [key, moving] : motion)
@@ -201,7 +152,8 @@ Score score(const std::string& run_dir, const Options& options) {
   const RunFolder run = readRunFolder(run_dir);
   const std::string seq = run.dataset_path;
   const fs::path out_root = fs::path(seq).parent_path().parent_path();
-  const formats::Trajectory truth_cams = formats::readKitti((out_root / "poses" / (run.dataset_sequence + ".txt")).string());
+  const formats::Trajectory truth_cams =
+      formats::readKitti((out_root / "poses" / (run.dataset_sequence + ".txt")).string());
   const formats::Trajectory run_cams = formats::readTum(run_dir + "/trajectory.tum");
   // Frame index of each run pose: times.txt row with the same stamp.
   std::vector<double> times;
@@ -267,7 +219,8 @@ Score score(const std::string& run_dir, const Options& options) {
     } catch (const Error& e) {
       throw Error(objects_path + ": object " + std::to_string(result.objects.size()) + ": " + e.what());
     }
-    if (!T_run_obj.matrix().allFinite()) throw Error(objects_path + ": object " + std::to_string(r.track_id) + " has a non-finite pose");
+    if (!T_run_obj.matrix().allFinite())
+      throw Error(objects_path + ": object " + std::to_string(r.track_id) + " has a non-finite pose");
     // Local alignment through the nearest tracked camera.
     size_t nearest = 0;
     for (size_t i = 1; i < run_cams.size(); ++i)
@@ -297,16 +250,18 @@ Score score(const std::string& run_dir, const Options& options) {
       r.moving = m != motion.end() && m->second;
       r.centre_error_m = best;
       r.yaw_error_deg = headingErrorDeg(T_true_obj, T_true_match);
-      r.correct = r.parked && r.centre_error_m <= options.centre_tolerance && r.yaw_error_deg <= options.yaw_tolerance_deg;
+      r.correct =
+          r.parked && r.centre_error_m <= options.centre_tolerance && r.yaw_error_deg <= options.yaw_tolerance_deg;
       if (entry.contains("mesh") && entry["mesh"].is_string()) {
-        const Mesh est = readPly((fs::path(run_dir) / entry["mesh"].get<std::string>()).string());
+        const Mesh est = formats::readPlyMesh((fs::path(run_dir) / entry["mesh"].get<std::string>()).string());
         char name[32];
         std::snprintf(name, sizeof name, "car_%04d.ply", match->track_id);
-        const Mesh true_mesh = readPly(seq + "/objects/" + name);
-        const auto true_samples = surfaceSamples(true_mesh, T_true_match * kittiObjectFromLandmark(match->height).inverse(),
-                                                 options.chamfer_samples);
+        const Mesh true_mesh = formats::readPlyMesh(seq + "/objects/" + name);
+        const auto true_samples = surfaceSamples(
+            true_mesh, T_true_match * kittiObjectFromLandmark(match->height).inverse(), options.chamfer_samples);
         r.chamfer_m = chamfer(surfaceSamples(est, T_true_run, options.chamfer_samples), true_samples);
-        r.shape_chamfer_m = chamfer(surfaceSamples(est, T_true_match * T_run_obj.inverse(), options.chamfer_samples), true_samples);
+        r.shape_chamfer_m =
+            chamfer(surfaceSamples(est, T_true_match * T_run_obj.inverse(), options.chamfer_samples), true_samples);
       }
     }
     if (r.correct) {
@@ -384,8 +339,8 @@ int runCommand(const std::vector<std::string>& args, std::ostream& out, std::ost
     o.precision(3);
     o << "objects reconstructed " << s.reconstructed << ": correct " << s.correct << ", false " << s.false_objects
       << " (" << 100 * s.falseShare() << " %), standing but not parked " << s.other << "\n"
-      << "parked cars within " << options.view_range << " m correctly reconstructed " << s.parked_in_view_correct << " of "
-      << s.parked_in_view << " (" << 100 * s.correctShare() << " %)\n"
+      << "parked cars within " << options.view_range << " m correctly reconstructed " << s.parked_in_view_correct
+      << " of " << s.parked_in_view << " (" << 100 * s.correctShare() << " %)\n"
       << "matched parked cars " << centre.size() << ": median centre error " << median(centre) << " m, heading "
       << median(yaw) << " deg, Chamfer " << median(chamfer) << " m (shape alone " << median(shape) << " m)\n";
     out << o.str();

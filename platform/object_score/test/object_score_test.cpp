@@ -153,14 +153,14 @@ TEST_F(ObjectScoreTest, CountsCorrectAndFalseObjectsThroughLocalAlignment) {
   const auto s = score(run(), Options{});
   EXPECT_EQ(s.reconstructed, 3);
   EXPECT_EQ(s.correct, 1);
-  EXPECT_EQ(s.false_objects, 2);  // the moving car and no car
+  EXPECT_EQ(s.false_objects, 2);   // the moving car and no car
   EXPECT_EQ(s.parked_in_view, 1);  // car 3 is 38-41 m away
   EXPECT_EQ(s.parked_in_view_correct, 1);
   ASSERT_EQ(s.objects.size(), 3u);
   EXPECT_EQ(s.objects[0].truth_track_id, 1);
   EXPECT_NEAR(s.objects[0].centre_error_m, 0.3, 1e-6);
   EXPECT_NEAR(s.objects[0].yaw_error_deg, 0.0, 1e-6);
-  EXPECT_NEAR(s.objects[0].shape_chamfer_m, 0.0, 0.1);  // the same box, sampled independently
+  EXPECT_NEAR(s.objects[0].shape_chamfer_m, 0.0, 0.1);                     // the same box, sampled independently
   EXPECT_GT(s.objects[0].chamfer_m, s.objects[0].shape_chamfer_m + 0.02);  // the 0.3 m offset shows
   EXPECT_LT(s.objects[0].chamfer_m, 0.35);
   EXPECT_TRUE(s.objects[1].moving);

@@ -2,12 +2,12 @@
 
 #include <cmath>
 #include <filesystem>
-#include <iomanip>
 #include <ostream>
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/formats/geometry.hpp"
+#include "beslam/formats/ply.hpp"
 
 namespace fs = std::filesystem;
 
@@ -21,35 +21,25 @@ std::string meshName(int32_t track_id) {
   return "objects/object_" + digits + ".ply";
 }
 
-// The mesh's vertices in the world frame.
-std::vector<Eigen::Vector3d> worldVertices(const registry::ObjectLandmark& o) {
-  std::vector<Eigen::Vector3d> out;
+// The object's mesh in its own frame.
+formats::TriangleMesh objectMesh(const registry::ObjectLandmark& o) {
+  formats::TriangleMesh mesh;
   for (size_t i = 0; i + 2 < o.mesh_vertices.size(); i += 3)
-    out.push_back(o.T_world_object *
-                  Eigen::Vector3d(o.mesh_vertices[i], o.mesh_vertices[i + 1], o.mesh_vertices[i + 2]));
-  return out;
+    mesh.vertices.emplace_back(o.mesh_vertices[i], o.mesh_vertices[i + 1], o.mesh_vertices[i + 2]);
+  for (size_t i = 0; i + 2 < o.mesh_faces.size(); i += 3)
+    mesh.faces.push_back({int(o.mesh_faces[i]), int(o.mesh_faces[i + 1]), int(o.mesh_faces[i + 2])});
+  return mesh;
 }
 
 void checkLandmark(const std::string& path, const registry::ObjectLandmark& o) {
   const std::string what = "object " + std::to_string(o.track_id);
-  if (!o.T_world_object.matrix().allFinite() || !o.size.allFinite()) throwAt(path, what + " has a non-finite pose or size");
+  if (!o.T_world_object.matrix().allFinite() || !o.size.allFinite())
+    throwAt(path, what + " has a non-finite pose or size");
   const size_t vertices = o.mesh_vertices.size() / 3;
   for (uint32_t index : o.mesh_faces)
     if (index >= vertices)
       throwAt(path, what + " has a mesh face index " + std::to_string(index) + " past its " + std::to_string(vertices) +
                         " vertices");
-}
-
-void writeMeshPly(const std::string& path, const std::vector<Eigen::Vector3d>& vertices,
-                  const std::vector<uint32_t>& faces, const std::string& comment) {
-  writeFileAtomic(path, [&](std::ostream& out) {
-    out << "ply\nformat ascii 1.0\ncomment " << comment << "\n"
-        << "element vertex " << vertices.size() << "\nproperty float x\nproperty float y\nproperty float z\n"
-        << "element face " << faces.size() / 3 << "\nproperty list uchar int vertex_indices\nend_header\n";
-    out << std::setprecision(7);
-    for (const Eigen::Vector3d& v : vertices) out << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
-    for (size_t i = 0; i + 2 < faces.size(); i += 3) out << "3 " << faces[i] << ' ' << faces[i + 1] << ' ' << faces[i + 2] << '\n';
-  });
 }
 
 }  // namespace
@@ -75,7 +65,8 @@ nlohmann::json writeObjectOutputs(const std::string& out_dir, const ObjectMap& o
     entry["id"] = list.size();
     entry["track_id"] = o.track_id;
     entry["class"] = formats::className(o.class_id);
-    entry["state"] = formats::motionName(BESLAM_MOTION_STATIC);  // a landmark is a static object; one that moved was removed
+    entry["state"] =
+        formats::motionName(BESLAM_MOTION_STATIC);  // a landmark is a static object; one that moved was removed
     std::vector<double> T(16);
     const Eigen::Matrix4d M = o.T_world_object.matrix();
     for (int r = 0; r < 4; ++r)
@@ -89,8 +80,8 @@ nlohmann::json writeObjectOutputs(const std::string& out_dir, const ObjectMap& o
     entry["mesh"] = nullptr;
     if (!o.mesh_faces.empty()) {
       fs::create_directories(dir / "objects");
-      writeMeshPly((dir / meshName(o.track_id)).string(), worldVertices(o), o.mesh_faces,
-                   "BE-SLAM object " + std::to_string(o.track_id) + " (world frame, metres)");
+      formats::writePlyMesh((dir / meshName(o.track_id)).string(), objectMesh(o), o.T_world_object,
+                            "BE-SLAM object " + std::to_string(o.track_id) + " (world frame, metres)");
       entry["mesh"] = meshName(o.track_id);
       ++with_mesh;
     }
@@ -98,15 +89,16 @@ nlohmann::json writeObjectOutputs(const std::string& out_dir, const ObjectMap& o
   }
   writeFileAtomic(json_path, nlohmann::json{{"frame", "world"}, {"unit", "metre"}, {"objects", list}}.dump(2) + "\n");
   if (with_mesh > 0) {  // map.ply: the map points, then every object's mesh (faces index into the one vertex list)
-    std::vector<Eigen::Vector3d> vertices;
-    std::vector<uint32_t> faces;
-    for (const auto& p : points) vertices.emplace_back(p.p_world[0], p.p_world[1], p.p_world[2]);
+    formats::TriangleMesh all;
+    for (const auto& p : points) all.vertices.emplace_back(p.p_world[0], p.p_world[1], p.p_world[2]);
     for (const auto& [id, o] : objects) {
-      const auto base = static_cast<uint32_t>(vertices.size());
-      for (const Eigen::Vector3d& v : worldVertices(o)) vertices.push_back(v);
-      for (uint32_t index : o.mesh_faces) faces.push_back(base + index);
+      const int base = static_cast<int>(all.vertices.size());
+      const formats::TriangleMesh mesh = objectMesh(o);
+      for (const Eigen::Vector3d& v : mesh.vertices) all.vertices.push_back(o.T_world_object * v);
+      for (const auto& f : mesh.faces) all.faces.push_back({base + f[0], base + f[1], base + f[2]});
     }
-    writeMeshPly((dir / "map.ply").string(), vertices, faces, "BE-SLAM map points and object meshes (world frame)");
+    formats::writePlyMesh((dir / "map.ply").string(), all, Eigen::Isometry3d::Identity(),
+                          "BE-SLAM map points and object meshes (world frame, metres)");
   }
   return {{"reconstructed", objects.size()}, {"with_mesh", with_mesh}, {"file", "objects.json"}};
 }

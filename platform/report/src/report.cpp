@@ -15,6 +15,7 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
+#include "beslam/formats/ply.hpp"
 #include "beslam/trajectory/trajectory.hpp"
 
 namespace fs = std::filesystem;
@@ -54,6 +55,49 @@ long nearest(const std::vector<double>& stamps, double t) {
     if (j >= 0 && j < static_cast<long>(stamps.size()) && std::abs(stamps[j] - t) <= bd)
       bd = std::abs(stamps[j] - t), best = j;
   return best;
+}
+
+// The run's object meshes (objects.json, objects/*.ply; world frame), each simplified by vertex
+// clustering on a 0.12 m grid (a car keeps its shape at a few hundred triangles, so a run with dozens of
+// cars stays a few MB).
+json readObjectMeshes(const fs::path& run) {
+  json out = json::array();
+  const fs::path listing = run / "objects.json";
+  if (!fs::exists(listing)) return out;
+  json doc;
+  try {
+    doc = json::parse(readFile(listing.string()));
+  } catch (const json::exception& e) {
+    throw Error(listing.string() + ": not JSON (" + e.what() + ")");
+  }
+  constexpr double kCell = 0.12;
+  for (const json& o : doc.value("objects", json::array())) {
+    if (!o.contains("mesh") || !o["mesh"].is_string()) continue;
+    const formats::TriangleMesh mesh = formats::readPlyMesh((run / o["mesh"].get<std::string>()).string());
+    std::map<std::array<long, 3>, int> cell_index;
+    std::vector<Eigen::Vector3d> sum;
+    std::vector<int> count, remap(mesh.vertices.size());
+    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+      const Eigen::Vector3d& v = mesh.vertices[i];
+      const std::array<long, 3> cell = {std::lround(std::floor(v.x() / kCell)), std::lround(std::floor(v.y() / kCell)),
+                                        std::lround(std::floor(v.z() / kCell))};
+      const auto [it, fresh] = cell_index.emplace(cell, static_cast<int>(sum.size()));
+      if (fresh) sum.emplace_back(Eigen::Vector3d::Zero()), count.push_back(0);
+      sum[it->second] += v, ++count[it->second];
+      remap[i] = it->second;
+    }
+    json positions = json::array(), indices = json::array();
+    for (size_t k = 0; k < sum.size(); ++k) {
+      const Eigen::Vector3d c = sum[k] / count[k];
+      positions.push_back(r2(c.x())), positions.push_back(r2(c.y())), positions.push_back(r2(c.z()));
+    }
+    for (const auto& f : mesh.faces) {
+      const int a = remap[f[0]], b = remap[f[1]], c = remap[f[2]];
+      if (a != b && b != c && a != c) indices.push_back(a), indices.push_back(b), indices.push_back(c);
+    }
+    out.push_back({{"track", o.value("track_id", -1)}, {"positions", positions}, {"indices", indices}});
+  }
+  return out;
 }
 
 json readMap(const fs::path& ply, size_t max_points) {
@@ -329,6 +373,7 @@ json runData(const fs::path& run, const std::string& label, size_t max_points, c
   // brought into the map's frame (inverse of the alignment).
   json view;
   view["map"] = readMap(run / "map_points.ply", max_points);
+  view["objects"] = readObjectMeshes(run);
   json path = json::array();
   for (size_t k : thin(est.size()))
     path.push_back(r2(est[k].p.x())), path.push_back(r2(est[k].p.y())), path.push_back(r2(est[k].p.z()));

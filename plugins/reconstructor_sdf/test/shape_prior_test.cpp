@@ -209,8 +209,8 @@ TEST(ShapePrior, MeshIsClosedOutwardInsideTheBoxAndRoundTripsAsPly) {
   const std::string path = tempPath("mesh.ply");
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(10, -2, 0.75);
-  writePly(path, m, T);
-  const Mesh back = readPly(path);
+  beslam::formats::writePlyMesh(path, m, T);
+  const Mesh back = beslam::formats::readPlyMesh(path);
   EXPECT_EQ(back.vertices.size(), m.vertices.size());
   EXPECT_EQ(back.faces.size(), m.faces.size());
   EXPECT_NEAR((back.vertices[0] - T * m.vertices[0]).norm(), 0.0, 1e-5);

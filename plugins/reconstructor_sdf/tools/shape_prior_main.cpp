@@ -243,7 +243,7 @@ int mesh(const Args& a) {
     for (int k = 0; k < prior.dimensions(); ++k) z(k) = c[k];
   }
   const shape::Mesh m = prior.mesh(z, Eigen::Vector3d(size[0], size[1], size[2]));
-  shape::writePly(out, m);
+  beslam::formats::writePlyMesh(out, m);
   std::printf("%s: %zu vertices, %zu faces\n", out.c_str(), m.vertices.size(), m.faces.size());
   return 0;
 }

@@ -48,7 +48,7 @@ struct FitObservations {                 // all world frame, metres
   std::vector<double> weight;            // per point, (0, 1], same size (or empty = all 1)
   // Where the detector's boxes put the car (their consensus), as a pose prior; none: no prior term.
   std::optional<Eigen::Isometry3d> T_world_obj_boxes;
-  std::vector<DepthRay> rays;            // observed depths for the rendering term (may be empty)
+  std::vector<DepthRay> rays;  // observed depths for the rendering term (may be empty)
 };
 
 struct FitOptions {

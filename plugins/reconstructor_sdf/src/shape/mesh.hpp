@@ -16,9 +16,8 @@
 // - chamferDistance(estimate, truth, n, seed): the symmetric mean surface distance, metres: (mean over n
 //   samples of estimate of the distance to truth + mean over n exterior samples of truth of the distance
 //   to estimate) / 2. Exact point-to-triangle distances; infinity when either mesh has no area.
-// - writePly: binary little-endian PLY (float x y z, uchar-count int faces), vertices mapped by
-//   T_world_obj, written atomically; readPly reads that format back (and ASCII PLY of the same layout).
-//   Errors throw beslam::Error naming the file.
+// - PLY files: beslam::formats::writePlyMesh / readPlyMesh (beslam/formats/ply.hpp); Mesh is that
+//   TriangleMesh.
 #pragma once
 
 #include <Eigen/Core>
@@ -28,12 +27,11 @@
 #include <string>
 #include <vector>
 
+#include "beslam/formats/ply.hpp"
+
 namespace beslam::recon::shape {
 
-struct Mesh {
-  std::vector<Eigen::Vector3d> vertices;
-  std::vector<std::array<int, 3>> faces;
-};
+using Mesh = formats::TriangleMesh;
 
 class MeshDistance {
  public:
@@ -66,10 +64,6 @@ int orientOutward(Mesh& mesh);
 std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, int n, std::uint64_t seed, bool exterior_only = false);
 
 double chamferDistance(const Mesh& estimate, const Mesh& truth, int n, std::uint64_t seed);
-
-void writePly(const std::string& path, const Mesh& mesh,
-              const Eigen::Isometry3d& T_world_obj = Eigen::Isometry3d::Identity());
-Mesh readPly(const std::string& path);
 
 // Deterministic uniform numbers in [0, 1) (the same on every platform; std:: distributions are not).
 class Random {

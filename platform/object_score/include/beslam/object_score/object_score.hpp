@@ -34,8 +34,8 @@ struct Options {
 };
 
 struct ObjectResult {
-  int32_t track_id = -1;       // the run's
-  int32_t truth_track_id = -1; // matched truth car (-1: none)
+  int32_t track_id = -1;        // the run's
+  int32_t truth_track_id = -1;  // matched truth car (-1: none)
   bool parked = false, moving = false, correct = false;
   double centre_error_m = -1, yaw_error_deg = -1;
   double chamfer_m = -1;        // symmetric mean, both meshes in the truth world (pose error included)
@@ -44,7 +44,7 @@ struct ObjectResult {
 };
 
 struct Score {
-  int64_t reconstructed = 0;  // objects in objects.json
+  int64_t reconstructed = 0;                          // objects in objects.json
   int64_t correct = 0, false_objects = 0, other = 0;  // other: matched a car that stands but is not parked
   int64_t parked_in_view = 0;                         // the denominator: parked cars in view within view_range
   int64_t parked_in_view_correct = 0;                 // of those, reconstructed correctly
