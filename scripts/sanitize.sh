@@ -19,8 +19,9 @@ runs=${BESLAM_FUZZ_RUNS:-10000}
 set_name=${BESLAM_SANITIZE_SET:-ci}
 only=${BESLAM_SANITIZE_ONLY:-}
 unit_tests=(abi_layout_test common_test formats_test datasets_test eval_test pipeline_spec_test pipeline_samples_test
-  static_map_test motion_score_test mask_common_test motion_bev_tracker_test detector_replay_test registry_test)
-fuzzers=(pipeline_yaml label_rows detection_rows nuscenes calibration image)
+  static_map_test motion_score_test object_score_test mask_common_test motion_bev_tracker_test detector_replay_test
+  registry_test)
+fuzzers=(pipeline_yaml label_rows detection_rows nuscenes calibration image ply_mesh)
 cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_CXX_FLAGS="-O1 -gline-tables-only" -DCMAKE_C_FLAGS="-O1 -gline-tables-only" -DBESLAM_SANITIZE=ON \
   -DBESLAM_FUZZ=ON -DBESLAM_FUZZ_RUNS="$runs" -DBESLAM_BUILD_BENCHMARKS=OFF > /dev/null

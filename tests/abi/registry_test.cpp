@@ -230,6 +230,24 @@ TEST(Registry, LandmarksCrossTheAbiWithMeshesPointsAndRemovals) {
   EXPECT_TRUE(reconstructor.finish().empty());  // nothing left: object 4 was removed
 }
 
+TEST(Registry, AnAbi12ReconstructorStillLoadsAndItsLandmarksRead) {
+  Registry registry;
+  registry.loadLibrary(fixture("reconstructor_1_2"));
+  beslam::registry::HostLog log;
+  beslam::registry::ReconstructorInstance reconstructor(registry.find("reconstructor_1_2"), createInfo(log, {}), log);
+  beslam_frame frame{};
+  frame.struct_size = sizeof(frame);
+  beslam_keyframe kf{};
+  kf.struct_size = sizeof(kf);
+  const beslam::registry::Landmarks made = reconstructor.reconstruct(kf, frame, {}, beslam_image_view{});
+  ASSERT_EQ(made.size(), 1u);
+  EXPECT_EQ(made[0].track_id, 5);
+  EXPECT_DOUBLE_EQ(made[0].size.x(), 4.0);
+  EXPECT_EQ(made[0].flags, 0u) << "1.3 fields past a 1.2 plugin's struct read as zero";
+  EXPECT_TRUE(made[0].mesh_faces.empty());
+  EXPECT_TRUE(reconstructor.finish().empty()) << "no finish() in a 1.2 table: nothing, no call";
+}
+
 TEST(Registry, FindsBuiltInPluginsThroughEnvironment) {
   // ctest sets BESLAM_PLUGIN_PATH to the built-in plugin folder.
   Registry registry;

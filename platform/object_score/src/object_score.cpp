@@ -26,8 +26,46 @@ namespace {
 
 using Mesh = formats::TriangleMesh;
 
-// Area-weighted samples on a mesh's surface, transformed by T (seeded: the same mesh gives the same samples).
-std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, const Eigen::Isometry3d& T, int n) {
+// True when a ray from `origin` along `dir` hits a face of the mesh (Moller-Trumbore, t > 1e-5).
+bool rayHits(const Mesh& mesh, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) {
+  for (const auto& f : mesh.faces) {
+    const Eigen::Vector3d& a = mesh.vertices[f[0]];
+    const Eigen::Vector3d e1 = mesh.vertices[f[1]] - a, e2 = mesh.vertices[f[2]] - a;
+    const Eigen::Vector3d h = dir.cross(e2);
+    const double det = e1.dot(h);
+    if (std::abs(det) < 1e-12) continue;
+    const Eigen::Vector3d s = origin - a;
+    const double u = s.dot(h) / det;
+    if (u < 0 || u > 1) continue;
+    const Eigen::Vector3d q = s.cross(e1);
+    const double v = dir.dot(q) / det;
+    if (v < 0 || u + v > 1) continue;
+    if (e2.dot(q) / det > 1e-5) return true;
+  }
+  return false;
+}
+
+// A point on the mesh is on its exterior when a ray in one of 14 directions (axes and diagonals) leaves
+// without hitting the mesh; faces buried in another part (a generated car's wheel rims inside its body)
+// fail every direction. Such faces are not what a sensor or a reconstruction can see.
+bool onExterior(const Mesh& mesh, const Eigen::Vector3d& p) {
+  static const std::vector<Eigen::Vector3d> kDirections = [] {
+    std::vector<Eigen::Vector3d> d;
+    for (int a = 0; a < 3; ++a)
+      for (double sign : {-1.0, 1.0}) d.push_back(sign * Eigen::Vector3d::Unit(a));
+    for (int k = 0; k < 8; ++k)
+      d.push_back(Eigen::Vector3d(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1).normalized());
+    return d;
+  }();
+  for (const Eigen::Vector3d& d : kDirections)
+    if (!rayHits(mesh, p + 1e-4 * d, d)) return true;
+  return false;
+}
+
+// Area-weighted samples on a mesh's surface, transformed by T (seeded: the same mesh gives the same
+// samples); with exterior_only, samples on buried faces are drawn again (at most 20 n draws).
+std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, const Eigen::Isometry3d& T, int n,
+                                            bool exterior_only = false) {
   std::vector<double> cumulative;
   double total = 0;
   for (const auto& f : mesh.faces) {
@@ -38,7 +76,7 @@ std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, const Eigen::Isome
   if (total <= 0) return out;
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(0, 1);
-  for (int i = 0; i < n; ++i) {
+  for (int draw = 0; static_cast<int>(out.size()) < n && draw < 20 * n; ++draw) {
     const size_t k =
         std::min(mesh.faces.size() - 1,
                  size_t(std::lower_bound(cumulative.begin(), cumulative.end(), u(rng) * total) - cumulative.begin()));
@@ -46,7 +84,9 @@ std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, const Eigen::Isome
     if (a + b > 1) a = 1 - a, b = 1 - b;
     const auto& f = mesh.faces[k];
     const Eigen::Vector3d& p0 = mesh.vertices[f[0]];
-    out.push_back(T * (p0 + a * (mesh.vertices[f[1]] - p0) + b * (mesh.vertices[f[2]] - p0)));
+    const Eigen::Vector3d p = p0 + a * (mesh.vertices[f[1]] - p0) + b * (mesh.vertices[f[2]] - p0);
+    if (exterior_only && !onExterior(mesh, p)) continue;
+    out.push_back(T * p);
   }
   return out;
 }
@@ -258,7 +298,7 @@ Score score(const std::string& run_dir, const Options& options) {
         std::snprintf(name, sizeof name, "car_%04d.ply", match->track_id);
         const Mesh true_mesh = formats::readPlyMesh(seq + "/objects/" + name);
         const auto true_samples = surfaceSamples(
-            true_mesh, T_true_match * kittiObjectFromLandmark(match->height).inverse(), options.chamfer_samples);
+            true_mesh, T_true_match * kittiObjectFromLandmark(match->height).inverse(), options.chamfer_samples, true);
         r.chamfer_m = chamfer(surfaceSamples(est, T_true_run, options.chamfer_samples), true_samples);
         r.shape_chamfer_m =
             chamfer(surfaceSamples(est, T_true_match * T_run_obj.inverse(), options.chamfer_samples), true_samples);

@@ -57,7 +57,10 @@ TriangleMesh readPlyMesh(const std::string& path) {
   const char* stop = data.data() + data.size();
   if (format == "binary_little_endian") {
     if (vertex_properties != 3) throwAt(path, "binary PLY vertices must be float x y z only");
-    if (stop - p < nv * 12 + nf * 13) throwAt(path, "PLY file truncated");
+    const auto avail = static_cast<unsigned long>(stop - p);  // counts checked before they multiply
+    if (static_cast<unsigned long>(nv) > avail / 12 || static_cast<unsigned long>(nf) > avail / 13 ||
+        static_cast<unsigned long>(nv) * 12 + static_cast<unsigned long>(nf) * 13 > avail)
+      throwAt(path, "PLY file truncated");
     for (long i = 0; i < nv; ++i, p += 12) {
       float v[3];
       std::memcpy(v, p, 12);

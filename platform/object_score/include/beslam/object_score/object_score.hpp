@@ -38,7 +38,10 @@ struct ObjectResult {
   int32_t truth_track_id = -1;  // matched truth car (-1: none)
   bool parked = false, moving = false, correct = false;
   double centre_error_m = -1, yaw_error_deg = -1;
-  double chamfer_m = -1;        // symmetric mean, both meshes in the truth world (pose error included)
+  // Symmetric mean over surface samples, both meshes in the truth world (pose error included); the true
+  // mesh's samples are on its exterior only (faces buried in another part, a wheel rim in the body, are
+  // not what a sensor or a reconstruction can see).
+  double chamfer_m = -1;
   double shape_chamfer_m = -1;  // the same with the reconstruction moved onto the true pose (shape alone)
   int keyframes = 0;
 };
