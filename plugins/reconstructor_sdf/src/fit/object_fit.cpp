@@ -5,11 +5,23 @@
 
 #include <cmath>
 #include <memory>
+#include <type_traits>
 
 #include "fit/render_depth.hpp"
 
 namespace beslam::recon::fit {
 namespace {
+
+// make(std::integral_constant<int, K>) for the runtime k in 1..kMaxFitDims: the code size is a template
+// argument of Ceres' AutoDiffCostFunction. nullptr for another k.
+template <int K = 1, class Make>
+ceres::CostFunction* withDims(int k, const Make& make) {
+  if constexpr (K > kMaxFitDims) {
+    return nullptr;
+  } else {
+    return k == K ? make(std::integral_constant<int, K>{}) : withDims<K + 1>(k, make);
+  }
+}
 
 // Pose block: angle-axis (3) then translation (3) of the update D, T_world_obj = T_init * D; the point in
 // the object frame is D^-1 * p0 with p0 = T_init^-1 * p_world. Size block: log(size / size_init).
@@ -67,30 +79,7 @@ ceres::CostFunction* depthCost(const shape::ShapePrior& prior, const Eigen::Vect
 
 ceres::CostFunction* depthCostFor(int k, const shape::ShapePrior& prior, const Eigen::Vector3d& o0,
                                   const Eigen::Vector3d& u0, const Eigen::Vector3d& size0, double depth, double scale) {
-  switch (k) {
-    case 1:
-      return depthCost<1>(prior, o0, u0, size0, depth, scale);
-    case 2:
-      return depthCost<2>(prior, o0, u0, size0, depth, scale);
-    case 3:
-      return depthCost<3>(prior, o0, u0, size0, depth, scale);
-    case 4:
-      return depthCost<4>(prior, o0, u0, size0, depth, scale);
-    case 5:
-      return depthCost<5>(prior, o0, u0, size0, depth, scale);
-    case 6:
-      return depthCost<6>(prior, o0, u0, size0, depth, scale);
-    case 7:
-      return depthCost<7>(prior, o0, u0, size0, depth, scale);
-    case 8:
-      return depthCost<8>(prior, o0, u0, size0, depth, scale);
-    case 9:
-      return depthCost<9>(prior, o0, u0, size0, depth, scale);
-    case 10:
-      return depthCost<10>(prior, o0, u0, size0, depth, scale);
-    default:
-      return nullptr;
-  }
+  return withDims(k, [&](auto dims) { return depthCost<decltype(dims)::value>(prior, o0, u0, size0, depth, scale); });
 }
 
 class DiagonalPrior : public ceres::CostFunction {  // r_k = w_k * x_k
@@ -138,30 +127,7 @@ ceres::CostFunction* surfaceCost(const shape::ShapePrior& prior, const Eigen::Ve
 
 ceres::CostFunction* surfaceCostFor(int k, const shape::ShapePrior& prior, const Eigen::Vector3d& p0,
                                     const Eigen::Vector3d& size0, double scale) {
-  switch (k) {
-    case 1:
-      return surfaceCost<1>(prior, p0, size0, scale);
-    case 2:
-      return surfaceCost<2>(prior, p0, size0, scale);
-    case 3:
-      return surfaceCost<3>(prior, p0, size0, scale);
-    case 4:
-      return surfaceCost<4>(prior, p0, size0, scale);
-    case 5:
-      return surfaceCost<5>(prior, p0, size0, scale);
-    case 6:
-      return surfaceCost<6>(prior, p0, size0, scale);
-    case 7:
-      return surfaceCost<7>(prior, p0, size0, scale);
-    case 8:
-      return surfaceCost<8>(prior, p0, size0, scale);
-    case 9:
-      return surfaceCost<9>(prior, p0, size0, scale);
-    case 10:
-      return surfaceCost<10>(prior, p0, size0, scale);
-    default:
-      return nullptr;
-  }
+  return withDims(k, [&](auto dims) { return surfaceCost<decltype(dims)::value>(prior, p0, size0, scale); });
 }
 
 FitResult failed(const Eigen::Isometry3d& T, const Eigen::Vector3d& size, const Eigen::VectorXd& code,
