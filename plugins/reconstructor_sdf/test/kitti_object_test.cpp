@@ -11,6 +11,7 @@
 #include "beslam/datasets/kitti_calib.hpp"
 #include "beslam/datasets/labels.hpp"
 #include "beslam/datasets/velodyne.hpp"
+#include "beslam/formats/geometry.hpp"
 #include "beslam/sdk/views.hpp"
 #include "fit/object_fit.hpp"
 #include "objects/object_store.hpp"
@@ -21,15 +22,10 @@ namespace {
 const std::string kDir = std::string(BESLAM_SHARED_DATA) + "/kitti/object/training";
 
 beslam_box3d boxOf(const datasets::ObjectLabel& l, int32_t track) {
-  beslam_box3d b = sdk::newBox();
-  b.class_id = BESLAM_CLASS_CAR;
+  beslam_box3d b = formats::boxFromKitti(BESLAM_CLASS_CAR, l.h, l.w, l.l, l.p_cam_bottom.x(), l.p_cam_bottom.y(),
+                                         l.p_cam_bottom.z(), l.ry);
   b.track_id = track;
   b.motion_state = BESLAM_MOTION_STATIC;
-  b.center_cam[0] = l.p_cam_bottom.x();
-  b.center_cam[1] = l.p_cam_bottom.y() - l.h / 2;
-  b.center_cam[2] = l.p_cam_bottom.z();
-  b.size[0] = l.l, b.size[1] = l.w, b.size[2] = l.h;
-  b.yaw = l.ry;
   return b;
 }
 
