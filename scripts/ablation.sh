@@ -13,16 +13,8 @@ cd "$(dirname "$0")/.."
 out="${1:-out/ablation}"
 seeds="${2:-42 1 2 3 4}"
 sequences="${3:-urban_loop dynamic_street}"
-bin="${BESLAM_BUILD_DIR:-build}/bin/beslam"
-[ -x "$bin" ] || { scripts/install-deps.sh && scripts/build.sh; }
-command -v python3 >/dev/null || { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3; }
-
-run() {  # run DIR CONFIG [--set k=v]...
-  local dir="$1" config="$2"; shift 2
-  if [ -f "$dir/summary.json" ]; then return; fi
-  echo "== $dir" >&2
-  "$bin" run "$config" --out "$dir" "$@" > "$dir.log" 2>&1 || { echo "failed: $dir (see $dir.log)" >&2; return 1; }
-}
+source scripts/lib/run-matrix.sh  # bin, run_once
+run() { run_once "$@"; }
 
 mkdir -p "$out"
 for s in $seeds; do  # seeds outermost: a partial sweep still compares every pipeline

@@ -11,17 +11,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 out="${1:-out/reconstruction}"
 seeds="${2:-1 2 3 4 5}"
-bin="${BESLAM_BUILD_DIR:-build}/bin/beslam"
-[ -x "$bin" ] || { scripts/install-deps.sh && scripts/build.sh; }
-command -v python3 >/dev/null || { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3; }
+source scripts/lib/run-matrix.sh  # bin, run_once
 
-run() {  # run DIR CONFIG [--set k=v]...
-  local dir="$1" config="$2"; shift 2
-  mkdir -p "$(dirname "$dir")"
-  if [ ! -f "$dir/summary.json" ]; then
-    echo "== $dir" >&2
-    "$bin" run "$config" --out "$dir" "$@" > "$dir.log" 2>&1 || { echo "failed: $dir (see $dir.log)" >&2; return 1; }
-  fi
+run() {  # run DIR CONFIG [--set k=v]...: the run (once), then its objects scored
+  local dir="$1"
+  run_once "$@"
   "$bin" eval-objects --run "$dir" --json "$dir/objects_score.json" > /dev/null
 }
 
