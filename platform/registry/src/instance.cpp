@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "beslam/common/error.hpp"
+#include "beslam/formats/geometry.hpp"
 
 namespace beslam::registry {
 
@@ -102,19 +103,8 @@ void MaskGeneratorInstance::generate(const beslam_frame& frame, const std::vecto
 }
 
 namespace {
-Eigen::Isometry3d toIsometry(const beslam_pose& pose) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) T.matrix()(r, c) = pose.m[r * 4 + c];
-  return T;
-}
-
-beslam_pose toPose(const Eigen::Isometry3d& T) {
-  beslam_pose pose{};
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) pose.m[r * 4 + c] = T.matrix()(r, c);
-  return pose;
-}
+using formats::toIsometry;
+using formats::toPose;
 
 template <class T>
 std::vector<T> copyOf(const T* data, size_t count, const char* what, const std::string& plugin) {
