@@ -124,12 +124,14 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
       l.removed = true;
       out.push_back(std::move(l));
     }
+    const bool debug = std::getenv("BESLAM_RECON_DEBUG") != nullptr;
     for (int32_t id : updated) {
-      if (std::getenv("BESLAM_RECON_DEBUG"))
+      const recon::ObjectRecord& record = *store_.find(id);
+      if (debug)
         std::fprintf(stderr, "kf %ld frame %ld: object %d boxes %zu points %zu lidar %zu (kf points %zu)\n",
-                     (long)keyframe.id, (long)keyframe.frame_index, id, store_.find(id)->boxes.size(),
-                     store_.find(id)->map_points.size(), store_.find(id)->lidar_points.size(), keyframe.points.size());
-      if (auto l = refit(*store_.find(id))) out.push_back(std::move(*l));
+                     static_cast<long>(keyframe.id), static_cast<long>(keyframe.frame_index), id, record.boxes.size(),
+                     record.map_points.size(), record.lidar_points.size(), keyframe.points.size());
+      if (auto l = refit(record)) out.push_back(std::move(*l));
     }
     return out;
   }
