@@ -118,6 +118,8 @@ void BevTracker::reset() {
   have_time_ = false;
   pose_mode_ = false;
   poses_.clear();
+  jitter_.clear();
+  jitter_rms_ = 0;
   ego_speed_ = ego_yaw_rate_ = 0;
 }
 
@@ -271,7 +273,21 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     if (!pose_mode_) {  // tracks built in the camera frame cannot continue in the world frame
       tracks_.clear();
       pose_mode_ = true;
+      first_pose_t_ = now;
     }
+    if (params_.pose_jitter && poses_.size() == 2 && poses_[1].first > poses_[0].first && now > poses_[1].first) {
+      // How far the pose is from where steady motion would have put it: a real vehicle's acceleration
+      // explains centimetres at 10 Hz, a backend's map correction decimetres to metres.
+      const auto& [t0, T0] = poses_[0];
+      const auto& [t1, T1] = poses_[1];
+      const Eigen::Vector3d d =
+          T_world_cam->translation() - (T1 * scaleMotion(T0.inverse() * T1, (now - t1) / (t1 - t0))).translation();
+      jitter_.emplace_back(now, d.x() * d.x() + d.z() * d.z());
+    }
+    while (!jitter_.empty() && jitter_.front().first < now - params_.window_static - 1e-6) jitter_.pop_front();
+    double sum = 0;
+    for (const auto& j : jitter_) sum += j.second;
+    jitter_rms_ = jitter_.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(jitter_.size()));
     poses_.emplace_back(now, *T_world_cam);
     if (poses_.size() > 2) poses_.erase(poses_.begin());
     if (poses_.size() == 2 && poses_[1].first > poses_[0].first) {
@@ -326,7 +342,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     const Eigen::Vector3d c_w = T_wc * c_cam;
     p[i] = Eigen::Vector2d(c_w.x(), c_w.z());
     range[i] = std::hypot(c_cam.x(), c_cam.z());
-    sigma[i] = params_.pos_sigma + params_.pos_sigma_per_m * range[i];
+    sigma[i] = std::hypot(params_.pos_sigma + params_.pos_sigma_per_m * range[i], jitter_rms_);
     v_sigma[i] = params_.ego_speed_noise * ego_speed_ + params_.ego_turn_noise * ego_yaw_rate_ * range[i];
     yaw[i] = bevYaw(R_wc, b.yaw);
     if (b.flags & BESLAM_BOX_HAS_VELOCITY) {
@@ -407,7 +423,8 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     Decision& d = out[i];
     d.track_id = t->id;
     d.range = range[i];
-    decide(*t, vel[i], d);
+    // Until the poses have been watched for window_static seconds their jitter is not known: no decision yet.
+    if (!params_.pose_jitter || now - first_pose_t_ >= params_.window_static - 1e-6) decide(*t, vel[i], d);
     d.motion_state = (T_world_cam && range[i] <= params_.max_range) ? t->state : BESLAM_MOTION_UNKNOWN;
   }
 

@@ -37,6 +37,9 @@ const beslam::sdk::Settings<Params> kSettings{
             "detections in the window before a track is decided"),
     setting(&Params::max_residual, "max_residual", "2.0", 0.01, 100,
             "a window whose line-fit residual exceeds this many noise sigmas gives no evidence"),
+    setting(&Params::pose_jitter, "pose_jitter", "false",
+            "measure how far the poses leave a steady path (a backend correcting itself) and add it to every "
+            "position's noise"),
     setting(&Params::init_velocity_sigma, "init_velocity_sigma", "5.0", 0.01, 100,
             "m/s: velocity uncertainty of a new track"),
     setting(&Params::dynamic_speed, "dynamic_speed", "0.3", 0, 100,

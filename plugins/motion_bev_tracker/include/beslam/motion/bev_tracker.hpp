@@ -23,12 +23,16 @@
 // sigma_v also holds the ego-motion error, ego_speed_noise * v_ego + ego_turn_noise * yaw_rate_ego * r (the
 // pose source's drift: a heading-rate error moves a far object sideways), which more positions do not
 // average away; the detection noise does, so a track seen longer gets a smaller sigma_v.
-// A static track also has dynamic evidence when its latest positions (mean of 3) leave its parked
-// position (a running mean while static) by displacement_margin plus z_dynamic standard errors.
-// Hysteresis: UNKNOWN -> STATIC on the first static evidence, UNKNOWN or STATIC -> DYNAMIC after
-// start_frames dynamic frames, DYNAMIC -> STATIC after stop_dwell static frames; a run of evidence is
-// broken only by contrary evidence (frames with none neither add nor break). Far objects whose speed
-// cannot be pinned down stay UNKNOWN (the paper checks nearby cars first). Without any camera pose the
+// Pose jitter: a vehicle cannot leave its constant-velocity path by much between two frames, so how far
+// the given poses do (a SLAM backend correcting itself) is measured, as an RMS over the last window_static
+// seconds, and every world position made with such poses carries it as extra position noise
+// (pose_jitter: true, for poses of a monocular SLAM backend). Ground truth or stereo odometry have almost none. Until
+// the poses have been watched for window_static seconds, their jitter is unknown and no track is decided. A static
+// track also has dynamic evidence when its latest positions (mean of 3) leave its parked position (a running mean while
+// static) by displacement_margin plus z_dynamic standard errors. Hysteresis: UNKNOWN -> STATIC on the first static
+// evidence, UNKNOWN or STATIC -> DYNAMIC after start_frames dynamic frames, DYNAMIC -> STATIC after stop_dwell static
+// frames; a run of evidence is broken only by contrary evidence (frames with none neither add nor break). Far objects
+// whose speed cannot be pinned down stay UNKNOWN (the paper checks nearby cars first). Without any camera pose the
 // tracker still tracks (camera frame) but reports UNKNOWN.
 #pragma once
 
@@ -63,6 +67,7 @@ struct Params {
   double ego_speed_noise = 0.01;     // fraction of the ego's speed (odometry translation drift)
   double ego_turn_noise = 0.05;      // fraction of the ego's yaw rate (heading-rate error; lateral, grows with range)
   double init_velocity_sigma = 5.0;  // m/s, velocity uncertainty of a new track (no detector velocity)
+  bool pose_jitter = false;          // measured pose jitter adds to every position's noise (for SLAM poses)
   // Track life.
   double max_miss_time = 1.0;  // s a track survives without a detection
   int max_history = 64;        // observations kept per track
@@ -120,6 +125,7 @@ class BevTracker {
   // The ego's BEV speed (m/s) and yaw rate (rad/s) between the last two poses given (0 before two).
   double egoSpeed() const { return ego_speed_; }
   double egoYawRate() const { return ego_yaw_rate_; }
+  double poseJitter() const { return jitter_rms_; }  // m: RMS distance of the poses from constant velocity
 
  private:
   struct Observation {
@@ -161,7 +167,11 @@ class BevTracker {
   double last_time_ = 0;
   bool pose_mode_ = false;                                   // tracks live in a world frame (some pose seen)
   std::vector<std::pair<double, Eigen::Isometry3d>> poses_;  // last two known poses, for extrapolation
-  double ego_speed_ = 0, ego_yaw_rate_ = 0;                  // between the last two known poses (m/s, rad/s)
+  std::deque<std::pair<double, double>> jitter_;  // (time, squared BEV distance of a pose from its prediction)
+  double jitter_rms_ = 0;
+  double first_pose_t_ = 0;  // time of the first pose: decisions wait window_static seconds from it // m, over the last
+                             // window_static seconds
+  double ego_speed_ = 0, ego_yaw_rate_ = 0;  // between the last two known poses (m/s, rad/s)
 };
 
 // BEV footprint helpers (x-z plane of the frame the box is expressed in).
