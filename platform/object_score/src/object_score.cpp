@@ -66,25 +66,15 @@ bool onExterior(const Mesh& mesh, const Eigen::Vector3d& p) {
 // samples); with exterior_only, samples on buried faces are drawn again (at most 20 n draws).
 std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, const Eigen::Isometry3d& T, int n,
                                             bool exterior_only = false) {
-  std::vector<double> cumulative;
-  double total = 0;
-  for (const auto& f : mesh.faces) {
-    total += 0.5 * (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]).norm();
-    cumulative.push_back(total);
-  }
+  const formats::SurfaceSampler sampler(mesh);
   std::vector<Eigen::Vector3d> out;
-  if (total <= 0) return out;
+  if (sampler.totalArea() <= 0) return out;
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(0, 1);
   for (int draw = 0; static_cast<int>(out.size()) < n && draw < 20 * n; ++draw) {
-    const size_t k =
-        std::min(mesh.faces.size() - 1,
-                 size_t(std::lower_bound(cumulative.begin(), cumulative.end(), u(rng) * total) - cumulative.begin()));
-    double a = u(rng), b = u(rng);
-    if (a + b > 1) a = 1 - a, b = 1 - b;
-    const auto& f = mesh.faces[k];
-    const Eigen::Vector3d& p0 = mesh.vertices[f[0]];
-    const Eigen::Vector3d p = p0 + a * (mesh.vertices[f[1]] - p0) + b * (mesh.vertices[f[2]] - p0);
+    const size_t k = sampler.face(u(rng) * sampler.totalArea());
+    const double a = u(rng), b = u(rng);
+    const Eigen::Vector3d p = sampler.point(k, a, b);
     if (exterior_only && !onExterior(mesh, p)) continue;
     out.push_back(T * p);
   }
