@@ -329,33 +329,18 @@ double median(std::vector<double> v) {
 int runCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   std::string run, json_path;
   Options options;
-  try {
-    const bool help = cli::forEachFlag(
-        args, [&] { out << kUsage; },
-        [&](const std::string& a, size_t& i) {
-          auto number = [&] { return cli::nextPositiveNumber(args, i); };
-          if (a == "--run")
-            run = cli::nextValue(args, i);
-          else if (a == "--json")
-            json_path = cli::nextValue(args, i);
-          else if (a == "--view-range")
-            options.view_range = number();
-          else if (a == "--match")
-            options.match_distance = number();
-          else if (a == "--centre")
-            options.centre_tolerance = number();
-          else if (a == "--yaw")
-            options.yaw_tolerance_deg = number();
-          else
-            throw std::invalid_argument("unknown argument '" + a + "'");
-        });
-    if (help) return 0;
-    if (run.empty()) throw std::invalid_argument("give --run DIR");
-  } catch (const std::invalid_argument& e) {
-    err << "beslam eval-objects: " << e.what() << " (see beslam eval-objects --help)\n";
-    return 2;
-  }
-  try {
+  const auto parse = [&] {
+    const bool help = cli::forEachValueFlag(args, [&] { out << kUsage; },
+                                            {{"--run", cli::text(run)},
+                                             {"--json", cli::text(json_path)},
+                                             {"--view-range", cli::positive(options.view_range)},
+                                             {"--match", cli::positive(options.match_distance)},
+                                             {"--centre", cli::positive(options.centre_tolerance)},
+                                             {"--yaw", cli::positive(options.yaw_tolerance_deg)}});
+    if (!help && run.empty()) throw std::invalid_argument("give --run DIR");
+    return help;
+  };
+  return cli::runSubcommand("eval-objects", err, parse, [&] {
     const Score s = score(run, options);
     std::vector<double> centre, yaw, chamfer, shape;
     for (const ObjectResult& r : s.objects) {
@@ -403,10 +388,7 @@ int runCommand(const std::vector<std::string>& args, std::ostream& out, std::ost
       writeFileAtomic(json_path, j.dump(2) + "\n");
     }
     return 0;
-  } catch (const std::exception& e) {
-    err << "beslam eval-objects: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }
 
 }  // namespace beslam::object_score
