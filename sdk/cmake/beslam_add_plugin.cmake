@@ -1,17 +1,21 @@
-# beslam_add_plugin(<target> SOURCES <src>... [LIBRARIES <lib>...] [INCLUDES <dir>...])
+# beslam_add_plugin(<target> SOURCES <src>... [LIBRARIES <lib>...] [INCLUDES <dir>...] [SETTINGS <json>...])
 #
 # Builds one BE-SLAM plugin library: a MODULE linked against beslam::sdk, with hidden symbols (only the
 # two entry points are exported by BESLAM_EXPORT_PLUGINS), --no-undefined so a missing symbol fails at
 # link time rather than at load time, and no "lib" prefix. Output goes to BESLAM_PLUGIN_OUTPUT_DIR when
 # set (the BE-SLAM tree sets it to build/lib/beslam/plugins), else to <build>/plugins; installs to
-# <prefix>/lib/beslam/plugins, where the host looks by default.
+# <prefix>/lib/beslam/plugins, where the host looks by default. SETTINGS: the plugin's settings files
+# (beslam_plugin_settings.cmake has their format), turned at configure time into the header
+# "<target>_settings.hpp" with the plugin's `kSettings` (and its options struct, if the file declares it).
 #
 # A plugin uses the SDK alone: at the end of the configure step every plugin's link graph is walked, and a
 # plugin that links a host library (a target defined under the folder in the global property
 # BESLAM_HOST_SOURCE_DIR, which the BE-SLAM tree sets to platform/), directly or through another library,
 # stops the configure with an error naming both.
+include(${CMAKE_CURRENT_LIST_DIR}/beslam_plugin_settings.cmake)
+
 function(beslam_add_plugin target)
-  cmake_parse_arguments(P "" "" "SOURCES;LIBRARIES;INCLUDES" ${ARGN})
+  cmake_parse_arguments(P "" "" "SOURCES;LIBRARIES;INCLUDES;SETTINGS" ${ARGN})
   if(NOT P_SOURCES)
     message(FATAL_ERROR "beslam_add_plugin(${target}): SOURCES is required")
   endif()
@@ -19,6 +23,11 @@ function(beslam_add_plugin target)
   target_link_libraries(${target} PRIVATE beslam::sdk ${P_LIBRARIES})
   if(P_INCLUDES)
     target_include_directories(${target} PRIVATE ${P_INCLUDES})
+  endif()
+  if(P_SETTINGS)
+    set(generated ${CMAKE_CURRENT_BINARY_DIR}/${target}_settings)
+    beslam_plugin_settings(${target} ${generated}/${target}_settings.hpp ${P_SETTINGS})
+    target_include_directories(${target} PRIVATE ${generated})
   endif()
   if(DEFINED BESLAM_PLUGIN_OUTPUT_DIR)
     set(out ${BESLAM_PLUGIN_OUTPUT_DIR})

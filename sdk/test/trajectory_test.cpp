@@ -34,7 +34,23 @@ class TrajectoryFiles : public beslam::test::ScratchDir {
       EXPECT_EQ(message.find('\n'), std::string::npos) << "one line only: " << message;
     }
   }
+  // `trajectory` written to the scratch file `name` by write() and read back by read().
+  template <typename Write, typename Read>
+  Trajectory roundTrip(Write write, Read read, const std::string& name, const Trajectory& trajectory) {
+    write(path(name), trajectory);
+    return read(path(name));
+  }
+  // Writes `text` to the scratch file `name` and expects read(file) to fail so (see expectError).
+  template <typename Read>
+  void expectReadError(Read read, const std::string& name, const std::string& text, int line,
+                       const std::string& cause) {
+    const std::string file = write(name, text);
+    expectError([&] { read(file); }, file, line, cause);
+  }
 };
+
+const auto readTum = [](const std::string& file) { traj::readTum(file); };
+const auto readKitti = [](const std::string& file) { traj::readKitti(file); };
 
 Trajectory makeTrajectory(int n) {
   Trajectory trajectory;
@@ -53,8 +69,7 @@ Trajectory makeTrajectory(int n) {
 
 TEST_F(TrajectoryFiles, KittiRoundTripIsExact) {
   const Trajectory original = makeTrajectory(20);
-  traj::writeKitti(path("a.txt"), original);
-  const Trajectory loaded = traj::readKitti(path("a.txt"));
+  const Trajectory loaded = roundTrip(traj::writeKitti, traj::readKitti, "a.txt", original);
   ASSERT_EQ(loaded.size(), original.size());
   for (std::size_t i = 0; i < loaded.size(); ++i) {
     EXPECT_TRUE(loaded.poses[i].matrix() == original.poses[i].matrix()) << "pose " << i;
@@ -64,8 +79,7 @@ TEST_F(TrajectoryFiles, KittiRoundTripIsExact) {
 
 TEST_F(TrajectoryFiles, TumRoundTripKeepsStampsAndPoses) {
   const Trajectory original = makeTrajectory(20);
-  traj::writeTum(path("a.tum"), original);
-  const Trajectory loaded = traj::readTum(path("a.tum"));
+  const Trajectory loaded = roundTrip(traj::writeTum, traj::readTum, "a.tum", original);
   ASSERT_EQ(loaded.size(), original.size());
   for (std::size_t i = 0; i < loaded.size(); ++i) {
     EXPECT_EQ(loaded.stamps[i], original.stamps[i]);
@@ -111,29 +125,21 @@ TEST_F(TrajectoryFiles, KittiKeepsRotationAsWritten) {
 TEST_F(TrajectoryFiles, WrongColumnCountNamesFileAndLine) {
   const std::string kitti = write("k.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n\n1 0 0 0 0 1 0 0 0 0 1\n");
   expectError([&] { traj::readKitti(kitti); }, kitti, 3, "expected 12 numbers per row");
-  const std::string tum = write("t.tum", "# header\n0 1 2 3 0 0 0 1 9\n");
-  expectError([&] { traj::readTum(tum); }, tum, 2, "expected 8 numbers per row");
+  expectReadError(readTum, "t.tum", "# header\n0 1 2 3 0 0 0 1 9\n", 2, "expected 8 numbers per row");
   expectError([&] { traj::readTum(kitti); }, kitti, 1, "found 12");
 }
 
 TEST_F(TrajectoryFiles, NonFiniteAndNonNumericValuesNameFileAndLine) {
-  const std::string nan_file = write("nan.tum", "0 1 2 3 0 0 0 1\n1 nan 2 3 0 0 0 1\n");
-  expectError([&] { traj::readTum(nan_file); }, nan_file, 2, "non-finite value 'nan'");
-  const std::string inf_file = write("inf.txt", "1 0 0 0 0 1 0 0 0 0 1 -inf\n");
-  expectError([&] { traj::readKitti(inf_file); }, inf_file, 1, "column 12: non-finite");
-  const std::string huge_file = write("huge.tum", "1e999 1 2 3 0 0 0 1\n");
-  expectError([&] { traj::readTum(huge_file); }, huge_file, 1, "non-finite");
-  const std::string word_file = write("word.tum", "0 1 2 3 0 0 0 1\n\n1 1 2 3x 0 0 0 1\n");
-  expectError([&] { traj::readTum(word_file); }, word_file, 3, "column 4: '3x' is not a number");
+  expectReadError(readTum, "nan.tum", "0 1 2 3 0 0 0 1\n1 nan 2 3 0 0 0 1\n", 2, "non-finite value 'nan'");
+  expectReadError(readKitti, "inf.txt", "1 0 0 0 0 1 0 0 0 0 1 -inf\n", 1, "column 12: non-finite");
+  expectReadError(readTum, "huge.tum", "1e999 1 2 3 0 0 0 1\n", 1, "non-finite");
+  expectReadError(readTum, "word.tum", "0 1 2 3 0 0 0 1\n\n1 1 2 3x 0 0 0 1\n", 3, "column 4: '3x' is not a number");
 }
 
 TEST_F(TrajectoryFiles, RejectsZeroQuaternionAndNonRotation) {
-  const std::string zero_q = write("z.tum", "0 1 2 3 0 0 0 0\n");
-  expectError([&] { traj::readTum(zero_q); }, zero_q, 1, "quaternion has zero length");
-  const std::string not_rot = write("r.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n2 0 0 0 0 1 0 0 0 0 1 0\n");
-  expectError([&] { traj::readKitti(not_rot); }, not_rot, 2, "not a rotation matrix");
-  const std::string mirror = write("m.txt", "1 0 0 0 0 1 0 0 0 0 -1 0\n");
-  expectError([&] { traj::readKitti(mirror); }, mirror, 1, "not a rotation matrix");
+  expectReadError(readTum, "z.tum", "0 1 2 3 0 0 0 0\n", 1, "quaternion has zero length");
+  expectReadError(readKitti, "r.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n2 0 0 0 0 1 0 0 0 0 1 0\n", 2, "not a rotation matrix");
+  expectReadError(readKitti, "m.txt", "1 0 0 0 0 1 0 0 0 0 -1 0\n", 1, "not a rotation matrix");
 }
 
 TEST_F(TrajectoryFiles, EmptyAndMissingFilesNameTheFile) {

@@ -5,13 +5,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = beslam::fuzz::writeScratch(data, size, "calib.txt");
-  try {
-    beslam::datasets::readOdometryCalib(path);
-  } catch (const beslam::Error&) {
-  }
-  try {
-    beslam::datasets::readObjectCalib(path);
-  } catch (const beslam::Error&) {
-  }
+  beslam::fuzz::acceptErrors([&] { beslam::datasets::readOdometryCalib(path); });
+  beslam::fuzz::acceptErrors([&] { beslam::datasets::readObjectCalib(path); });
   return 0;
 }

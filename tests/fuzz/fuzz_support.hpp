@@ -1,4 +1,5 @@
-// Helpers for the fuzz targets: a per-process scratch file for readers that take a path.
+// Helpers for the fuzz targets: a per-process scratch file for readers that take a path, and the one
+// answer a reader may give to bad input (beslam::Error).
 #pragma once
 
 #include <unistd.h>
@@ -8,6 +9,8 @@
 #include <fstream>
 #include <string>
 
+#include "beslam/formats/error.hpp"
+
 namespace beslam::fuzz {
 
 // Writes the input to a scratch file named `stem` (in the working folder, which run_fuzzer.sh makes a
@@ -16,6 +19,15 @@ inline std::string writeScratch(const uint8_t* data, size_t size, const std::str
   const std::string path = stem + "." + std::to_string(::getpid());
   std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
   return path;
+}
+
+// Runs read(); a beslam::Error is the expected answer to bad input, anything else escapes to the fuzzer.
+template <class Read>
+void acceptErrors(Read&& read) {
+  try {
+    read();
+  } catch (const beslam::Error&) {
+  }
 }
 
 }  // namespace beslam::fuzz

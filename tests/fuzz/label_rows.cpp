@@ -6,22 +6,15 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/datasets/labels.hpp"
+#include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
   int line_no = 0;
   for (std::string line; std::getline(in, line);) {
     ++line_no;
-    try {
-      const auto t = beslam::datasets::parseTrackingRow(line, "fuzz.txt", line_no);
-      (void)t;
-    } catch (const beslam::Error&) {
-    }
-    try {
-      const auto o = beslam::datasets::parseObjectRow(line, "fuzz.txt", line_no);
-      (void)o;
-    } catch (const beslam::Error&) {
-    }
+    beslam::fuzz::acceptErrors([&] { (void)beslam::datasets::parseTrackingRow(line, "fuzz.txt", line_no); });
+    beslam::fuzz::acceptErrors([&] { (void)beslam::datasets::parseObjectRow(line, "fuzz.txt", line_no); });
   }
   return 0;
 }

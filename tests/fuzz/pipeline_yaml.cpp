@@ -5,9 +5,6 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = beslam::fuzz::writeScratch(data, size, "pipeline.yaml");
-  try {
-    beslam::pipeline::loadPipeline(path);
-  } catch (const beslam::Error&) {
-  }
+  beslam::fuzz::acceptErrors([&] { beslam::pipeline::loadPipeline(path); });
   return 0;
 }

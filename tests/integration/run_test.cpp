@@ -418,30 +418,28 @@ TEST(Demo, CallsParkedCarsStaticAndReconstructsThem) {
                           dir);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("map in metres from frame"), std::string::npos) << r.out;
-  const Result m =
-      beslam("eval-motion --run " + (dir / "out").string() + " --json " + (dir / "motion.json").string(), dir);
-  ASSERT_EQ(m.code, 0) << m.err;
-  const std::string json = slurp(dir / "motion.json");
-  auto number = [&](const std::string& key) { return jsonNumber(json, key); };
-  EXPECT_GT(number("standing_near_static"), 0) << m.out;
-  ASSERT_GT(number("moving"), 0) << m.out;
-  EXPECT_LE(number("moving_static") / number("moving"), 0.01) << m.out;
+  // `beslam <command> --run OUT --json FILE` on the run: FILE's text ("" when the command failed).
+  const auto evaluate = [&](const std::string& command, const std::string& file) {
+    const Result e = beslam(command + " --run " + (dir / "out").string() + " --json " + (dir / file).string(), dir);
+    EXPECT_EQ(e.code, 0) << e.err;
+    return e.code == 0 ? slurp(dir / file) : std::string();
+  };
+  const std::string motion = evaluate("eval-motion", "motion.json");
+  ASSERT_FALSE(motion.empty());
+  EXPECT_GT(jsonNumber(motion, "standing_near_static"), 0) << motion;
+  ASSERT_GT(jsonNumber(motion, "moving"), 0) << motion;
+  EXPECT_LE(jsonNumber(motion, "moving_static") / jsonNumber(motion, "moving"), 0.01) << motion;
   // Trusted statics reach the backend: features on parked cars' labels, matches to their map points, and
   // map points on them in the final map.
   const std::string summary = slurp(dir / "out/summary.json");
-  auto field = [&](const std::string& key) { return jsonNumber(summary, key); };
-  EXPECT_GT(field("features_static"), 0) << summary;
-  EXPECT_GT(field("tracked_static"), 0) << summary;
-  EXPECT_GT(field("on_static_objects"), 0) << summary;
+  for (const char* key : {"features_static", "tracked_static", "on_static_objects"})
+    EXPECT_GT(jsonNumber(summary, key), 0) << key << ": " << summary;
   // Parked cars are reconstructed (objects.json, meshes), near true parked cars and none where there is none.
   EXPECT_NE(r.out.find("objects reconstructed: "), std::string::npos) << r.out;
-  const Result o =
-      beslam("eval-objects --run " + (dir / "out").string() + " --json " + (dir / "objects.json").string(), dir);
-  ASSERT_EQ(o.code, 0) << o.err;
-  const std::string scored = slurp(dir / "objects.json");
-  auto score = [&](const std::string& key) { return jsonNumber(scored, key); };
-  EXPECT_GE(score("correct"), 2) << o.out;
-  EXPECT_EQ(score("false"), 0) << o.out;
+  const std::string scored = evaluate("eval-objects", "objects.json");
+  ASSERT_FALSE(scored.empty());
+  EXPECT_GE(jsonNumber(scored, "correct"), 2) << scored;
+  EXPECT_EQ(jsonNumber(scored, "false"), 0) << scored;
   EXPECT_TRUE(fs::exists(dir / "out/map.ply"));
   fs::remove_all(dir);
 }

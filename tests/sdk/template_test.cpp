@@ -114,6 +114,22 @@ TEST_F(TemplateBuild, HostLoadsAndRunsTheOutOfTreePlugin) {
   EXPECT_THROW(masker.generate(frame, {box}, buffer), beslam::Error);
 }
 
+// The template declares its settings as data (sdk/template/mask_rect.settings.json); the installed SDK's
+// beslam_add_plugin generated the header with Options and kSettings, which is the schema the host sees.
+TEST_F(TemplateBuild, TheSettingsFileIsTheSchema) {
+  EXPECT_TRUE(fs::exists(root_ / "build" / "mask_rect_settings" / "mask_rect_settings.hpp"));
+  const auto& plugin = registry_.find("mask_rect", BESLAM_KIND_MASK_GENERATOR);
+  ASSERT_EQ(plugin.fields.size(), 3u);
+  EXPECT_EQ(plugin.fields[0].key, "margin_px");
+  EXPECT_EQ(plugin.fields[0].type, BESLAM_CONFIG_INT);
+  EXPECT_EQ(plugin.fields[0].default_value, "4");
+  EXPECT_EQ(plugin.fields[0].min_value, 0);
+  EXPECT_EQ(plugin.fields[0].max_value, 200);
+  EXPECT_EQ(plugin.fields[0].doc, "pixels added on every side of the rectangle");
+  EXPECT_EQ(plugin.fields[1].type, BESLAM_CONFIG_BOOL);
+  EXPECT_EQ(plugin.fields[2].type, BESLAM_CONFIG_DOUBLE);
+}
+
 TEST_F(TemplateBuild, BeslamPluginsListsIt) {
   const fs::path out = root_ / "plugins.txt";
   ASSERT_EQ(shell(std::string(BESLAM_BINARY_DIR) + "/bin/beslam plugins --plugin-path " + plugin_dir_.string(), out), 0)

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "beslam/bench/bench.hpp"
+#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/interrupt.hpp"
 #include "beslam/eval/eval.hpp"
@@ -328,7 +329,7 @@ int main(int argc, char** argv) {
   }
   const std::string command = args[0];
   args.erase(args.begin());
-  try {
+  const auto dispatch = [&]() -> int {
     if (command == "run") return runCommand(args);
     if (command == "plugins") return pluginsCommand(args);
     if (command == "eval") return beslam::eval::runEvalCommand(args, std::cout, std::cerr);
@@ -347,14 +348,7 @@ int main(int argc, char** argv) {
     }
     runExternalCommand(command, argv);  // returns only when there is no beslam-<command>
     throw UsageError("unknown command '" + command + "'");
-  } catch (const UsageError& e) {
-    std::cerr << "beslam: usage error: " << e.what() << "\n" << kUsage;
-    return 2;
-  } catch (const beslam::Error& e) {
-    std::cerr << "beslam: error: " << e.what() << "\n";
-    return 1;
-  } catch (const std::exception& e) {
-    std::cerr << "beslam: internal error: " << e.what() << "\n";
-    return 1;
-  }
+  };
+  return beslam::cli::runMain<UsageError>(dispatch, std::cerr, kUsage,
+                                          "beslam: usage error: ", "beslam: error: ", "beslam: internal error: ");
 }

@@ -66,25 +66,15 @@ bool onExterior(const Mesh& mesh, const Eigen::Vector3d& p) {
 // samples); with exterior_only, samples on buried faces are drawn again (at most 20 n draws).
 std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, const Eigen::Isometry3d& T, int n,
                                             bool exterior_only = false) {
-  std::vector<double> cumulative;
-  double total = 0;
-  for (const auto& f : mesh.faces) {
-    total += 0.5 * (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]).norm();
-    cumulative.push_back(total);
-  }
+  const formats::SurfaceSampler sampler(mesh);
   std::vector<Eigen::Vector3d> out;
-  if (total <= 0) return out;
+  if (sampler.totalArea() <= 0) return out;
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(0, 1);
   for (int draw = 0; static_cast<int>(out.size()) < n && draw < 20 * n; ++draw) {
-    const size_t k =
-        std::min(mesh.faces.size() - 1,
-                 size_t(std::lower_bound(cumulative.begin(), cumulative.end(), u(rng) * total) - cumulative.begin()));
-    double a = u(rng), b = u(rng);
-    if (a + b > 1) a = 1 - a, b = 1 - b;
-    const auto& f = mesh.faces[k];
-    const Eigen::Vector3d& p0 = mesh.vertices[f[0]];
-    const Eigen::Vector3d p = p0 + a * (mesh.vertices[f[1]] - p0) + b * (mesh.vertices[f[2]] - p0);
+    const size_t k = sampler.face(u(rng) * sampler.totalArea());
+    const double a = u(rng), b = u(rng);
+    const Eigen::Vector3d p = sampler.point(k, a, b);
     if (exterior_only && !onExterior(mesh, p)) continue;
     out.push_back(T * p);
   }
@@ -339,33 +329,18 @@ double median(std::vector<double> v) {
 int runCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   std::string run, json_path;
   Options options;
-  try {
-    const bool help = cli::forEachFlag(
-        args, [&] { out << kUsage; },
-        [&](const std::string& a, size_t& i) {
-          auto number = [&] { return cli::nextPositiveNumber(args, i); };
-          if (a == "--run")
-            run = cli::nextValue(args, i);
-          else if (a == "--json")
-            json_path = cli::nextValue(args, i);
-          else if (a == "--view-range")
-            options.view_range = number();
-          else if (a == "--match")
-            options.match_distance = number();
-          else if (a == "--centre")
-            options.centre_tolerance = number();
-          else if (a == "--yaw")
-            options.yaw_tolerance_deg = number();
-          else
-            throw std::invalid_argument("unknown argument '" + a + "'");
-        });
-    if (help) return 0;
-    if (run.empty()) throw std::invalid_argument("give --run DIR");
-  } catch (const std::invalid_argument& e) {
-    err << "beslam eval-objects: " << e.what() << " (see beslam eval-objects --help)\n";
-    return 2;
-  }
-  try {
+  const auto parse = [&] {
+    const bool help = cli::forEachValueFlag(args, [&] { out << kUsage; },
+                                            {{"--run", cli::text(run)},
+                                             {"--json", cli::text(json_path)},
+                                             {"--view-range", cli::positive(options.view_range)},
+                                             {"--match", cli::positive(options.match_distance)},
+                                             {"--centre", cli::positive(options.centre_tolerance)},
+                                             {"--yaw", cli::positive(options.yaw_tolerance_deg)}});
+    if (!help && run.empty()) throw std::invalid_argument("give --run DIR");
+    return help;
+  };
+  return cli::runSubcommand("eval-objects", err, parse, [&] {
     const Score s = score(run, options);
     std::vector<double> centre, yaw, chamfer, shape;
     for (const ObjectResult& r : s.objects) {
@@ -413,10 +388,7 @@ int runCommand(const std::vector<std::string>& args, std::ostream& out, std::ost
       writeFileAtomic(json_path, j.dump(2) + "\n");
     }
     return 0;
-  } catch (const std::exception& e) {
-    err << "beslam eval-objects: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }
 
 }  // namespace beslam::object_score

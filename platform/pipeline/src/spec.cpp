@@ -6,6 +6,10 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/yaml_set.hpp"
+#include "dataset_fields.hpp"     // kDatasetFields, from sections/dataset.json
+#include "evaluation_fields.hpp"  // kEvaluationFields, from sections/evaluation.json
+#include "output_fields.hpp"      // kOutputFields, from sections/output.json
+#include "pipeline_fields.hpp"    // kPipelineFields, from sections/pipeline.json
 
 namespace fs = std::filesystem;
 
@@ -106,55 +110,17 @@ std::string resolvePath(const std::string& text, const std::string& base_dir, co
   return resolved.string();
 }
 
-std::vector<ConfigField> datasetFields() {
-  return {
-      {"type", BESLAM_CONFIG_STRING, true, "", 1, 0, "kitti_odometry|kitti_tracking|kitti_raw|kitti_object|tum|synth",
-       "dataset layout (synth: rendered, cached)"},
-      {"root", BESLAM_CONFIG_PATH, true, "", 1, 0, "", "dataset folder (relative to the pipeline file)"},
-      {"sequence", BESLAM_CONFIG_STRING, false, "\"\"", 1, 0, "", "sequence name: 06, 0007, ..."},
-      {"camera", BESLAM_CONFIG_STRING, false, "auto", 1, 0, "auto|image_0|image_2", "which camera folder"},
-      {"first", BESLAM_CONFIG_INT, false, "0", 0, 1e12, "", "first frame"},
-      {"last", BESLAM_CONFIG_INT, false, "-1", -1, 1e12, "", "last frame, inclusive (-1: to the end)"},
-      {"step", BESLAM_CONFIG_INT, false, "1", 1, 1e6, "", "use every step-th frame"},
-      {"lidar", BESLAM_CONFIG_BOOL, false, "false", 1, 0, "", "load LiDAR scans"},
-      {"color", BESLAM_CONFIG_BOOL, false, "false", 1, 0, "", "load colour images beside grey"},
-      {"ego_poses", BESLAM_CONFIG_PATH, false, "\"\"", 1, 0, "", "KITTI-format poses for layouts without them"},
-      {"synth_set", BESLAM_CONFIG_STRING, false, "\"\"", 1, 0, "",
-       "synth: config overrides 'key=value,key=value' applied to the preset named by sequence"},
-      {"camera_height", BESLAM_CONFIG_DOUBLE, false, "0", 0, 100, "",
-       "m from the camera down to the road, handed to every plugin (0: the dataset's own: KITTI 1.65, "
-       "synth: its manifest)"},
-  };
+// The pipeline file's own sections, declared as data in platform/pipeline/sections/*.json.
+template <size_t N>
+std::vector<ConfigField> fieldsOf(const beslam_config_field (&raw)[N]) {
+  std::vector<ConfigField> fields;
+  for (const beslam_config_field& f : raw) fields.push_back(registry::fieldOf(f));
+  return fields;
 }
-
-std::vector<ConfigField> outputFields() {
-  return {
-      {"dir", BESLAM_CONFIG_STRING, false, "\"\"", 1, 0, "", "output folder (relative to the working folder)"},
-      {"masks", BESLAM_CONFIG_BOOL, false, "false", 1, 0, "", "write masks/NNNNNN.png"},
-      {"map_points", BESLAM_CONFIG_BOOL, false, "true", 1, 0, "", "write map_points.ply"},
-      {"samples", BESLAM_CONFIG_INT, false, "6", 0, 1000, "",
-       "frames spread over the run drawn to samples/NNNNNN.jpg with their masks and features"},
-      {"octomap", BESLAM_CONFIG_BOOL, false, "false", 1, 0, "",
-       "write static_map.bt, an OctoMap of the static world (LiDAR scans, else map points)"},
-      {"octomap_resolution", BESLAM_CONFIG_DOUBLE, false, "0.2", 0.02, 10, "", "OctoMap voxel edge, metres"},
-  };
-}
-
-std::vector<ConfigField> runFields() {
-  return {
-      {"prefetch", BESLAM_CONFIG_INT, false, "3", 0, 16, "",
-       "frames loaded (and detected, masked when no stage needs the backend's pose) ahead of the backend on a "
-       "second thread; 0: every stage in turn on one thread"},
-  };
-}
-
-std::vector<ConfigField> evaluationFields() {
-  return {
-      {"enabled", BESLAM_CONFIG_BOOL, false, "true", 1, 0, "", "APE/RPE against ground truth when available"},
-      {"alignment", BESLAM_CONFIG_STRING, false, "sim3", 1, 0, "none|se3|sim3", "trajectory alignment"},
-      {"rpe_delta", BESLAM_CONFIG_INT, false, "1", 1, 1e6, "", "RPE frame delta"},
-  };
-}
+std::vector<ConfigField> datasetFields() { return fieldsOf(kDatasetFields); }
+std::vector<ConfigField> outputFields() { return fieldsOf(kOutputFields); }
+std::vector<ConfigField> runFields() { return fieldsOf(kPipelineFields); }
+std::vector<ConfigField> evaluationFields() { return fieldsOf(kEvaluationFields); }
 
 const beslam_config_value& value(const PluginConfig& c, const std::string& key) {
   for (const auto& v : c.values())

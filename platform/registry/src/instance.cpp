@@ -6,6 +6,7 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/formats/geometry.hpp"
+#include "beslam/sdk/detail/landmark_view.hpp"
 
 namespace beslam::registry {
 
@@ -104,7 +105,6 @@ void MaskGeneratorInstance::generate(const beslam_frame& frame, const std::vecto
 
 namespace {
 using formats::toIsometry;
-using formats::toPose;
 
 template <class T>
 std::vector<T> copyOf(const T* data, size_t count, const char* what, const std::string& plugin) {
@@ -208,27 +208,7 @@ TrackOutput BackendInstance::track(const beslam_frame& frame, const beslam_image
 
 void BackendInstance::addLandmarks(const Landmarks& landmarks) {
   std::vector<beslam_object_landmark> views;  // C views of the host's copies, for this call only
-  for (const ObjectLandmark& o : landmarks) {
-    beslam_object_landmark l{};
-    l.struct_size = sizeof(l);
-    l.track_id = o.track_id;
-    l.class_id = o.class_id;
-    l.confidence = o.confidence;
-    l.T_world_object = toPose(o.T_world_object);
-    for (int i = 0; i < 3; ++i) l.scale[i] = o.size[i];
-    l.shape_code = o.shape_code.empty() ? nullptr : o.shape_code.data();
-    l.shape_code_size = static_cast<uint32_t>(o.shape_code.size());
-    l.surface_points = o.surface_points.empty() ? nullptr : o.surface_points.data();
-    l.surface_point_count = o.surface_points.size() / 3;
-    l.flags = o.flags;
-    l.keyframes = o.keyframes;
-    l.cost = o.cost;
-    l.mesh_vertices = o.mesh_vertices.empty() ? nullptr : o.mesh_vertices.data();
-    l.mesh_vertex_count = static_cast<uint32_t>(o.mesh_vertices.size() / 3);
-    l.mesh_faces = o.mesh_faces.empty() ? nullptr : o.mesh_faces.data();
-    l.mesh_face_count = static_cast<uint32_t>(o.mesh_faces.size() / 3);
-    views.push_back(l);
-  }
+  for (const ObjectLandmark& o : landmarks) views.push_back(sdk::detail::landmarkView(o, o.size, o.flags));
   beslam_landmark_list list{views.data(), static_cast<uint32_t>(views.size()), sizeof(beslam_object_landmark)};
   check(table<beslam_backend_v1>().add_landmarks(handle_, &list), "add_landmarks");
 }

@@ -278,9 +278,7 @@ void Registry::Impl::load(const std::string& path) {
                 "plugin " + id + ": configuration key '" + raw.key + "' has unknown type " + std::to_string(raw.type));
       if (!raw.required && raw.default_value == nullptr)
         throwAt(path, "plugin " + id + ": configuration key '" + raw.key + "' is optional but has no default");
-      ConfigField field{raw.key,       raw.type,      raw.required != 0, str(raw.default_value),
-                        raw.min_value, raw.max_value, str(raw.choices),  str(raw.doc)};
-      p.fields.push_back(std::move(field));
+      p.fields.push_back(fieldOf(raw));
     }
     for (const Plugin& other : plugins)
       if (other.id == id) throwAt(path, "plugin id '" + id + "' is already provided by " + other.library_path);
@@ -316,6 +314,11 @@ const Plugin& Registry::find(const std::string& id, int32_t kind) const {
   // A library refused for this reason may have been the one meant: say why each was refused.
   for (const std::string& problem : impl_->problems) message += "; refused " + problem;
   throw Error(message);
+}
+
+ConfigField fieldOf(const beslam_config_field& raw) {
+  return {str(raw.key),  raw.type,      raw.required != 0, str(raw.default_value),
+          raw.min_value, raw.max_value, str(raw.choices),  str(raw.doc)};
 }
 
 }  // namespace beslam::registry

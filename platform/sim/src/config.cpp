@@ -28,60 +28,9 @@ class Binder {
   virtual void s(const std::string& key, std::string& v, const std::vector<std::string>& allowed) = 0;
 };
 
+// Every key of platform/sim/config_keys.json, in its order: x.d("camera.fx", c.camera.fx, 10.0, 1e5), ...
 void bindAll(Binder& x, SynthConfig& c) {
-  x.u64("seed", c.seed);
-  x.s("sequence", c.sequence, {});
-  x.i("frames", c.frames, 1, 100000);
-  x.d("rate_hz", c.rate_hz, 1.0, 100.0);
-  x.i("camera.width", c.camera.width, 32, 8192);
-  x.i("camera.height", c.camera.height, 16, 8192);
-  x.d("camera.fx", c.camera.fx, 10.0, 1e5);
-  x.d("camera.fy", c.camera.fy, 10.0, 1e5);
-  x.d("camera.cx", c.camera.cx, -1e4, 1e4);
-  x.d("camera.cy", c.camera.cy, -1e4, 1e4);
-  x.d("camera.mount_height", c.camera.mount_height, 0.3, 5.0);
-  x.b("camera.grey", c.camera.grey);
-  x.b("camera.colour", c.camera.colour);
-  x.d("ego.speed_kmh", c.ego.speed_kmh, 5.0, 130.0);
-  x.d("ego.max_lateral_accel", c.ego.max_lateral_accel, 0.5, 8.0);
-  x.b("ego.clockwise", c.ego.clockwise);
-  x.d("ego.start_fraction", c.ego.start_fraction, 0.0, 1.0);
-  x.d("ego.pitch_amplitude_deg", c.ego.pitch_amplitude_deg, 0.0, 3.0);
-  x.d("ego.roll_per_accel_deg", c.ego.roll_per_accel_deg, 0.0, 2.0);
-  x.s("world.type", c.world.type, {"urban", "highway"});
-  x.i("world.blocks_x", c.world.blocks_x, 1, 9);
-  x.i("world.blocks_y", c.world.blocks_y, 1, 9);
-  x.d("world.block_x", c.world.block_x, 50.0, 2000.0);
-  x.d("world.block_y", c.world.block_y, 50.0, 2000.0);
-  x.i("world.lanes_per_direction", c.world.lanes_per_direction, 1, 4);
-  x.d("world.lane_width", c.world.lane_width, 2.5, 4.5);
-  x.b("world.parking_lanes", c.world.parking_lanes);
-  x.d("world.pavement_width", c.world.pavement_width, 1.5, 10.0);
-  x.d("world.corner_radius", c.world.corner_radius, 8.0, 400.0);
-  x.d("world.building_min_height", c.world.building_min_height, 3.0, 100.0);
-  x.d("world.building_max_height", c.world.building_max_height, 3.0, 100.0);
-  x.d("world.building_gap_probability", c.world.building_gap_probability, 0.0, 0.9);
-  x.d("world.building_setback_max", c.world.building_setback_max, 0.0, 10.0);
-  x.d("world.tree_spacing", c.world.tree_spacing, 0.0, 100.0);
-  x.i("objects.parked", c.objects.parked, 0, 500);
-  x.i("objects.driving", c.objects.driving, 0, 200);
-  x.i("objects.stop_and_go", c.objects.stop_and_go, 0, 100);
-  x.i("objects.pedestrians", c.objects.pedestrians, 0, 200);
-  x.d("objects.driving_speed_kmh_min", c.objects.driving_speed_kmh_min, 5.0, 130.0);
-  x.d("objects.driving_speed_kmh_max", c.objects.driving_speed_kmh_max, 5.0, 130.0);
-  x.d("image.noise_sigma", c.image.noise_sigma, 0.0, 30.0);
-  x.d("image.blur_sigma", c.image.blur_sigma, 0.0, 3.0);
-  x.d("image.exposure_variation", c.image.exposure_variation, 0.0, 0.5);
-  x.b("lidar.enabled", c.lidar.enabled);
-  x.i("lidar.beams", c.lidar.beams, 1, 256);
-  x.d("lidar.fov_up_deg", c.lidar.fov_up_deg, -30.0, 30.0);
-  x.d("lidar.fov_down_deg", c.lidar.fov_down_deg, -45.0, 30.0);
-  x.d("lidar.horizontal_resolution_deg", c.lidar.horizontal_resolution_deg, 0.05, 5.0);
-  x.d("lidar.max_range", c.lidar.max_range, 5.0, 500.0);
-  x.d("lidar.range_noise", c.lidar.range_noise, 0.0, 0.5);
-  x.d("lidar.mount_height", c.lidar.mount_height, 0.3, 5.0);
-  x.b("output.depth", c.output.depth);
-  x.i("output.threads", c.output.threads, 1, 64);
+#include "config_keys.inc"
 }
 
 // Looks a dotted key up without modifying the tree (lookups go through const nodes); false when the

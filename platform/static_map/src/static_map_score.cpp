@@ -183,26 +183,14 @@ Similarity alignmentOf(const nlohmann::json& summary) {
 int runEvalCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   std::string run, json_path;
   double near = 20.0;
-  try {
-    const bool help = cli::forEachFlag(
+  const auto parse = [&] {
+    const bool help = cli::forEachValueFlag(
         args, [&] { out << kUsage; },
-        [&](const std::string& a, size_t& i) {
-          if (a == "--run")
-            run = cli::nextValue(args, i);
-          else if (a == "--json")
-            json_path = cli::nextValue(args, i);
-          else if (a == "--near")
-            near = cli::nextPositiveNumber(args, i);
-          else
-            throw std::invalid_argument("unknown argument '" + a + "'");
-        });
-    if (help) return 0;
-    if (run.empty()) throw std::invalid_argument("give --run DIR");
-  } catch (const std::invalid_argument& e) {
-    err << "beslam eval-static-map: " << e.what() << " (see beslam eval-static-map --help)\n";
-    return 2;
-  }
-  try {
+        {{"--run", cli::text(run)}, {"--json", cli::text(json_path)}, {"--near", cli::positive(near)}});
+    if (!help && run.empty()) throw std::invalid_argument("give --run DIR");
+    return help;
+  };
+  return cli::runSubcommand("eval-static-map", err, parse, [&] {
     const std::string summary_path = (fs::path(run) / "summary.json").string();
     nlohmann::json summary;
     try {
@@ -230,10 +218,7 @@ int runEvalCommand(const std::vector<std::string>& args, std::ostream& out, std:
                                          .dump(2) +
                                      "\n");
     return 0;
-  } catch (const std::exception& e) {
-    err << "beslam eval-static-map: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }
 
 }  // namespace beslam::static_map

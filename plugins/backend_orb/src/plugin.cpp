@@ -4,6 +4,7 @@
 #include <set>
 #include <system_error>
 
+#include "backend_orb_settings.hpp"  // kSettings, from settings.json
 #include "beslam/sdk/sdk.hpp"
 #include "beslam_orb/orb_slam.hpp"
 
@@ -11,95 +12,6 @@ namespace {
 
 using beslam::orb::Options;
 using beslam::orb::OrbSlam;
-using beslam::sdk::path;
-using beslam::sdk::setting;
-
-// Each setting once: its schema entry and the beslam::orb::Options member it sets.
-// clang-format off: one setting a line
-const beslam::sdk::Settings<Options> kSettings{
-    setting(&Options::features, "features", "2000", 100, 20000,
-            "ORB keypoints per frame (twice that while initialising)"),
-    setting(&Options::scale_factor, "scale_factor", "1.2", 1.01, 2.0, "image pyramid scale step"),
-    setting(&Options::levels, "levels", "8", 1, 16, "image pyramid levels"),
-    setting(&Options::fast_initial, "fast_initial", "20", 1, 255, "FAST threshold per cell"),
-    setting(&Options::fast_fallback, "fast_fallback", "7", 1, 255, "FAST threshold of a cell that found nothing"),
-    setting(&Options::static_object_fast, "static_object_fast", "7", 1, 255,
-            "FAST threshold on static objects (mask label >= 1000)"),
-    setting(&Options::static_object_budget_share, "static_object_budget_share", "0.3", 0.0, 1.0,
-            "share of each level's features reserved for static objects"),
-    setting(&Options::static_object_weight, "static_object_weight", "1.0", 0.01, 100.0,
-            "optimisation weight of map points on static objects"),
-    setting(&Options::fps, "fps", "10", 0.1, 1000.0, "frame rate: at most this many frames between keyframes"),
-    setting(&Options::keyframe_min_gap, "keyframe_min_gap", "2", 1, 100, "at least this many frames between keyframes"),
-    setting(&Options::keyframe_culling, "keyframe_culling", "true", "remove redundant keyframes"),
-    setting(&Options::local_ba_max_keyframes, "local_ba_max_keyframes", "0", 0, 1000,
-            "keyframes moved by local BA (0: all covisible)"),
-    setting(&Options::ground_prior, "ground_prior", "false",
-            "hold the camera height over the fitted ground plane in local BA (vehicle cameras)"),
-    setting(&Options::ground_prior_sigma, "ground_prior_sigma", "0.2", 0.001, 10.0,
-            "std-dev of one ground point's height, as a share of the camera height"),
-    setting(&Options::ground_reference_keyframes, "ground_reference_keyframes", "5", 1, 1000,
-            "first keyframes whose median camera height is the reference"),
-    setting(&Options::ground_min_inliers, "ground_min_inliers", "25", 3, 100000,
-            "map points a keyframe's ground plane needs"),
-    setting(&Options::metric_scale, "metric_scale", "false",
-            "recover metres from the rig's camera height over the road (dataset camera_height) and hold them with the "
-            "ground prior"),
-    setting(&Options::metric_max_spread, "metric_max_spread", "0.1", 0.001, 10.0,
-            "metric scale: the reference ground fits' heights must agree this well (relative MAD)"),
-    setting(&Options::metric_correction_min, "metric_correction_min", "0.02", 0.0, 1.0,
-            "metric scale: recent ground fits off by more than this share (and their noise) scale the newer map back "
-            "(0: off)"),
-    setting(&Options::object_scale, "object_scale", "true",
-            "metric scale: static objects' 3D boxes are a scale source and, once metric, range priors in local BA"),
-    setting(&Options::object_range_sigma, "object_range_sigma", "0.15", 0.001, 100.0,
-            "std-dev (m) of a static-object point's range from its box"),
-    setting(&Options::object_range_sigma_per_m, "object_range_sigma_per_m", "0.02", 0.0, 10.0,
-            "std-dev added per metre of range"),
-    beslam::sdk::choice(&Options::object_landmarks, "object_landmarks", "off",
-                        {{"off", beslam::orb::ObjectLandmarkMode::Off}, {"ba", beslam::orb::ObjectLandmarkMode::BA}},
-                        "reconstructed objects (add_landmarks) in local BA: off (stored only) or ba (pose nodes with "
-                        "box and map-point-on-surface factors, metric maps only; docs/object-ba.md)"),
-    setting(&Options::object_pose_weight, "object_pose_weight", "1.0", 0.0, 1000.0,
-            "information multiplier of the camera-object (box) factors"),
-    setting(&Options::object_surface_weight, "object_surface_weight", "1.0", 0.0, 1000.0,
-            "information multiplier of the map-point-on-surface factors"),
-    setting(&Options::object_box_sigma, "object_box_sigma", "0.2", 0.001, 100.0,
-            "std-dev (m) of a car box's centre in a keyframe"),
-    setting(&Options::object_box_sigma_per_m, "object_box_sigma_per_m", "0.05", 0.0, 10.0,
-            "box centre std-dev added per metre of range"),
-    setting(&Options::object_yaw_sigma_deg, "object_yaw_sigma_deg", "10", 0.01, 180.0,
-            "std-dev (degrees) of a car box's heading"),
-    setting(&Options::object_surface_sigma, "object_surface_sigma", "0.1", 0.001, 100.0,
-            "std-dev (m) of a map point's distance to its object's nearest surface sample"),
-    setting(&Options::object_surface_gate, "object_surface_gate", "0.5", 0.001, 100.0,
-            "map points farther (m) than this from every surface sample of their object get no factor"),
-    setting(&Options::threaded_mapping, "threaded_mapping", "false",
-            "local mapping on its own thread (same results, overlaps the next frame)"),
-    setting(&Options::seed, "seed", "42", 0, 2147483647.0, "seed of every random choice (RANSAC)"),
-    path(&Options::vocabulary, "vocabulary", "\"\"",
-         "ORB vocabulary file (beslam vocab train); empty: the default one if installed or built, 'none': no "
-         "bag of words"),
-    setting(&Options::bow_matching, "bow_matching", "false",
-            "reference-keyframe tracking matches by bag of words (needs a vocabulary; measured no better)"),
-    setting(&Options::triangulation_bow, "triangulation_bow", "false",
-            "new points: epipolar candidates only under the same bag-of-words node (ORB-SLAM2; needs a vocabulary)"),
-    setting(&Options::relocalisation, "relocalisation", "true",
-            "relocalise when lost (by bag of words with a vocabulary, else near the last pose)"),
-    path(&Options::load_map, "load_map", "\"\"",
-         "map file to start from (saved by save_map with the same camera); tracking first localises in it"),
-    path(&Options::save_map, "save_map", "\"\"", "map file written at the end of the run (also when interrupted)"),
-    setting(&Options::localisation_only, "localisation_only", "false",
-            "track against the loaded map (load_map) without changing it: no keyframes, map points or BA"),
-    setting(&Options::loop_closure, "loop_closure", "false",
-            "close loops: BoW candidates, Sim3 (SE3 once metric), essential graph, global BA (needs a vocabulary; "
-            "off: the corrected map measured worse, docs/place-recognition.md)"),
-    setting(&Options::loop_object_check, "loop_object_check", "true",
-            "reject a loop whose parked cars disagree after the loop transform (BE-SLAM's BEV check)"),
-    setting(&Options::loop_global_ba_iterations, "loop_global_ba_iterations", "10", 0, 1000,
-            "global bundle adjustment iterations after a loop correction (0: none)"),
-};
-// clang-format on
 
 const beslam::sdk::PluginInfo kInfo(
     "backend_orb", "ORB monocular SLAM",

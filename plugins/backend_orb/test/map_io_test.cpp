@@ -77,6 +77,15 @@ class MapFileTest : public ::testing::Test {
   }
   static std::string path(const std::string& name) { return (fs::path(*dir_) / name).string(); }
 
+  // `slam` holds the saved map unchanged: its keyframes and map points, and saved as `name` the same bytes.
+  static void expectTheSavedMap(OrbSlam& slam, const std::string& name) {
+    const Statistics s = slam.statistics();
+    EXPECT_EQ(s.keyframes, stats_->keyframes);
+    EXPECT_EQ(s.map_points, stats_->map_points);
+    slam.saveMap(path(name));
+    EXPECT_EQ(readBytes(path(name)), readBytes(path("map.bin")));
+  }
+
   // The runtime_error message loading `file` with `camera` gives ("" if it loads).
   static std::string loadError(const std::string& file, const Camera& camera = test::CorridorWorld().camera()) {
     try {
@@ -102,11 +111,7 @@ TEST_F(MapFileTest, SavedAndLoadedMapIsTheSameMap) {
   ASSERT_GT(stats_->keyframes, 5);
   OrbSlam loaded(test::CorridorWorld().camera(), smallOptions());
   loaded.loadMap(path("map.bin"));
-  const Statistics s = loaded.statistics();
-  EXPECT_EQ(s.keyframes, stats_->keyframes);
-  EXPECT_EQ(s.map_points, stats_->map_points);
-  loaded.saveMap(path("again.bin"));
-  EXPECT_EQ(readBytes(path("again.bin")), readBytes(path("map.bin")));
+  expectTheSavedMap(loaded, "again.bin");
 }
 
 TEST_F(MapFileTest, LoadedMapTracksTheSameFramesToTheSamePosesWithoutChangingIt) {
@@ -122,9 +127,7 @@ TEST_F(MapFileTest, LoadedMapTracksTheSameFramesToTheSamePosesWithoutChangingIt)
   }
   slam.finish();
   EXPECT_EQ(tracked, kFrames);  // localised from the first frame on
-  const Statistics s = slam.statistics();
-  EXPECT_EQ(s.keyframes, stats_->keyframes);
-  EXPECT_EQ(s.map_points, stats_->map_points);
+  expectTheSavedMap(slam, "after_localisation.bin");
   // Every frame the mapping run tracked lands where that run (after its last BA) put it, within the noise of
   // two estimates (online tracking then, localisation against the final map now). The map's unit is the
   // first keyframes' median depth (about 7 m here; the corridor moves 0.4 m = 0.056 units per frame).
@@ -142,8 +145,6 @@ TEST_F(MapFileTest, LoadedMapTracksTheSameFramesToTheSamePosesWithoutChangingIt)
   ASSERT_EQ(dts.size(), trajectory_->size());
   std::nth_element(dts.begin(), dts.begin() + dts.size() / 2, dts.end());
   EXPECT_LT(dts[dts.size() / 2], 0.002);
-  slam.saveMap(path("after_localisation.bin"));
-  EXPECT_EQ(readBytes(path("after_localisation.bin")), readBytes(path("map.bin")));
 }
 
 TEST_F(MapFileTest, SaveMapOptionSavesInFinish) {

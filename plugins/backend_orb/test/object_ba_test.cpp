@@ -80,6 +80,27 @@ Eigen::MatrixXd numericJacobian(const ceres::CostFunction& cost, std::vector<std
   return J;
 }
 
+// Evaluates a two-block cost (R residuals; P0 and P1 parameters) and checks its analytic Jacobians against
+// central differences. A pose first block (7 parameters, 6 tangent directions) is compared on its tangent
+// columns, and its last column must be zero.
+template <int R, int P0, int P1>
+void expectJacobiansMatchNumeric(const ceres::CostFunction& cost, const std::vector<std::vector<double>>& params,
+                                 bool first_is_pose) {
+  double r[R], j0[R * P0], j1[R * P1];
+  double* jac[] = {j0, j1};
+  const double* ptrs[] = {params[0].data(), params[1].data()};
+  ASSERT_TRUE(cost.Evaluate(ptrs, r, jac));
+  const Eigen::Map<Eigen::Matrix<double, R, P0, Eigen::RowMajor>> A0(j0);
+  const Eigen::Map<Eigen::Matrix<double, R, P1, Eigen::RowMajor>> A1(j1);
+  const Eigen::MatrixXd N0 = numericJacobian<R>(cost, params, 0, first_is_pose),
+                        N1 = numericJacobian<R>(cost, params, 1, false);
+  EXPECT_LT((A0.leftCols(N0.cols()) - N0).norm(), 1e-6 * (1 + N0.norm())) << A0 << "\n" << N0;
+  if (first_is_pose) {
+    EXPECT_EQ(A0.col(6).norm(), 0.0);
+  }
+  EXPECT_LT((A1 - N1).norm(), 1e-6 * (1 + N1.norm())) << A1 << "\n" << N1;
+}
+
 TEST(ObjectFactors, BoxCostJacobiansMatchNumericOnes) {
   std::mt19937 rng(3);
   for (int trial = 0; trial < 5; ++trial) {
@@ -89,17 +110,7 @@ TEST(ObjectFactors, BoxCostJacobiansMatchNumericOnes) {
     optimize::poseToParams(T_cw, params[0].data());
     (void)T_wo;
     const objects::ObjectBoxCost cost(meas, T_wo.linear(), 0.3, 0.1, 0.8);
-    double r[4], j0[4 * 7], j1[4 * 4];
-    double* jac[] = {j0, j1};
-    const double* ptrs[] = {params[0].data(), params[1].data()};
-    ASSERT_TRUE(cost.Evaluate(ptrs, r, jac));
-    const Eigen::Map<Eigen::Matrix<double, 4, 7, Eigen::RowMajor>> A0(j0);
-    const Eigen::Map<Eigen::Matrix<double, 4, 4, Eigen::RowMajor>> A1(j1);
-    const Eigen::MatrixXd N0 = numericJacobian<4>(cost, params, 0, true),
-                          N1 = numericJacobian<4>(cost, params, 1, false);
-    EXPECT_LT((A0.leftCols<6>() - N0).norm(), 1e-6 * (1 + N0.norm())) << A0 << "\n" << N0;
-    EXPECT_EQ(A0.col(6).norm(), 0.0);
-    EXPECT_LT((A1 - N1).norm(), 1e-6 * (1 + N1.norm())) << A1 << "\n" << N1;
+    expectJacobiansMatchNumeric<4, 7, 4>(cost, params, true);
   }
 }
 
@@ -125,16 +136,7 @@ TEST(ObjectFactors, SurfaceCostJacobiansMatchNumericOnes) {
     std::vector<std::vector<double>> params{{1.5, -0.5, 12.0}, {-0.2 * trial, 0.5, 1.0, 11.0}};
     const Eigen::Vector3d normal = trial % 2 ? Eigen::Vector3d(0, 0.6, 0.8) : Eigen::Vector3d::Zero();
     const objects::SurfacePointCost cost(Eigen::Vector3d(0.3, -0.2, 0.6), normal, T_wo.linear(), 0.1, 0.7);
-    double r[3], j0[9], j1[12];
-    double* jac[] = {j0, j1};
-    const double* ptrs[] = {params[0].data(), params[1].data()};
-    ASSERT_TRUE(cost.Evaluate(ptrs, r, jac));
-    const Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> A0(j0);
-    const Eigen::Map<Eigen::Matrix<double, 3, 4, Eigen::RowMajor>> A1(j1);
-    const Eigen::MatrixXd N0 = numericJacobian<3>(cost, params, 0, false),
-                          N1 = numericJacobian<3>(cost, params, 1, false);
-    EXPECT_LT((A0 - N0).norm(), 1e-6 * (1 + N0.norm()));
-    EXPECT_LT((A1 - N1).norm(), 1e-6 * (1 + N1.norm()));
+    expectJacobiansMatchNumeric<3, 3, 4>(cost, params, false);
   }
 }
 

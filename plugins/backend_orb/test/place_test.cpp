@@ -11,6 +11,7 @@
 #include <string>
 
 #include "beslam/formats/align.hpp"
+#include "beslam/test/error_text.hpp"
 #include "beslam_orb/orb_slam.hpp"
 #include "features/orb_extractor.hpp"
 #include "map/frame.hpp"
@@ -62,12 +63,7 @@ std::string tempPath(const std::string& name) { return ::testing::TempDir() + "b
 
 // The error load() throws for a file, or "" when it loads.
 std::string loadError(const std::string& path) {
-  try {
-    Vocabulary::load(path);
-  } catch (const std::runtime_error& e) {
-    return e.what();
-  }
-  return "";
+  return beslam::test::errorText<std::runtime_error>([&] { Vocabulary::load(path); });
 }
 
 TEST(Vocabulary, SameSeedGivesAByteIdenticalFile) {
@@ -125,41 +121,35 @@ TEST(Vocabulary, DamagedFilesGiveOneClearErrorNamingTheFile) {
   const std::string good = readAll(tempPath("good.bvoc"));
   EXPECT_EQ(loadError(tempPath("good.bvoc")), "");
 
-  const std::string truncated = tempPath("truncated.bvoc");
-  writeAll(truncated, good.substr(0, good.size() - 100));
-  std::string e = loadError(truncated);
-  EXPECT_NE(e.find(truncated), std::string::npos) << e;
-  EXPECT_NE(e.find("truncated"), std::string::npos) << e;
+  // Each damaged copy: its bytes, what the error must say, and whether it names the file.
+  const auto with = [&](size_t at, char value) {
+    std::string bytes = good;
+    bytes[at] = value;
+    return bytes;
+  };
+  const struct {
+    const char* name;
+    std::string bytes;
+    const char* says;
+    bool names_file;
+  } damaged[] = {
+      {"truncated.bvoc", good.substr(0, good.size() - 100), "truncated", true},
+      {"header.bvoc", good.substr(0, 12), "truncated", false},
+      {"magic.bvoc", with(0, 'X'), "magic", true},
+      {"version.bvoc", with(8, 7), "version 7", true},  // format version 7
+      {"corrupt.bvoc", with(good.size() / 2, static_cast<char>(good[good.size() / 2] ^ 0x10)), "checksum", false},
+  };
+  for (const auto& d : damaged) {
+    const std::string path = tempPath(d.name);
+    writeAll(path, d.bytes);
+    const std::string e = loadError(path);
+    if (d.names_file) {
+      EXPECT_NE(e.find(path), std::string::npos) << e;
+    }
+    EXPECT_NE(e.find(d.says), std::string::npos) << e;
+  }
 
-  const std::string header_only = tempPath("header.bvoc");
-  writeAll(header_only, good.substr(0, 12));
-  e = loadError(header_only);
-  EXPECT_NE(e.find("truncated"), std::string::npos) << e;
-
-  std::string bytes = good;
-  bytes[0] = 'X';
-  const std::string magic = tempPath("magic.bvoc");
-  writeAll(magic, bytes);
-  e = loadError(magic);
-  EXPECT_NE(e.find(magic), std::string::npos) << e;
-  EXPECT_NE(e.find("magic"), std::string::npos) << e;
-
-  bytes = good;
-  bytes[8] = 7;  // format version 7
-  const std::string version = tempPath("version.bvoc");
-  writeAll(version, bytes);
-  e = loadError(version);
-  EXPECT_NE(e.find(version), std::string::npos) << e;
-  EXPECT_NE(e.find("version 7"), std::string::npos) << e;
-
-  bytes = good;
-  bytes[bytes.size() / 2] ^= 0x10;
-  const std::string corrupt = tempPath("corrupt.bvoc");
-  writeAll(corrupt, bytes);
-  e = loadError(corrupt);
-  EXPECT_NE(e.find("checksum"), std::string::npos) << e;
-
-  e = loadError(tempPath("missing.bvoc"));
+  const std::string e = loadError(tempPath("missing.bvoc"));
   EXPECT_NE(e.find("missing.bvoc"), std::string::npos) << e;
 }
 

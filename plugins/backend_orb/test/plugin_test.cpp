@@ -81,6 +81,21 @@ beslam_create_info createInfo(const std::vector<beslam_config_value>& config) {
   return info;
 }
 
+// Renders corridor frame i (10 frames a second) and tracks it through the C table into `result`; returns
+// the call's status.
+int32_t trackFrame(const beslam_backend_v1* table, void* instance, const beslam::orb::test::CorridorWorld& world, int i,
+                   beslam_track_result& result) {
+  const cv::Mat image = world.render(i);
+  beslam_frame frame{};
+  frame.struct_size = sizeof(frame);
+  frame.index = i;
+  frame.timestamp = 0.1 * i;
+  frame.gray = {image.data, image.cols, image.rows, static_cast<int32_t>(image.step), BESLAM_PIXEL_GRAY8};
+  result = beslam_track_result{};
+  result.struct_size = sizeof(result);
+  return table->track(instance, &frame, nullptr, nullptr, &result);
+}
+
 TEST(BackendOrbPlugin, TracksThroughTheCAbi) {
   Loaded l;
   load(l);
@@ -93,15 +108,8 @@ TEST(BackendOrbPlugin, TracksThroughTheCAbi) {
   const beslam::orb::test::CorridorWorld world;
   int ok_frames = 0;
   for (int i = 0; i < 15; ++i) {
-    const cv::Mat image = world.render(i);
-    beslam_frame frame{};
-    frame.struct_size = sizeof(frame);
-    frame.index = i;
-    frame.timestamp = 0.1 * i;
-    frame.gray = {image.data, image.cols, image.rows, static_cast<int32_t>(image.step), BESLAM_PIXEL_GRAY8};
     beslam_track_result result{};
-    result.struct_size = sizeof(result);
-    ASSERT_EQ(table->track(instance, &frame, nullptr, nullptr, &result), BESLAM_OK);
+    ASSERT_EQ(trackFrame(table, instance, world, i, result), BESLAM_OK);
     ok_frames += result.state == BESLAM_TRACKING_OK;
     EXPECT_GT(result.stage_count, 0u);
   }
@@ -133,18 +141,25 @@ int trackFrames(const beslam_backend_v1* table, void* instance, int first, int f
   const beslam::orb::test::CorridorWorld world;
   int ok_frames = 0;
   for (int i = first; i < first + frames; ++i) {
-    const cv::Mat image = world.render(i);
-    beslam_frame frame{};
-    frame.struct_size = sizeof(frame);
-    frame.index = i;
-    frame.timestamp = 0.1 * i;
-    frame.gray = {image.data, image.cols, image.rows, static_cast<int32_t>(image.step), BESLAM_PIXEL_GRAY8};
     beslam_track_result result{};
-    result.struct_size = sizeof(result);
-    if (table->track(instance, &frame, nullptr, nullptr, &result) != BESLAM_OK) return -1;
+    if (trackFrame(table, instance, world, i, result) != BESLAM_OK) return -1;
     ok_frames += result.state == BESLAM_TRACKING_OK;
   }
   return ok_frames;
+}
+
+// An instance made from `config` tracks frames [first, first + frames) and finishes; how many were tracked
+// (-1 when creating, tracking or finishing failed).
+int trackAndFinish(const beslam_plugin_descriptor* desc, const std::vector<beslam_config_value>& config, int first,
+                   int frames) {
+  const beslam_create_info info = createInfo(config);
+  void* instance = nullptr;
+  if (desc->create(&info, &instance) != BESLAM_OK) return -1;
+  const auto* table = static_cast<const beslam_backend_v1*>(desc->functions);
+  int tracked = trackFrames(table, instance, first, frames);
+  if (table->finish(instance) != BESLAM_OK) tracked = -1;
+  desc->destroy(instance);
+  return tracked;
 }
 
 void keepLastError(void* user_data, int32_t level, const char*, const char* message) {
@@ -159,28 +174,17 @@ TEST(BackendOrbPlugin, SavesAMapAndLocalisesInIt) {
       std::filesystem::temp_directory_path() / ("beslam_orb_plugin_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string map_file = (dir / "corridor.map").string();
-  const auto* table = static_cast<const beslam_backend_v1*>(l.desc->functions);
   {
     auto config = defaults(l.desc, "features", 1000);
     setText(config, "save_map", map_file.c_str());
-    const beslam_create_info info = createInfo(config);
-    void* instance = nullptr;
-    ASSERT_EQ(l.desc->create(&info, &instance), BESLAM_OK);
-    EXPECT_GE(trackFrames(table, instance, 0, 15), 10);
-    EXPECT_EQ(table->finish(instance), BESLAM_OK);
-    l.desc->destroy(instance);
+    EXPECT_GE(trackAndFinish(l.desc, config, 0, 15), 10);
   }
   ASSERT_TRUE(std::filesystem::exists(map_file));
   {
     auto config = defaults(l.desc, "features", 1000);
     setText(config, "load_map", map_file.c_str());
     setNumber(config, "localisation_only", 1);
-    const beslam_create_info info = createInfo(config);
-    void* instance = nullptr;
-    ASSERT_EQ(l.desc->create(&info, &instance), BESLAM_OK);
-    EXPECT_EQ(trackFrames(table, instance, 2, 10), 10);
-    EXPECT_EQ(table->finish(instance), BESLAM_OK);
-    l.desc->destroy(instance);
+    EXPECT_EQ(trackAndFinish(l.desc, config, 2, 10), 10);
   }
   {
     const auto size = std::filesystem::file_size(map_file);

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "beslam/common/cli_args.hpp"
 #include "features/orb_extractor.hpp"
 #include "place/vocabulary.hpp"
 
@@ -204,7 +205,7 @@ int rank(const std::vector<std::string>& args) {
 
 int main(int argc, char** argv) {
   const std::vector<std::string> all(argv + 1, argv + argc);
-  try {
+  const auto dispatch = [&]() -> int {
     if (all.empty() || all[0] == "--help" || all[0] == "-h") {
       std::cout << kUsage;
       return all.empty() ? 2 : 0;
@@ -214,11 +215,7 @@ int main(int argc, char** argv) {
     if (all[0] == "info") return info(rest);
     if (all[0] == "rank") return rank(rest);
     throw UsageError("unknown command '" + all[0] + "'");
-  } catch (const UsageError& e) {
-    std::cerr << "beslam-vocab: error: " << e.what() << "\n" << kUsage;
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "beslam-vocab: error: " << e.what() << "\n";
-    return 1;
-  }
+  };
+  return beslam::cli::runMain<UsageError>(dispatch, std::cerr, kUsage,
+                                          "beslam-vocab: error: ", "beslam-vocab: error: ");
 }

@@ -7,31 +7,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "backend_pose_replay_settings.hpp"  // Options and kSettings, from settings.json
 #include "beslam/formats/trajectory.hpp"
 #include "beslam/sdk/sdk.hpp"
 
 namespace {
 
-using beslam::sdk::setting;
 using beslam::sdk::TrajectoryEntry;
-
-struct Options {
-  std::string poses, format;
-  double max_time_diff = 0;
-  int64_t keyframe_interval = 1;
-  bool metric = true;
-};
-
-const beslam::sdk::Settings<Options> kSettings{
-    beslam::sdk::path(&Options::poses, "poses", nullptr,
-                      "pose file: KITTI (12 numbers a row) or TUM (t x y z qx qy qz qw)"),
-    setting(&Options::format, "format", "auto", "auto|kitti|tum", "file format; auto decides by the column count"),
-    setting(&Options::max_time_diff, "max_time_diff", "0.02", 0, 10, "TUM: largest |t_frame - t_pose| accepted (s)"),
-    setting(&Options::keyframe_interval, "keyframe_interval", "5", 1, 1000,
-            "every n-th tracked frame becomes a keyframe"),
-    setting(&Options::metric, "metric", "true",
-            "the poses are in metres (ground truth, stereo, LiDAR); false for a monocular estimate"),
-};
 
 const beslam::sdk::PluginInfo kInfo("backend_pose_replay", "Pose replay",
                                     "Replays camera poses from a KITTI or TUM file (ground truth or external odometry)",

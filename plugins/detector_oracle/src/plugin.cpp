@@ -5,61 +5,12 @@
 #include "beslam/detector_oracle/oracle.hpp"
 #include "beslam/detector_replay/replay.hpp"
 #include "beslam/sdk/sdk.hpp"
+#include "detector_oracle_settings.hpp"  // Options and kSettings, from settings.json
 
 namespace {
 
-using beslam::sdk::nested;
-using beslam::sdk::path;
-using beslam::sdk::setting;
 namespace fs = std::filesystem;
 using namespace beslam::detector_oracle;
-
-// What the plugin reads: the oracle's own options and where its labels come from.
-struct Options {
-  std::string labels, sequence, motion;
-  bool true_motion = false;
-  OracleOptions oracle;
-  bool missing_empty = false;
-};
-
-// Each setting once: its schema entry and the member it sets.
-// clang-format off: one setting a line
-const beslam::sdk::Settings<Options> kSettings{
-    path(&Options::labels, "labels", "\"\"",
-         "tracking label file (label_02/0007.txt), or its folder with `sequence`; empty: found from the first frame's "
-         "image path (KITTI tracking ROOT/image_02/SSSS/ -> ROOT/label_02/SSSS.txt, beslam synth sequences/NN/image_0/ "
-         "-> sequences/NN/label_02/NN.txt)"),
-    setting(&Options::sequence, "sequence", "\"\"", nullptr, "sequence name when labels is a folder (0007, 00)"),
-    path(&Options::motion, "motion", "\"\"",
-         "objects_motion.txt (beslam synth): pass the true motion state of each box"),
-    setting(&Options::true_motion, "true_motion", "false",
-            "pass the true motion states from the objects_motion.txt beside the labels (beslam synth sequences; "
-            "`motion` unset)"),
-    nested(&Options::oracle,
-           beslam::sdk::parsed(&OracleOptions::classes, "classes", "all", nullptr,
-                               "classes to keep: all, or a comma list of Car,Van,Truck,Pedestrian,Cyclist,Unknown",
-                               beslam::detector_replay::parseClassList)),
-    nested(&Options::oracle, setting(&OracleOptions::position_noise, "position_noise", "0.0", 0, 100,
-                                     "m: std dev of each centre coordinate")),
-    nested(&Options::oracle, setting(&OracleOptions::depth_noise_per_m, "depth_noise_per_m", "0.0", 0, 10,
-                                     "std dev along the viewing ray per metre of range (monocular-like)")),
-    nested(&Options::oracle, setting(&OracleOptions::size_noise, "size_noise", "0.0", 0, 10,
-                                     "relative std dev of length, width, height")),
-    nested(&Options::oracle, setting(&OracleOptions::yaw_noise, "yaw_noise", "0.0", 0, 10, "rad: std dev of the yaw")),
-    nested(&Options::oracle,
-           setting(&OracleOptions::miss_rate, "miss_rate", "0.0", 0, 1, "probability a true box is missed")),
-    nested(&Options::oracle, setting(&OracleOptions::false_positives, "false_positives", "0.0", 0, 50,
-                                     "mean false boxes per frame (Poisson)")),
-    nested(&Options::oracle, setting(&OracleOptions::max_range, "max_range", "80", 5.01, 1000,
-                                     "m: labels farther away are not detected")),
-    nested(&Options::oracle, setting(&OracleOptions::seed, "seed", "0", 0, 4294967295.0,
-                                     "random seed (a frame's boxes depend on seed and frame only)")),
-    nested(&Options::oracle, setting(&OracleOptions::pass_track_ids, "pass_track_ids", "false",
-                                     "keep the labels' track ids (default -1: the motion checker must track)")),
-    beslam::sdk::choice(&Options::missing_empty, "on_missing_frame", "error", {{"error", false}, {"empty", true}},
-                        "a frame past the last labelled frame"),
-};
-// clang-format on
 
 const beslam::sdk::PluginInfo kInfo(
     "detector_oracle", "Label oracle",

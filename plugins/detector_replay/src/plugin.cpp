@@ -8,58 +8,12 @@
 #include "beslam/detector_replay/replay.hpp"
 #include "beslam/formats/trajectory.hpp"
 #include "beslam/sdk/sdk.hpp"
+#include "detector_replay_settings.hpp"  // Options and kSettings, from settings.json
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace beslam::detector_replay;
-using beslam::sdk::nested;
-using beslam::sdk::path;
-using beslam::sdk::setting;
-
-// What the plugin reads; each setting below is declared once against it.
-struct Options {
-  std::string format, path, sequence;
-  Filter filter;
-  std::string score_transform;
-  Policy policy = Policy::stop;
-  bool missing_empty = false;
-  std::string sample_tokens, ego_poses;
-  std::vector<double> camera_extrinsic;
-};
-
-// clang-format off: one setting a line
-const beslam::sdk::Settings<Options> kSettings{
-    setting(&Options::format, "format", nullptr, "ab3dmot|kitti_tracking|kitti_object|nuscenes", "result file format"),
-    path(&Options::path, "path", nullptr,
-         "ab3dmot: a file, or a folder of <Class>/<sequence>.txt; kitti_tracking: a label file, or a folder of "
-         "<sequence>.txt; kitti_object: a folder of <frame:06d>.txt; nuscenes: the results JSON"),
-    setting(&Options::sequence, "sequence", "\"\"", nullptr,
-            "sequence name (0007) when path is a folder of per-sequence files"),
-    nested(&Options::filter,
-           beslam::sdk::parsed(&Filter::classes, "classes", "all", nullptr,
-                               "classes to keep: all, or a comma list of Car,Van,Truck,Pedestrian,Cyclist,Unknown",
-                               parseClassList)),
-    nested(&Options::filter, setting(&Filter::min_score, "min_score", "0.0", -1e9, 1e9,
-                                     "boxes below this score (after score_transform) are dropped")),
-    setting(&Options::score_transform, "score_transform", "auto", "auto|none|sigmoid",
-            "auto: sigmoid for ab3dmot (PointRCNN writes logits), none otherwise"),
-    nested(&Options::filter, setting(&Filter::min_depth, "min_depth", "0.0", -1e9, 1e9,
-                                     "boxes whose centre has camera z below this (m) are dropped")),
-    nested(&Options::filter, setting(&Filter::max_distance, "max_distance", "1e9", 0, 1e12,
-                                     "boxes farther than this from the camera (m) are dropped")),
-    beslam::sdk::choice(&Options::policy, "on_error", "stop", {{"stop", Policy::stop}, {"skip", Policy::skip}},
-                        "a malformed row stops the run, or is skipped and counted"),
-    beslam::sdk::choice(&Options::missing_empty, "on_missing_frame", "error", {{"error", false}, {"empty", true}},
-                        "a frame the results do not cover (past the last frame, no token, no result, no label file)"),
-    path(&Options::sample_tokens, "sample_tokens", "\"\"",
-         "nuscenes: token per frame (text, one per line; or JSON, optionally with ego poses)"),
-    path(&Options::ego_poses, "ego_poses", "\"\"",
-         "nuscenes: T_global_ego per frame, KITTI pose format (row i = frame i)"),
-    setting(&Options::camera_extrinsic, "camera_extrinsic", "[0, 0, 0, 0.5, -0.5, 0.5, -0.5]", -1e6, 1e6,
-            "nuscenes: T_ego_cam as tx ty tz qw qx qy qz (calibrated_sensor of the camera)"),
-};
-// clang-format on
 
 const beslam::sdk::PluginInfo kInfo(
     "detector_replay", "Detection replay",

@@ -5,10 +5,9 @@
 // BESLAM_LABEL_STATIC_BASE + track id; nearer objects overwrite farther ones.
 #include "beslam/mask_common/plugin_config.hpp"
 #include "beslam/sdk/sdk.hpp"
+#include "mask_box_settings.hpp"  // kSettings, from ../mask_common/settings.json
 
 namespace {
-
-const beslam::sdk::Settings<beslam::mask::MaskOptions> kSettings(beslam::mask::commonSettings());
 
 const beslam::sdk::PluginInfo kInfo(
     "mask_box", "Box projection mask",

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "beslam/common/cli_args.hpp"
 #include "beslam/datasets/image_io.hpp"
 #include "beslam/datasets/kitti_calib.hpp"
 #include "beslam/datasets/labels.hpp"
@@ -242,13 +243,5 @@ int run(const std::vector<std::string>& args) {
 
 int main(int argc, char** argv) {
   std::vector<std::string> args(argv + 1, argv + argc);
-  try {
-    return run(args);
-  } catch (const Usage& e) {
-    std::cerr << "mask_bench: " << e.what() << "\n" << kUsage;
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "mask_bench: " << e.what() << "\n";
-    return 1;
-  }
+  return beslam::cli::runMain<Usage>([&] { return run(args); }, std::cerr, kUsage, "mask_bench: ", "mask_bench: ");
 }

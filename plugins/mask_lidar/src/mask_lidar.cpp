@@ -7,42 +7,11 @@
 // image edges near it. A frame without a scan gets plain box projection (warned once).
 #include "beslam/mask_common/plugin_config.hpp"
 #include "beslam/sdk/sdk.hpp"
+#include "mask_lidar_settings.hpp"  // kSettings, from ../mask_common/settings.json and settings.json
 
 namespace {
 
-using beslam::mask::BevRefineParams;
 using beslam::mask::MaskOptions;
-using beslam::mask::PointMaskParams;
-using beslam::sdk::nested;
-using beslam::sdk::setting;
-
-// The common mask settings, then mask_lidar's own; each declared once against MaskOptions.
-// clang-format off: one setting a line
-const beslam::sdk::Settings<MaskOptions> kSettings(
-    beslam::mask::commonSettings(),
-    {
-        setting(&MaskOptions::refine_boxes, "refine_boxes", "true",
-                "fine-tune each box to its LiDAR points in the bird's-eye view"),
-        setting(&MaskOptions::point_masks, "point_masks", "true",
-                "per-object masks from the projected LiDAR points where dense enough"),
-        nested(&MaskOptions::bev, setting(&BevRefineParams::search_margin, "search_margin", "1.0", 0, 10,
-                                          "m around a box where its points are looked for")),
-        nested(&MaskOptions::bev,
-               setting(&BevRefineParams::ground_clearance, "ground_clearance", "0.3", 0, 2,
-                       "m above the box bottom below which points count as ground (road, kerb, pavement)")),
-        nested(&MaskOptions::bev, setting(&BevRefineParams::yaw_range_deg, "yaw_range_deg", "15", 0, 90,
-                                          "yaw searched around the input box's (degrees)")),
-        nested(&MaskOptions::bev, setting(&BevRefineParams::min_points, "min_points", "15", 3, 100000,
-                                          "fewer matched points: the box is not fine-tuned")),
-        nested(&MaskOptions::points, setting(&PointMaskParams::min_points, "mask_min_points", "40", 3, 100000,
-                                             "fewer projected object points: no point mask")),
-        nested(&MaskOptions::points, setting(&PointMaskParams::splat_half_width, "splat_half_width", "2", 0, 50,
-                                             "px: each projected point covers 2w+1 columns")),
-        nested(&MaskOptions::points, setting(&PointMaskParams::splat_half_height, "splat_half_height", "4", 0, 50,
-                                             "px: each projected point covers 2h+1 rows (beam spacing)")),
-        setting(&MaskOptions::max_range, "max_range", "80", 1, 500, "LiDAR points farther than this (m) are ignored"),
-    });
-// clang-format on
 
 const beslam::sdk::PluginInfo kInfo(
     "mask_lidar", "LiDAR-refined mask",

@@ -12,62 +12,12 @@
 #include "beslam/sdk/sdk.hpp"
 #include "fit/object_fit.hpp"
 #include "objects/object_store.hpp"
+#include "reconstructor_sdf_settings.hpp"  // Options and kSettings, from settings.json
 #include "shape/shape_prior.hpp"
 
 namespace {
 
 namespace recon = beslam::recon;
-using beslam::sdk::path;
-using beslam::sdk::setting;
-
-struct Options {
-  std::string prior;
-  recon::StoreOptions store;
-  recon::fit::FitOptions fit;
-  int min_map_points = 8;
-  int min_lidar_points = 30;
-  int surface_samples = 300;
-  bool meshes = true;
-  double map_sigma_m = 0.15, map_huber_m = 0.3;  // map points: noisier than LiDAR returns
-  double box_sigma_yaw_deg = 20;
-};
-
-const beslam::sdk::Settings<Options> kSettings{
-    path(&Options::prior, "prior", "\"\"", "shape prior file (.bsdf); empty: the shipped car prior"),
-    beslam::sdk::nested(&Options::store, setting(&recon::StoreOptions::max_range, "max_range", "30.0", 1.0, 200.0,
-                                                 "m: parked cars farther from the camera add no observation")),
-    beslam::sdk::nested(&Options::store, setting(&recon::StoreOptions::box_margin, "box_margin", "0.15", 0.0, 2.0,
-                                                 "m: LiDAR returns this far outside a box still count")),
-    beslam::sdk::nested(&Options::store, setting(&recon::StoreOptions::road_clearance, "road_clearance", "0.12", 0.0,
-                                                 1.0, "m: returns this close to a box's bottom are road")),
-    beslam::sdk::nested(&Options::store, setting(&recon::StoreOptions::max_lidar_points, "max_lidar_points", "2000", 50,
-                                                 100000, "LiDAR returns kept per object")),
-    beslam::sdk::nested(&Options::store,
-                        setting(&recon::StoreOptions::map_point_margin, "map_point_margin", "0.5", 0.0, 10.0,
-                                "m: map points labelled on a car but farther outside its boxes are not used")),
-    setting(&Options::min_map_points, "min_map_points", "8", 4, 10000,
-            "map points on a car before it is fitted without LiDAR"),
-    setting(&Options::min_lidar_points, "min_lidar_points", "30", 4, 100000,
-            "LiDAR returns on a car before it is fitted with them"),
-    beslam::sdk::nested(&Options::fit, setting(&recon::fit::FitOptions::lambda_code, "lambda_code", "1.0", 0.0, 1e6,
-                                               "weight of the shape-code prior |z / std|^2")),
-    beslam::sdk::nested(&Options::fit, setting(&recon::fit::FitOptions::sigma_m, "sigma_m", "0.03", 0.001, 1.0,
-                                               "m: noise of one surface observation")),
-    beslam::sdk::nested(&Options::fit, setting(&recon::fit::FitOptions::huber_m, "huber_m", "0.05", 0.001, 2.0,
-                                               "m: robust (Huber) threshold of a surface distance")),
-    beslam::sdk::nested(&Options::fit, setting(&recon::fit::FitOptions::fit_size, "fit_size", "false",
-                                               "also refine length, width and height")),
-    setting(&Options::map_sigma_m, "map_sigma_m", "0.15", 0.001, 2.0,
-            "m: noise of one map point on a car (without LiDAR; monocular depth is coarse)"),
-    setting(&Options::map_huber_m, "map_huber_m", "0.3", 0.001, 5.0, "m: robust threshold for map points"),
-    beslam::sdk::nested(&Options::fit, setting(&recon::fit::FitOptions::box_sigma_m, "box_sigma_m", "0.5", 0.01, 100.0,
-                                               "m: how far the fit may pull the centre from the boxes' consensus")),
-    setting(&Options::box_sigma_yaw_deg, "box_sigma_yaw_deg", "20", 0.1, 1000.0,
-            "degrees: the same for the heading (front and back of a box are not told apart)"),
-    setting(&Options::surface_samples, "surface_samples", "300", 0, 100000,
-            "surface points per landmark handed to the backend"),
-    setting(&Options::meshes, "meshes", "true", "return each object's mesh (objects/ and map.ply)"),
-};
 
 const beslam::sdk::PluginInfo kInfo("reconstructor_sdf", "SDF shape-prior reconstructor",
                                     "Parked cars as shape-and-pose landmarks: a learnt PCA signed-distance prior "

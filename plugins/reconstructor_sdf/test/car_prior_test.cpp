@@ -5,18 +5,9 @@
 #include "beslam/sim/car_mesh.hpp"
 #include "car_set.hpp"
 #include "shape/shape_prior.hpp"
+#include "shipped_prior.hpp"
 
 using namespace beslam::recon;
-
-namespace {
-
-const shape::ShapePrior& shipped() {
-  static const shape::ShapePrior prior =
-      shape::ShapePrior::load(std::string(BESLAM_SOURCE_DIR) + "/plugins/reconstructor_sdf/data/car_shape_prior.bsdf");
-  return prior;
-}
-
-}  // namespace
 
 TEST(CarSet, MeshesAreCentredInTheirBox) {
   for (const auto& car : tools::heldOutCars(6, 3)) {
@@ -44,7 +35,7 @@ TEST(CarPrior, TrainingOnTheGeneratorsCarsIsDeterministic) {
 }
 
 TEST(CarPrior, ShippedMeanCarIsACarInItsBox) {
-  const shape::ShapePrior& prior = shipped();
+  const shape::ShapePrior& prior = test::shippedPrior();
   const Eigen::Vector3d size(4.6, 1.8, 1.5);
   const Eigen::VectorXd z = Eigen::VectorXd::Zero(prior.dimensions());
   EXPECT_LT(prior.distance(Eigen::Vector3d(0, 0, -0.2), size, z), -0.3);            // body
@@ -60,7 +51,7 @@ TEST(CarPrior, ShippedMeanCarIsACarInItsBox) {
 }
 
 TEST(CarPrior, ShippedPriorReconstructsHeldOutCars) {
-  const shape::ShapePrior& prior = shipped();
+  const shape::ShapePrior& prior = test::shippedPrior();
   ASSERT_GE(prior.dimensions(), 2);
   ASSERT_LE(prior.dimensions(), 8);
   std::vector<double> chamfer;

@@ -9,16 +9,11 @@
 
 #include "car_set.hpp"
 #include "fit/render_depth.hpp"
+#include "shipped_prior.hpp"
 
 using namespace beslam::recon;
 
 namespace {
-
-const shape::ShapePrior& shipped() {
-  static const shape::ShapePrior prior =
-      shape::ShapePrior::load(std::string(BESLAM_SOURCE_DIR) + "/plugins/reconstructor_sdf/data/car_shape_prior.bsdf");
-  return prior;
-}
 
 struct Scenario {
   tools::Car car;
@@ -55,7 +50,7 @@ Errors errors(const Scenario& s, const fit::FitResult& r) {
   e.centre = (r.T_world_obj.translation() - s.T_world_obj.translation()).norm();
   const Eigen::Matrix3d dR = s.T_world_obj.linear().transpose() * r.T_world_obj.linear();
   e.yaw_deg = std::abs(std::atan2(dR(1, 0), dR(0, 0))) * 180 / M_PI;
-  shape::Mesh m = shipped().mesh(r.code, r.size);
+  shape::Mesh m = test::shippedPrior().mesh(r.code, r.size);
   const Eigen::Isometry3d T = s.T_world_obj.inverse() * r.T_world_obj;
   for (auto& v : m.vertices) v = T * v;
   e.chamfer = shape::chamferDistance(m, s.car.body.mesh, 300, 9);
@@ -69,8 +64,9 @@ TEST(ObjectFit, RecoversACarFromLidarPoints) {
   for (int i = 0; i < 4; ++i) {
     const Scenario s = scenario(i, 200, 0.02, bearings[i], 8.0);
     ASSERT_GE(s.obs.p_world.size(), 150u);
-    const fit::FitResult r = fit::fitObject(shipped(), s.T_init, s.car.body.size,
-                                            Eigen::VectorXd::Zero(shipped().dimensions()), s.obs, fit::FitOptions());
+    const fit::FitResult r =
+        fit::fitObject(test::shippedPrior(), s.T_init, s.car.body.size,
+                       Eigen::VectorXd::Zero(test::shippedPrior().dimensions()), s.obs, fit::FitOptions());
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
     EXPECT_LT(e.centre, 0.15) << "car " << i << " " << s.car.shape;
@@ -93,8 +89,8 @@ TEST(ObjectFit, RecoversACarFromSparseMapPoints) {
   opt.huber_m = 0.10;
   for (int i = 0; i < 4; ++i) {
     const Scenario s = scenario(i + 4, counts[i], 0.05, bearings[i], 9.0);
-    const fit::FitResult r =
-        fit::fitObject(shipped(), s.T_init, s.car.body.size, Eigen::VectorXd::Zero(shipped().dimensions()), s.obs, opt);
+    const fit::FitResult r = fit::fitObject(test::shippedPrior(), s.T_init, s.car.body.size,
+                                            Eigen::VectorXd::Zero(test::shippedPrior().dimensions()), s.obs, opt);
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
     EXPECT_LT(e.centre, 0.30) << "car " << i << " " << s.car.shape;
@@ -109,8 +105,8 @@ TEST(ObjectFit, FullPoseAndSizeOptionsStillConverge) {
   opt.yaw_only = false;
   opt.fit_size = true;
   const Eigen::Vector3d size0 = s.car.body.size.cwiseProduct(Eigen::Vector3d(1.05, 0.97, 1.04));
-  const fit::FitResult r =
-      fit::fitObject(shipped(), s.T_init, size0, Eigen::VectorXd::Zero(shipped().dimensions()), s.obs, opt);
+  const fit::FitResult r = fit::fitObject(test::shippedPrior(), s.T_init, size0,
+                                          Eigen::VectorXd::Zero(test::shippedPrior().dimensions()), s.obs, opt);
   ASSERT_TRUE(r.ok) << r.why;
   const Errors e = errors(s, r);
   EXPECT_LT(e.centre, 0.2);
@@ -119,7 +115,7 @@ TEST(ObjectFit, FullPoseAndSizeOptionsStillConverge) {
 }
 
 TEST(ObjectFit, BadObservationsGiveAClearErrorNotACrash) {
-  const auto& prior = shipped();
+  const auto& prior = test::shippedPrior();
   const Eigen::VectorXd z = Eigen::VectorXd::Zero(prior.dimensions());
   const Eigen::Vector3d size(4.5, 1.8, 1.5);
   const Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -160,7 +156,7 @@ TEST(ObjectFit, BadObservationsGiveAClearErrorNotACrash) {
 }
 
 TEST(RenderDepth, AutodiffGradientMatchesNumeric) {
-  const auto& prior = shipped();
+  const auto& prior = test::shippedPrior();
   const int K = prior.dimensions();
   ASSERT_LE(K, 8);
   using J = ceres::Jet<double, 14>;  // origin 3, direction 3, code up to 8
@@ -232,8 +228,9 @@ TEST(ObjectFit, RecoversACarFromADepthMap) {
         s.obs.rays.push_back(ray);
       }
     ASSERT_GT(s.obs.rays.size(), 80u);
-    const fit::FitResult r = fit::fitObject(shipped(), s.T_init, size, Eigen::VectorXd::Zero(shipped().dimensions()),
-                                            s.obs, fit::FitOptions());
+    const fit::FitResult r =
+        fit::fitObject(test::shippedPrior(), s.T_init, size, Eigen::VectorXd::Zero(test::shippedPrior().dimensions()),
+                       s.obs, fit::FitOptions());
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
     EXPECT_LT(e.centre, 0.15) << "car " << i << " " << s.car.shape;

@@ -10,6 +10,7 @@
 #include <map>
 
 #include "beslam/formats/error.hpp"
+#include "beslam/test/error_text.hpp"
 
 namespace fs = std::filesystem;
 using namespace beslam::recon::shape;
@@ -64,13 +65,9 @@ std::string tempPath(const std::string& name) {
   return (fs::temp_directory_path() / ("beslam_shape_" + name)).string();
 }
 
+// The error load() throws for a file, or "" when it loads.
 std::string loadError(const std::string& path) {
-  try {
-    ShapePrior::load(path);
-  } catch (const beslam::Error& e) {
-    return e.what();
-  }
-  return "";
+  return beslam::test::errorText<beslam::Error>([&] { ShapePrior::load(path); });
 }
 
 }  // namespace

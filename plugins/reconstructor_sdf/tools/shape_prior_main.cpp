@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "beslam/common/cli_args.hpp"
 #include "beslam/formats/error.hpp"
 #include "car_set.hpp"
 #include "fit/object_fit.hpp"
@@ -252,7 +253,7 @@ int mesh(const Args& a) {
 
 int main(int argc, char** argv) {
   const std::vector<std::string> args(argv + 1, argv + argc);
-  try {
+  const auto dispatch = [&]() -> int {
     if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
       std::cout << kUsage;
       return args.empty() ? 2 : 0;
@@ -264,11 +265,7 @@ int main(int argc, char** argv) {
     if (cmd == "eval") return eval(parse(args, 1, {"--cars", "--seed", "--samples"}, {"--fit"}, true));
     if (cmd == "mesh") return mesh(parse(args, 1, {"--size", "--code", "--out"}, {}, true));
     throw UsageError("unknown command " + cmd);
-  } catch (const UsageError& e) {
-    std::cerr << "beslam-shape-prior: error: " << e.what() << "\n" << kUsage;
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "beslam-shape-prior: error: " << e.what() << "\n";
-    return 1;
-  }
+  };
+  return beslam::cli::runMain<UsageError>(dispatch, std::cerr, kUsage,
+                                          "beslam-shape-prior: error: ", "beslam-shape-prior: error: ");
 }

@@ -8,24 +8,9 @@
 #include "beslam/formats/geometry.hpp"
 #include "beslam/formats/labels.hpp"
 #include "beslam/sdk/sdk.hpp"
+#include "label_replay_settings.hpp"  // Options and kSettings, generated from label_replay.settings.json
 
 namespace {
-
-using beslam::sdk::path;
-using beslam::sdk::setting;
-
-struct Options {
-  std::string folder;
-  double min_score = 0;
-  bool missing_is_error = false;
-};
-
-const beslam::sdk::Settings<Options> kSettings{
-    path(&Options::folder, "folder", nullptr, "folder of KITTI object label files <frame:06d>.txt (required)"),
-    setting(&Options::min_score, "min_score", "0.0", -1e9, 1e9, "rows with a score below this are dropped"),
-    beslam::sdk::choice(&Options::missing_is_error, "missing", "empty", {{"empty", false}, {"error", true}},
-                        "a frame without a label file: no boxes, or an error"),
-};
 
 // What `beslam plugins` shows: id, name, one line, version, settings.
 const beslam::sdk::PluginInfo kInfo("label_replay", "KITTI label replay (template)",

@@ -8,23 +8,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "beslam/sdk/sdk.hpp"
+#include "mask_rect_settings.hpp"  // Options and kSettings, generated from mask_rect.settings.json
 
 namespace {
-
-using beslam::sdk::setting;
-
-// Each setting declared once: the schema `beslam plugins` prints and the host validates, and the reader.
-struct Options {
-  int margin_px = 0;
-  bool unknown_is_dynamic = true;
-  double min_depth = 0;
-};
-
-const beslam::sdk::Settings<Options> kSettings{
-    setting(&Options::margin_px, "margin_px", "4", 0, 200, "pixels added on every side of the rectangle"),
-    setting(&Options::unknown_is_dynamic, "unknown_is_dynamic", "true", "treat boxes of unknown motion as dynamic"),
-    setting(&Options::min_depth, "min_depth", "0.5", 0.01, 100, "corners closer than this (m) are ignored"),
-};
 
 // What `beslam plugins` shows: id, name, one line, version, settings.
 const beslam::sdk::PluginInfo kInfo("mask_rect", "Box rectangle mask",

@@ -219,22 +219,17 @@ double TwoViewInitializer::checkHomography(const Eigen::Matrix3d& H21, const Eig
 double TwoViewInitializer::checkFundamental(const Eigen::Matrix3d& F21, std::vector<bool>& inliers) const {
   const double th = 3.841, th_score = 5.991, inv_s2 = 1.0 / (options_.sigma * options_.sigma);
   return scoreMatches(inliers, [&](const Eigen::Vector3d& x1, const Eigen::Vector3d& x2, double& score) {
-    bool in = true;
-    const Eigen::Vector3d l2 = F21 * x1;  // line in image 2
-    const double d2 = l2.dot(x2);
-    const double e2 = d2 * d2 / (l2.x() * l2.x() + l2.y() * l2.y()) * inv_s2;
-    if (e2 > th)
-      in = false;
-    else
-      score += th_score - e2;
-    const Eigen::Vector3d l1 = F21.transpose() * x2;  // line in image 1
-    const double d1 = l1.dot(x1);
-    const double e1 = d1 * d1 / (l1.x() * l1.x() + l1.y() * l1.y()) * inv_s2;
-    if (e1 > th)
-      in = false;
-    else
-      score += th_score - e1;
-    return in;
+    // x's squared distance to the epipolar line l, in sigma units: within th it adds to the score.
+    const auto near = [&](const Eigen::Vector3d& l, const Eigen::Vector3d& x) {
+      const double d = l.dot(x);
+      const double e = d * d / (l.x() * l.x() + l.y() * l.y()) * inv_s2;
+      if (e > th) return false;
+      score += th_score - e;
+      return true;
+    };
+    const bool in2 = near(F21 * x1, x2);              // line in image 2
+    const bool in1 = near(F21.transpose() * x2, x1);  // line in image 1
+    return in2 && in1;
   });
 }
 

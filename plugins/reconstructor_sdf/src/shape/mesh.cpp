@@ -191,29 +191,20 @@ int orientOutward(Mesh& mesh) {
 }
 
 std::vector<Eigen::Vector3d> surfaceSamples(const Mesh& mesh, int n, std::uint64_t seed, bool exterior_only) {
-  std::vector<double> cumulative;
-  double total = 0;
-  for (const auto& f : mesh.faces) {
-    total += 0.5 * (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]).norm();
-    cumulative.push_back(total);
-  }
+  const formats::SurfaceSampler sampler(mesh);
   std::vector<Eigen::Vector3d> out;
-  if (n <= 0 || !(total > 0)) return out;
+  if (n <= 0 || !(sampler.totalArea() > 0)) return out;
   std::unique_ptr<MeshDistance> inside;
   if (exterior_only) inside = std::make_unique<MeshDistance>(mesh);
   Random rng(seed);
   const int max_tries = 50 * n;
   for (int tries = 0; static_cast<int>(out.size()) < n && tries < max_tries; ++tries) {
-    const double r = rng.uniform() * total;
-    const size_t i =
-        std::min(cumulative.size() - 1,
-                 static_cast<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), r) - cumulative.begin()));
-    const auto& f = mesh.faces[i];
-    double u = rng.uniform(), v = rng.uniform();
-    if (u + v > 1) u = 1 - u, v = 1 - v;
-    const Eigen::Vector3d &a = mesh.vertices[f[0]], &b = mesh.vertices[f[1]], &c = mesh.vertices[f[2]];
-    const Eigen::Vector3d p = a + u * (b - a) + v * (c - a);
+    const size_t i = sampler.face(rng.uniform() * sampler.totalArea());
+    const double u = rng.uniform(), v = rng.uniform();
+    const Eigen::Vector3d p = sampler.point(i, u, v);
     if (inside) {
+      const auto& f = mesh.faces[i];
+      const Eigen::Vector3d &a = mesh.vertices[f[0]], &b = mesh.vertices[f[1]], &c = mesh.vertices[f[2]];
       const Eigen::Vector3d nrm = (b - a).cross(c - a).normalized();
       if (inside->windingNumber(p + 0.01 * nrm) > 0.5) continue;  // a buried face
     }

@@ -1,7 +1,9 @@
 // Settings: each plugin setting is declared once - name, type, default, range or choices, help - bound to
 // a member of the plugin's options struct. That one declaration is the schema the host prints
 // (`beslam plugins`) and validates the pipeline against, and it reads the validated values, typed, into
-// the struct:
+// the struct. A plugin normally writes no such table itself: it declares its settings as data in a settings
+// file and beslam_add_plugin(... SETTINGS file) generates the table (sdk/cmake/beslam_plugin_settings.cmake,
+// docs/writing-a-plugin.md). By hand it reads:
 //
 //   struct Options { double gate = 0; int frames = 0; std::string mode; Policy policy{}; };
 //   const beslam::sdk::Settings<Options> kSettings{

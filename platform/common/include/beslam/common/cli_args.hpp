@@ -1,12 +1,17 @@
 #pragma once
 // Small helpers for the --flag parsing of beslam's sub-commands (eval-motion, eval-static-map, ...).
-// Both throw std::invalid_argument with the message the command prints as a usage error.
+// They throw std::invalid_argument with the message the command prints as a usage error. runMain: the
+// exit-code convention of the beslam command and the tools (beslam-vocab, beslam-shape-prior, mask_bench).
 #include <cstddef>
 #include <exception>
 #include <functional>
+#include <map>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "beslam/formats/error.hpp"
 
 namespace beslam::cli {
 
@@ -65,6 +70,66 @@ inline double nextPositiveNumber(const std::vector<std::string>& args, std::size
   const std::string& flag = args[i];
   const std::string text = nextValue(args, i);
   return positiveNumber(flag, text);
+}
+
+/// What a flag does with its value: text(s) keeps the text, positive(x) a number > 0 (positiveNumber).
+using FlagValue = std::function<void(const std::string& flag, const std::string& text)>;
+inline FlagValue text(std::string& out) {
+  return [&out](const std::string&, const std::string& value) { out = value; };
+}
+inline FlagValue positive(double& out) {
+  return [&out](const std::string& flag, const std::string& value) { out = positiveNumber(flag, value); };
+}
+
+/// forEachFlag for a command whose flags each take one value, given as a table flag -> what it does with
+/// it; any other flag is "unknown argument 'FLAG'".
+inline bool forEachValueFlag(const std::vector<std::string>& args, const std::function<void()>& help,
+                             const std::map<std::string, FlagValue>& flags) {
+  return forEachFlag(args, help, [&](const std::string& flag, std::size_t& i) {
+    const auto it = flags.find(flag);
+    if (it == flags.end()) throw std::invalid_argument("unknown argument '" + flag + "'");
+    it->second(flag, nextValue(args, i));
+  });
+}
+
+/// A `beslam NAME` command in two steps: parse() reads the flags and returns true when help was asked
+/// (exit 0); a std::invalid_argument from it is a usage error, "beslam NAME: MESSAGE (see beslam NAME
+/// --help)", exit 2. Then run() does the work and gives the exit code; an exception from it is
+/// "beslam NAME: MESSAGE", exit 1.
+inline int runSubcommand(const std::string& name, std::ostream& err, const std::function<bool()>& parse,
+                         const std::function<int()>& run) {
+  try {
+    if (parse()) return 0;
+  } catch (const std::invalid_argument& e) {
+    err << "beslam " << name << ": " << e.what() << " (see beslam " << name << " --help)\n";
+    return 2;
+  }
+  try {
+    return run();
+  } catch (const std::exception& e) {
+    err << "beslam " << name << ": " << e.what() << "\n";
+    return 1;
+  }
+}
+
+/// A command's main(): body()'s exit code, or what it throws as one message on `err`: a usage error (type
+/// Usage) as "<usage_prefix>MESSAGE" and then the usage text, exit 2; beslam::Error as
+/// "<error_prefix>MESSAGE", any other exception as "<other_prefix>MESSAGE" (error_prefix when empty), exit 1.
+template <class Usage, class Body>
+int runMain(Body&& body, std::ostream& err, const std::string& usage, const std::string& usage_prefix,
+            const std::string& error_prefix, const std::string& other_prefix = "") {
+  try {
+    return body();
+  } catch (const Usage& e) {
+    err << usage_prefix << e.what() << "\n" << usage;
+    return 2;
+  } catch (const beslam::Error& e) {
+    err << error_prefix << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    err << (other_prefix.empty() ? error_prefix : other_prefix) << e.what() << "\n";
+    return 1;
+  }
 }
 
 }  // namespace beslam::cli

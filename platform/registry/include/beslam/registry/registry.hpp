@@ -39,9 +39,10 @@ struct Plugin {
   uint32_t functions_size = 0;            // its struct_size
 };
 
-const char* kindName(int32_t kind);             // "detector", "motion_checker", ...
-int32_t kindFromName(const std::string& name);  // 0 if unknown
-const char* configTypeName(int32_t type);       // "bool", "int", ...
+const char* kindName(int32_t kind);                   // "detector", "motion_checker", ...
+int32_t kindFromName(const std::string& name);        // 0 if unknown
+const char* configTypeName(int32_t type);             // "bool", "int", ...
+ConfigField fieldOf(const beslam_config_field& raw);  // a C schema entry as the host keeps it
 const char* statusName(beslam_status status);
 
 class Registry {

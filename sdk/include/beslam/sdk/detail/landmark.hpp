@@ -1,6 +1,8 @@
 // C conversions of keyframes and object landmarks (included by landmark.hpp).
 #pragma once
 
+#include "beslam/sdk/detail/landmark_view.hpp"
+
 namespace beslam::sdk {
 
 inline Keyframe toKeyframe(const beslam_keyframe& kf) {
@@ -40,27 +42,8 @@ inline beslam_keyframe toC(const Keyframe& kf) {
 inline std::vector<beslam_object_landmark> toC(const std::vector<Landmark>& landmarks) {
   std::vector<beslam_object_landmark> out;
   out.reserve(landmarks.size());
-  for (const Landmark& l : landmarks) {
-    beslam_object_landmark c{};
-    c.struct_size = sizeof(c);
-    c.track_id = l.track_id;
-    c.class_id = l.class_id;
-    c.confidence = l.confidence;
-    c.T_world_object = toPose(l.T_world_object);
-    for (int i = 0; i < 3; ++i) c.scale[i] = l.scale[i];
-    c.shape_code = l.shape_code.empty() ? nullptr : l.shape_code.data();
-    c.shape_code_size = static_cast<uint32_t>(l.shape_code.size());
-    c.surface_points = l.surface_points.empty() ? nullptr : l.surface_points.data();
-    c.surface_point_count = l.surface_points.size() / 3;
-    c.flags = l.removed ? BESLAM_LANDMARK_REMOVED : 0u;
-    c.keyframes = l.keyframes;
-    c.cost = l.cost;
-    c.mesh_vertices = l.mesh_vertices.empty() ? nullptr : l.mesh_vertices.data();
-    c.mesh_vertex_count = static_cast<uint32_t>(l.mesh_vertices.size() / 3);
-    c.mesh_faces = l.mesh_faces.empty() ? nullptr : l.mesh_faces.data();
-    c.mesh_face_count = static_cast<uint32_t>(l.mesh_faces.size() / 3);
-    out.push_back(c);
-  }
+  for (const Landmark& l : landmarks)
+    out.push_back(detail::landmarkView(l, l.scale, l.removed ? BESLAM_LANDMARK_REMOVED : 0u));
   return out;
 }
 
