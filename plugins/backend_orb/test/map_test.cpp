@@ -107,11 +107,16 @@ void expectNoCulledReferences(const Map& map) {
   const std::unordered_set<const KeyFrame*> kfs(map.keyframes().begin(), map.keyframes().end());
   const std::unordered_set<const MapPoint*> points(map.points().begin(), map.points().end());
   for (const KeyFrame* kf : map.keyframes()) {
-    if (kf != map.origin()) EXPECT_TRUE(kfs.count(kf->parent)) << "keyframe " << kf->id << ": parent";
+    if (kf != map.origin()) {
+      EXPECT_TRUE(kfs.count(kf->parent)) << "keyframe " << kf->id << ": parent";
+    }
     for (const KeyFrame* c : kf->children) EXPECT_TRUE(kfs.count(c)) << "keyframe " << kf->id << ": child";
     for (const auto& [other, w] : kf->connections()) EXPECT_TRUE(kfs.count(other)) << "keyframe " << kf->id;
-    for (const MapPoint* mp : kf->points)
-      if (mp) EXPECT_TRUE(points.count(mp)) << "keyframe " << kf->id << ": map point";
+    for (const MapPoint* mp : kf->points) {
+      if (mp) {
+        EXPECT_TRUE(points.count(mp)) << "keyframe " << kf->id << ": map point";
+      }
+    }
   }
   for (const MapPoint* mp : map.points()) {
     EXPECT_TRUE(kfs.count(mp->reference)) << "map point " << mp->id << ": reference";

@@ -503,10 +503,13 @@ TEST(BevTracker, LongPoseGapsGiveUnknownNotExtrapolation) {
     if (k < 20 || k >= 45) pose = sim.ego(k * kDt);  // backend lost for 2.5 s
     const auto d = tracker.update(k * kDt, pose, boxes);
     for (size_t i = 0; i < d.size(); ++i) {
-      if (ids[i] == 0) EXPECT_NE(d[i].motion_state, BESLAM_MOTION_DYNAMIC) << "frame " << k;
+      if (ids[i] == 0) {
+        EXPECT_NE(d[i].motion_state, BESLAM_MOTION_DYNAMIC) << "frame " << k;
+      }
       if (k >= 31 && k < 45) unknown_in_gap += d[i].motion_state == BESLAM_MOTION_UNKNOWN, ++boxes_in_gap;
-      if (k >= 55)
+      if (k >= 55) {
         EXPECT_EQ(d[i].motion_state, ids[i] == 0 ? BESLAM_MOTION_STATIC : BESLAM_MOTION_DYNAMIC) << "frame " << k;
+      }
     }
   }
   ASSERT_GT(boxes_in_gap, 0);

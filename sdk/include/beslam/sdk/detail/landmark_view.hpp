@@ -7,8 +7,8 @@
 #include <Eigen/Core>
 #include <cstdint>
 
-#include "beslam/formats/geometry.hpp"
 #include "beslam/data.h"
+#include "beslam/formats/geometry.hpp"
 
 namespace beslam::sdk::detail {
 
