@@ -52,23 +52,11 @@ else
 fi
 
 python3 - "$out" <<'PY'
-import json, os, statistics, sys
+import os, statistics, sys
+sys.path.insert(0, "scripts/lib")
+from run_table import collect
 out = sys.argv[1]
-rows = []
-for p in sorted(os.listdir(out)):
-    pdir = os.path.join(out, p)
-    if not os.path.isdir(pdir): continue
-    for seq in sorted(os.listdir(pdir)):
-        sdir = os.path.join(pdir, seq)
-        if not os.path.isdir(sdir): continue
-        runs = []
-        for r in sorted(os.listdir(sdir)):
-            f = os.path.join(sdir, r, "summary.json")
-            if not os.path.isfile(f): continue
-            j = json.load(open(f))
-            m = os.path.join(sdir, r, "motion.json")
-            runs.append((j, json.load(open(m)) if os.path.isfile(m) else None))
-        if runs: rows.append((p, seq, runs))
+rows = collect(out, ["summary.json", "motion.json"], required=["summary.json"])
 def stat(v):
     v = [x for x in v if x is not None]
     if not v: return "-"

@@ -34,7 +34,9 @@ for s in $seeds; do
 done
 
 python3 - "$out" <<'PY'
-import json, os, statistics, sys
+import os, statistics, sys
+sys.path.insert(0, "scripts/lib")
+from run_table import collect
 out = sys.argv[1]
 def stat(v, fmt="%.3f"):
     v = [x for x in v if x is not None and x >= 0]
@@ -42,28 +44,19 @@ def stat(v, fmt="%.3f"):
     return (fmt + " (" + fmt + "-" + fmt + ")") % (statistics.median(v), min(v), max(v))
 lines = ["| row | sequence | seeds | APE Sim(3) m | APE SE(3) m | objects | parked <=15 m correct | false | centre error m | heading <=10 deg | Chamfer m | shape-only Chamfer m |",
          "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-for row in sorted(os.listdir(out)):
-    rdir = os.path.join(out, row)
-    if not os.path.isdir(rdir): continue
-    for seq in sorted(os.listdir(rdir)):
-        sdir = os.path.join(rdir, seq)
-        if not os.path.isdir(sdir): continue
-        runs = []
-        for r in sorted(os.listdir(sdir)):
-            f, g = os.path.join(sdir, r, "summary.json"), os.path.join(sdir, r, "objects_score.json")
-            if os.path.isfile(f) and os.path.isfile(g): runs.append((json.load(open(f)), json.load(open(g))))
-        if not runs: continue
-        ape = [j.get("ape", {}) for j, _ in runs]
-        share = lambda o: o["parked_in_view_correct"] / o["parked_in_view"] if o["parked_in_view"] else None
-        false = lambda o: o["false"] / o["reconstructed"] if o["reconstructed"] else None
-        yaw10 = lambda o: (sum(1 for x in o["objects"] if x["parked"] and 0 <= x["yaw_error_deg"] <= 10) /
-                           max(1, sum(1 for x in o["objects"] if x["parked"] and x["yaw_error_deg"] >= 0)))
-        lines.append("| %s | %s | %d | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
-            row, seq, len(runs), stat([a.get("sim3_rmse") for a in ape]), stat([a.get("se3_rmse") for a in ape]),
-            stat([o["reconstructed"] for _, o in runs], "%d"), stat([share(o) for _, o in runs]),
-            stat([false(o) for _, o in runs]), stat([o["median_centre_error_m"] for _, o in runs]),
-            stat([yaw10(o) for _, o in runs]), stat([o["median_chamfer_m"] for _, o in runs]),
-            stat([o["median_shape_chamfer_m"] for _, o in runs])))
+names = ["summary.json", "objects_score.json"]
+for row, seq, runs in collect(out, names, required=names):
+    ape = [j.get("ape", {}) for j, _ in runs]
+    share = lambda o: o["parked_in_view_correct"] / o["parked_in_view"] if o["parked_in_view"] else None
+    false = lambda o: o["false"] / o["reconstructed"] if o["reconstructed"] else None
+    yaw10 = lambda o: (sum(1 for x in o["objects"] if x["parked"] and 0 <= x["yaw_error_deg"] <= 10) /
+                       max(1, sum(1 for x in o["objects"] if x["parked"] and x["yaw_error_deg"] >= 0)))
+    lines.append("| %s | %s | %d | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+        row, seq, len(runs), stat([a.get("sim3_rmse") for a in ape]), stat([a.get("se3_rmse") for a in ape]),
+        stat([o["reconstructed"] for _, o in runs], "%d"), stat([share(o) for _, o in runs]),
+        stat([false(o) for _, o in runs]), stat([o["median_centre_error_m"] for _, o in runs]),
+        stat([yaw10(o) for _, o in runs]), stat([o["median_chamfer_m"] for _, o in runs]),
+        stat([o["median_shape_chamfer_m"] for _, o in runs])))
 text = "\n".join(lines) + "\n"
 open(os.path.join(out, "table.md"), "w").write(text)
 print(text)

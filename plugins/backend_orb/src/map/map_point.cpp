@@ -100,6 +100,15 @@ void MapPoint::computeDistinctiveDescriptor() {
   std::copy(descs[best], descs[best] + 32, descriptor.begin());
 }
 
+void MapPoint::completeNewPoint(const std::array<uint8_t, 3>& bgr) {
+  b = bgr[0];
+  g = bgr[1];
+  r = bgr[2];
+  grey = static_cast<uint8_t>((bgr[0] + bgr[1] + bgr[2]) / 3);
+  computeDistinctiveDescriptor();
+  updateNormalAndDepth();
+}
+
 void MapPoint::updateNormalAndDepth() {
   if (observations.empty() || reference == nullptr) return;
   Eigen::Vector3d n = Eigen::Vector3d::Zero();

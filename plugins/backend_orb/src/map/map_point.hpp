@@ -61,6 +61,9 @@ class MapPoint {
 
   void computeDistinctiveDescriptor();
   void updateNormalAndDepth();
+  // A new point's last step, once its first observations are in: its colour (BGR of the keypoint it was
+  // made from, grey their mean), its distinctive descriptor, its normal and distance range.
+  void completeNewPoint(const std::array<uint8_t, 3>& bgr);
   int predictLevel(double distance, const ScalePyramid& pyramid) const;
 
  private:

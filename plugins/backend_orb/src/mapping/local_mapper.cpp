@@ -263,12 +263,7 @@ int LocalMapper::createNewPoints(KeyFrame* kf) {
       mp->trusted = kf->features->onStaticObject(i1) || kf2->features->onStaticObject(i2);
       mp->object_id = kf->features->onStaticObject(i1) ? kf->features->objectId(i1) : kf2->features->objectId(i2);
       const cv::Vec3b c = kf->features->colours[i1];
-      mp->b = c[0];
-      mp->g = c[1];
-      mp->r = c[2];
-      mp->grey = static_cast<uint8_t>((c[0] + c[1] + c[2]) / 3);
-      mp->computeDistinctiveDescriptor();
-      mp->updateNormalAndDepth();
+      mp->completeNewPoint({c[0], c[1], c[2]});
       recent_.push_back(mp);
       ++created;
     }

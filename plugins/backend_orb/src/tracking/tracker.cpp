@@ -225,12 +225,7 @@ bool Tracker::createInitialMap(const std::vector<int>& matches12, const TwoViewR
     mp->trusted = kf_ini->features->onStaticObject(i);
     mp->object_id = kf_ini->features->objectId(i);
     const cv::Vec3b c = kf_ini->features->colours[i];
-    mp->b = c[0];
-    mp->g = c[1];
-    mp->r = c[2];
-    mp->grey = static_cast<uint8_t>((c[0] + c[1] + c[2]) / 3);
-    mp->computeDistinctiveDescriptor();
-    mp->updateNormalAndDepth();
+    mp->completeNewPoint({c[0], c[1], c[2]});
     current_.points[j] = mp;
   }
   kf_ini->updateConnections();
