@@ -249,6 +249,12 @@ void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_
   out.speed_sigma = dyn.valid ? dyn.sigma : 0;
 }
 
+Eigen::Isometry3d BevTracker::steadyPose(double now) const {
+  const auto& [t1, T1] = poses_.back();
+  if (poses_.size() < 2 || !(t1 > poses_[0].first)) return T1;
+  return T1 * scaleMotion(poses_[0].second.inverse() * T1, (now - t1) / (t1 - poses_[0].first));
+}
+
 std::vector<Decision> BevTracker::update(double timestamp, const std::optional<Eigen::Isometry3d>& T_world_cam_in,
                                          const std::vector<beslam_box3d>& boxes) {
   for (size_t i = 0; i < boxes.size(); ++i) {
@@ -278,10 +284,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     if (params_.pose_jitter && poses_.size() == 2 && poses_[1].first > poses_[0].first && now > poses_[1].first) {
       // How far the pose is from where steady motion would have put it: a real vehicle's acceleration
       // explains centimetres at 10 Hz, a backend's map correction decimetres to metres.
-      const auto& [t0, T0] = poses_[0];
-      const auto& [t1, T1] = poses_[1];
-      const Eigen::Vector3d d =
-          T_world_cam->translation() - (T1 * scaleMotion(T0.inverse() * T1, (now - t1) / (t1 - t0))).translation();
+      const Eigen::Vector3d d = T_world_cam->translation() - steadyPose(now).translation();
       jitter_.emplace_back(now, d.x() * d.x() + d.z() * d.z());
     }
     while (!jitter_.empty() && jitter_.front().first < now - params_.window_static - 1e-6) jitter_.pop_front();
@@ -307,13 +310,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       unknown[i].range = std::hypot(boxes[i].center_cam[0], boxes[i].center_cam[2]);
     return unknown;
   } else if (!poses_.empty()) {
-    const auto& [t1, T1] = poses_.back();
-    Eigen::Isometry3d T = T1;
-    if (poses_.size() == 2 && t1 > poses_[0].first) {
-      const Eigen::Isometry3d delta = poses_[0].second.inverse() * T1;
-      T = T1 * scaleMotion(delta, (now - t1) / (t1 - poses_[0].first));
-    }
-    T_world_cam = T;
+    T_world_cam = steadyPose(now);
   }
   const Eigen::Isometry3d T_wc = T_world_cam ? *T_world_cam : Eigen::Isometry3d::Identity();
   const Eigen::Matrix3d R_wc = T_wc.linear();

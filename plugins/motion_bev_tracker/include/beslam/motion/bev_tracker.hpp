@@ -23,17 +23,19 @@
 // sigma_v also holds the ego-motion error, ego_speed_noise * v_ego + ego_turn_noise * yaw_rate_ego * r (the
 // pose source's drift: a heading-rate error moves a far object sideways), which more positions do not
 // average away; the detection noise does, so a track seen longer gets a smaller sigma_v.
-// Pose jitter: a vehicle cannot leave its constant-velocity path by much between two frames, so how far
-// the given poses do (a SLAM backend correcting itself) is measured, as an RMS over the last window_static
-// seconds, and every world position made with such poses carries it as extra position noise
-// (pose_jitter: true, for poses of a monocular SLAM backend). Ground truth or stereo odometry have almost none. Until
-// the poses have been watched for window_static seconds, their jitter is unknown and no track is decided. A static
-// track also has dynamic evidence when its latest positions (mean of 3) leave its parked position (a running mean while
-// static) by displacement_margin plus z_dynamic standard errors. Hysteresis: UNKNOWN -> STATIC on the first static
-// evidence, UNKNOWN or STATIC -> DYNAMIC after start_frames dynamic frames, DYNAMIC -> STATIC after stop_dwell static
-// frames; a run of evidence is broken only by contrary evidence (frames with none neither add nor break). Far objects
-// whose speed cannot be pinned down stay UNKNOWN (the paper checks nearby cars first). Without any camera pose the
+// A static track also has dynamic evidence when its latest positions (mean of 3) leave its parked
+// position (a running mean while static) by displacement_margin plus z_dynamic standard errors.
+// Hysteresis: UNKNOWN -> STATIC on the first static evidence, UNKNOWN or STATIC -> DYNAMIC after
+// start_frames dynamic frames, DYNAMIC -> STATIC after stop_dwell static frames; a run of evidence is
+// broken only by contrary evidence (frames with none neither add nor break). Far objects whose speed
+// cannot be pinned down stay UNKNOWN (the paper checks nearby cars first). Without any camera pose the
 // tracker still tracks (camera frame) but reports UNKNOWN.
+//
+// Pose jitter (pose_jitter: true, for the poses of a monocular SLAM backend): a vehicle cannot leave its
+// constant-velocity path by much between two frames, so how far the given poses do (a backend correcting
+// itself) is measured as an RMS over the last window_static seconds, and every world position made with
+// them carries it as extra position noise. Ground truth and stereo odometry have almost none. Until the
+// poses have been watched for window_static seconds their jitter is unknown and no track is decided.
 #pragma once
 
 #include <Eigen/Core>
@@ -159,6 +161,9 @@ class BevTracker {
   Speed fitSpeed(const Track& track, double window, const std::optional<Eigen::Vector2d>& det_velocity,
                  double det_sigma) const;
   void decide(Track& track, const std::optional<Eigen::Vector2d>& det_velocity, Decision& out);
+  // The last pose carried on to `now` at the last two poses' velocity and turn rate (the last pose alone
+  // when there is one, or no time between them). Needs a pose.
+  Eigen::Isometry3d steadyPose(double now) const;
 
   Params params_;
   std::vector<Track> tracks_;
@@ -168,9 +173,8 @@ class BevTracker {
   bool pose_mode_ = false;                                   // tracks live in a world frame (some pose seen)
   std::vector<std::pair<double, Eigen::Isometry3d>> poses_;  // last two known poses, for extrapolation
   std::deque<std::pair<double, double>> jitter_;  // (time, squared BEV distance of a pose from its prediction)
-  double jitter_rms_ = 0;
-  double first_pose_t_ = 0;  // time of the first pose: decisions wait window_static seconds from it // m, over the last
-                             // window_static seconds
+  double jitter_rms_ = 0;                         // m, over the last window_static seconds
+  double first_pose_t_ = 0;  // time of the first pose: with pose_jitter, decisions wait window_static from it
   double ego_speed_ = 0, ego_yaw_rate_ = 0;  // between the last two known poses (m/s, rad/s)
 };
 
