@@ -219,13 +219,13 @@ TEST(Registry, LandmarksCrossTheAbiWithMeshesPointsAndRemovals) {
   EXPECT_NEAR(made[0].T_world_object.translation().z(), 10, 1e-12);
   EXPECT_EQ(made[0].mesh_vertices.size(), 24u);
   EXPECT_EQ(made[0].mesh_faces.size(), 36u);
-  EXPECT_FALSE(made[0].removed());
+  EXPECT_FALSE(made[0].removed);
   // The host's copy owns its arrays: it outlives the plugin's next call.
   const beslam::registry::Landmarks first = made;
   box.motion_state = BESLAM_MOTION_DYNAMIC;
   made = reconstructor.reconstruct(kf, frame, {box}, no_mask);
   ASSERT_EQ(made.size(), 1u);
-  EXPECT_TRUE(made[0].removed());
+  EXPECT_TRUE(made[0].removed);
   EXPECT_FLOAT_EQ(first[0].mesh_vertices[0], -2.0f);
   EXPECT_TRUE(reconstructor.finish().empty());  // nothing left: object 4 was removed
 }
@@ -242,10 +242,40 @@ TEST(Registry, AnAbi12ReconstructorStillLoadsAndItsLandmarksRead) {
   const beslam::registry::Landmarks made = reconstructor.reconstruct(kf, frame, {}, beslam_image_view{});
   ASSERT_EQ(made.size(), 1u);
   EXPECT_EQ(made[0].track_id, 5);
-  EXPECT_DOUBLE_EQ(made[0].size.x(), 4.0);
-  EXPECT_EQ(made[0].flags, 0u) << "1.3 fields past a 1.2 plugin's struct read as zero";
+  EXPECT_DOUBLE_EQ(made[0].scale.x(), 4.0);
+  EXPECT_FALSE(made[0].removed) << "1.3 fields past a 1.2 plugin's struct read as zero";
   EXPECT_TRUE(made[0].mesh_faces.empty());
   EXPECT_TRUE(reconstructor.finish().empty()) << "no finish() in a 1.2 table: nothing, no call";
+}
+
+// The one checked copy the host and the backends read landmarks through (sdk::fromC): counts that
+// promise data the plugin did not give, and mesh faces past the vertices, are refused by name.
+TEST(Registry, LandmarkCopiesRefuseCountsWithoutDataAndFacesPastTheVertices) {
+  auto errorFor = [](const beslam_landmark_list& list) {
+    try {
+      beslam::sdk::fromC(&list);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  std::vector<float> vertices(9, 0.0f);  // three vertices
+  std::vector<uint32_t> faces = {0, 1, 3};
+  beslam_object_landmark l{};
+  l.struct_size = sizeof(l);
+  l.track_id = 7;
+  l.mesh_vertices = vertices.data();
+  l.mesh_vertex_count = 3;
+  l.mesh_faces = faces.data();
+  l.mesh_face_count = 1;
+  const beslam_landmark_list list{&l, 1, sizeof(l)};
+  EXPECT_EQ(errorFor(list), "landmark 7 has a mesh face index 3 past its 3 vertices");
+  faces[2] = 2;
+  ASSERT_EQ(beslam::sdk::fromC(&list).at(0).mesh_faces, faces);
+  l.shape_code_size = 4;  // and no shape_code array
+  EXPECT_EQ(errorFor(list), "landmark 7 has 4 shape code values without data");
+  EXPECT_EQ(errorFor(beslam_landmark_list{nullptr, 2, sizeof(l)}), "2 landmarks without data");
+  EXPECT_TRUE(beslam::sdk::fromC(nullptr).empty());
 }
 
 TEST(Registry, FindsBuiltInPluginsThroughEnvironment) {

@@ -33,7 +33,7 @@ formats::TriangleMesh objectMesh(const registry::ObjectLandmark& o) {
 
 void checkLandmark(const std::string& path, const registry::ObjectLandmark& o) {
   const std::string what = "object " + std::to_string(o.track_id);
-  if (!o.T_world_object.matrix().allFinite() || !o.size.allFinite())
+  if (!o.T_world_object.matrix().allFinite() || !o.scale.allFinite())
     throwAt(path, what + " has a non-finite pose or size");
   const size_t vertices = o.mesh_vertices.size() / 3;
   for (uint32_t index : o.mesh_faces)
@@ -46,7 +46,7 @@ void checkLandmark(const std::string& path, const registry::ObjectLandmark& o) {
 
 void applyLandmarkUpdates(ObjectMap& objects, const registry::Landmarks& updates) {
   for (const registry::ObjectLandmark& l : updates) {
-    if (l.removed())
+    if (l.removed)
       objects.erase(l.track_id);
     else
       objects[l.track_id] = l;
@@ -72,7 +72,7 @@ nlohmann::json writeObjectOutputs(const std::string& out_dir, const ObjectMap& o
     for (int r = 0; r < 4; ++r)
       for (int c = 0; c < 4; ++c) T[r * 4 + c] = M(r, c);
     entry["T_world_obj"] = T;
-    entry["size"] = {o.size.x(), o.size.y(), o.size.z()};
+    entry["size"] = {o.scale.x(), o.scale.y(), o.scale.z()};
     entry["shape_code"] = o.shape_code;
     entry["keyframes"] = o.keyframes;
     entry["cost"] = o.cost;

@@ -6,7 +6,6 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/formats/geometry.hpp"
-#include "beslam/sdk/detail/landmark_view.hpp"
 
 namespace beslam::registry {
 
@@ -106,43 +105,13 @@ void MaskGeneratorInstance::generate(const beslam_frame& frame, const std::vecto
 namespace {
 using formats::toIsometry;
 
-template <class T>
-std::vector<T> copyOf(const T* data, size_t count, const char* what, const std::string& plugin) {
-  if (count == 0) return {};
-  if (data == nullptr)
-    throw Error("plugin " + plugin + ": a landmark has " + std::to_string(count) + " " + what + " without data");
-  return std::vector<T>(data, data + count);
-}
-
 // Copies the plugin's landmarks (plugin memory, element_size as the plugin was built) into host memory.
 Landmarks copyLandmarks(const beslam_landmark_list& out, const std::string& plugin) {
-  if (out.count > 0 && (out.landmarks == nullptr || out.element_size < offsetof(beslam_object_landmark, flags)))
-    throw Error("plugin " + plugin + ": returned " + std::to_string(out.count) + " landmarks without data");
-  Landmarks copy;
-  const char* base = reinterpret_cast<const char*>(out.landmarks);
-  for (uint32_t i = 0; i < out.count; ++i) {
-    beslam_object_landmark l{};
-    std::memcpy(&l, base + static_cast<size_t>(i) * out.element_size, std::min<size_t>(out.element_size, sizeof(l)));
-    ObjectLandmark o;
-    o.track_id = l.track_id;
-    o.class_id = l.class_id;
-    o.confidence = l.confidence;
-    o.flags = l.flags;
-    o.keyframes = l.keyframes;
-    o.cost = l.cost;
-    o.T_world_object = toIsometry(l.T_world_object);
-    o.size = Eigen::Vector3d(l.scale[0], l.scale[1], l.scale[2]);
-    o.shape_code = copyOf(l.shape_code, l.shape_code_size, "shape code values", plugin);
-    o.surface_points = copyOf(l.surface_points, 3 * l.surface_point_count, "surface point values", plugin);
-    o.mesh_vertices = copyOf(l.mesh_vertices, 3 * size_t(l.mesh_vertex_count), "mesh vertex values", plugin);
-    o.mesh_faces = copyOf(l.mesh_faces, 3 * size_t(l.mesh_face_count), "mesh face indices", plugin);
-    for (uint32_t index : o.mesh_faces)
-      if (index >= l.mesh_vertex_count)
-        throw Error("plugin " + plugin + ": landmark " + std::to_string(o.track_id) + " has a mesh face index " +
-                    std::to_string(index) + " past its " + std::to_string(l.mesh_vertex_count) + " vertices");
-    copy.push_back(std::move(o));
+  try {
+    return sdk::fromC(&out);
+  } catch (const std::invalid_argument& e) {
+    throw Error("plugin " + plugin + ": returned " + e.what());
   }
-  return copy;
 }
 }  // namespace
 
@@ -207,8 +176,7 @@ TrackOutput BackendInstance::track(const beslam_frame& frame, const beslam_image
 }
 
 void BackendInstance::addLandmarks(const Landmarks& landmarks) {
-  std::vector<beslam_object_landmark> views;  // C views of the host's copies, for this call only
-  for (const ObjectLandmark& o : landmarks) views.push_back(sdk::detail::landmarkView(o, o.size, o.flags));
+  std::vector<beslam_object_landmark> views = sdk::toC(landmarks);  // views of the host's copies, for this call
   beslam_landmark_list list{views.data(), static_cast<uint32_t>(views.size()), sizeof(beslam_object_landmark)};
   check(table<beslam_backend_v1>().add_landmarks(handle_, &list), "add_landmarks");
 }

@@ -32,18 +32,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-ExtractorOptions extractorOptions(const Options& o) {
-  ExtractorOptions e;
-  e.features = o.features;
-  e.scale_factor = o.scale_factor;
-  e.levels = o.levels;
-  e.fast_initial = o.fast_initial;
-  e.fast_fallback = o.fast_fallback;
-  e.static_object_fast = o.static_object_fast;
-  e.static_object_budget_share = o.static_object_budget_share;
-  return e;
-}
-
 LocalMapperOptions mapperOptions(const Options& o) {
   LocalMapperOptions m;
   m.triangulation_neighbours = o.triangulation_neighbours;
@@ -86,13 +74,15 @@ bool Options::validate(std::string* error) const {
     if (error) *error = m;
     return false;
   };
-  if (features < 100) return fail("features must be >= 100");
+  const ExtractorOptions& e = extractor;
+  if (e.features < 100) return fail("features must be >= 100");
   if (init_features_factor < 1) return fail("init_features_factor must be >= 1");
-  if (!(scale_factor > 1.0 && scale_factor < 2.0)) return fail("scale_factor must be in (1, 2)");
-  if (levels < 1 || levels > 16) return fail("levels must be in [1, 16]");
-  if (fast_initial < 1 || fast_fallback < 1 || static_object_fast < 1) return fail("FAST thresholds must be >= 1");
-  if (fast_fallback > fast_initial) return fail("fast_fallback must be <= fast_initial");
-  if (static_object_budget_share < 0 || static_object_budget_share > 1)
+  if (!(e.scale_factor > 1.0 && e.scale_factor < 2.0)) return fail("scale_factor must be in (1, 2)");
+  if (e.levels < 1 || e.levels > 16) return fail("levels must be in [1, 16]");
+  if (e.fast_initial < 1 || e.fast_fallback < 1 || e.static_object_fast < 1)
+    return fail("FAST thresholds must be >= 1");
+  if (e.fast_fallback > e.fast_initial) return fail("fast_fallback must be <= fast_initial");
+  if (e.static_object_budget_share < 0 || e.static_object_budget_share > 1)
     return fail("static_object_budget_share must be in [0, 1]");
   if (static_object_weight <= 0) return fail("static_object_weight must be > 0");
   if (fps <= 0) return fail("fps must be > 0");
@@ -154,7 +144,7 @@ struct OrbSlam::Impl {
   Impl(const Camera& c, const Options& o)
       : camera(c),
         options(o),
-        extractor(extractorOptions(o)),
+        extractor(o.extractor),
         vocabulary(o.vocabulary.empty() ? place::Vocabulary() : place::Vocabulary::load(o.vocabulary)),
         mapper(map, c, extractor.pyramid(), mapperOptions(o)),
         tracker(
@@ -180,8 +170,8 @@ struct OrbSlam::Impl {
   MapFileInfo mapFileInfo() const {
     MapFileInfo info;
     info.camera = camera;
-    info.levels = options.levels;
-    info.scale_factor = options.scale_factor;
+    info.levels = options.extractor.levels;
+    info.scale_factor = options.extractor.scale_factor;
     info.metric = mapper.metric();
     return info;
   }
@@ -247,7 +237,8 @@ struct OrbSlam::Impl {
                     const std::vector<ObjectBox>& boxes) {
     const auto t_start = Clock::now();
     auto t0 = Clock::now();
-    const int budget = tracker.initialising() ? options.features * options.init_features_factor : options.features;
+    const int budget =
+        tracker.initialising() ? options.extractor.features * options.init_features_factor : options.extractor.features;
     auto features = extractor.extract(image, labels, budget);
     if (options.object_scale && options.metric_scale && !boxes.empty()) setObjectRanges(*features, boxes);
     if (options.object_landmarks != ObjectLandmarkMode::Off)  // kept with a keyframe for its camera-object factors

@@ -32,7 +32,7 @@ constexpr int kFrames = 40;
 
 Options smallOptions() {
   Options o;
-  o.features = 1000;
+  o.extractor.features = 1000;
   return o;
 }
 
@@ -230,9 +230,7 @@ TEST_F(MapFileTest, LoadingAfterTrackingIsALogicError) {
 TEST(MapMemory, TrackerLetsGoOfACulledKeyFrame) {
   const Camera cam = test::CorridorWorld().camera();
   Options o = smallOptions();
-  ExtractorOptions eo;
-  eo.features = o.features;
-  const OrbExtractor extractor(eo);
+  const OrbExtractor extractor(o.extractor);
   Map map;
   LocalMapper mapper(map, cam, extractor.pyramid(), LocalMapperOptions{});
   std::vector<std::pair<KeyFrame*, bool>> jobs;
@@ -240,7 +238,7 @@ TEST(MapMemory, TrackerLetsGoOfACulledKeyFrame) {
       cam, o, extractor.pyramid(), map, [&](KeyFrame* kf, bool initial) { jobs.emplace_back(kf, initial); },
       [&] { mapper.reset(); });
   auto track = [&](int i) {
-    const int budget = tracker.initialising() ? o.features * o.init_features_factor : o.features;
+    const int budget = tracker.initialising() ? o.extractor.features * o.init_features_factor : o.extractor.features;
     const TrackResult r = tracker.track(extractor.extract(corridorImages()[i], cv::Mat(), budget), 0.1 * i, i);
     for (auto& [kf, initial] : jobs) mapper.processKeyFrame(kf, !initial);
     jobs.clear();

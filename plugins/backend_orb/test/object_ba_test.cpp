@@ -392,7 +392,7 @@ TEST(ObjectLandmarks, OffAndNonMetricRunsAreByteIdenticalToNoObjects) {
   for (int i = 0; i < 20; ++i) images.push_back(world.render(i));
   auto run = [&](ObjectLandmarkMode mode, bool landmarks) {
     Options o;
-    o.features = 1000;
+    o.extractor.features = 1000;
     o.object_landmarks = mode;
     OrbSlam slam(world.camera(), o);
     ObjectBox box;  // a parked car's box every frame (not on the image)
@@ -461,7 +461,7 @@ TEST(ObjectLandmarks, EnterLocalBaOfAMetricCorridorRun) {
   auto run = [&](ObjectLandmarkMode mode, bool threaded) {
     Options o;
     o.threaded_mapping = threaded;
-    o.features = 1000;
+    o.extractor.features = 1000;
     o.metric_scale = true;
     o.camera_height = 1.5;
     o.object_landmarks = mode;

@@ -228,7 +228,7 @@ TEST(Relocalisation, ResumesAfterABlackout) {
   vo.seed = 1;
   Vocabulary::train(trainingDescriptors(), vo).save(tempPath("reloc.bvoc"));
   Options options;
-  options.features = 1000;
+  options.extractor.features = 1000;
   options.vocabulary = tempPath("reloc.bvoc");
   const test::CorridorWorld world;
   OrbSlam slam(world.camera(), options);
@@ -290,7 +290,7 @@ TEST(Relocalisation, ResumesAfterABlackout) {
 
 TEST(Relocalisation, WithoutAVocabularyTheBackendStillTracks) {
   Options options;
-  options.features = 1000;
+  options.extractor.features = 1000;
   options.vocabulary = "";
   const test::CorridorWorld world;
   OrbSlam slam(world.camera(), options);

@@ -30,7 +30,7 @@ RunResult runCorridor(const Options& options, int frames = kFrames) {
 
 Options smallOptions() {
   Options o;
-  o.features = 1000;
+  o.extractor.features = 1000;
   return o;
 }
 
@@ -102,7 +102,7 @@ TEST(Options, ValidationNamesTheConstraint) {
   Options o;
   std::string error;
   EXPECT_TRUE(o.validate(&error));
-  o.scale_factor = 0.9;
+  o.extractor.scale_factor = 0.9;
   EXPECT_FALSE(o.validate(&error));
   EXPECT_NE(error.find("scale_factor"), std::string::npos);
   EXPECT_THROW(OrbSlam(Camera{640, 480, 500, 500, 320, 240}, o), std::invalid_argument);

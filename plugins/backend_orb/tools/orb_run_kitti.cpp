@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--ba-max-kfs") && i + 1 < argc)
       options.local_ba_max_keyframes = std::stoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--features") && i + 1 < argc)
-      options.features = std::stoi(argv[++i]);
+      options.extractor.features = std::stoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--no-kf-culling"))
       options.keyframe_culling = false;
     else if (!std::strcmp(argv[i], "--init-parallax") && i + 1 < argc)
@@ -90,8 +90,8 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--tri-cos") && i + 1 < argc)
       options.triangulation_max_cos_parallax = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--fast") && i + 2 < argc) {
-      options.fast_initial = std::stoi(argv[++i]);
-      options.fast_fallback = std::stoi(argv[++i]);
+      options.extractor.fast_initial = std::stoi(argv[++i]);
+      options.extractor.fast_fallback = std::stoi(argv[++i]);
     } else if (!std::strcmp(argv[i], "--kf-ratio") && i + 1 < argc) {
       options.keyframe_ref_ratio = std::stod(argv[++i]);
     } else if (!std::strcmp(argv[i], "--ground") && i + 2 < argc) {

@@ -38,18 +38,26 @@ struct Camera {
 // per landmark with camera-object and map-point-on-surface factors to local BA (docs/object-ba.md).
 enum class ObjectLandmarkMode { Off, BA };
 
-// Every tunable with its default. validate() names the first violated constraint.
-struct Options {
-  // Features (features/).
+// ORB extraction (features/orb_extractor.hpp): the pyramid, the FAST thresholds and the share of the
+// budget that static objects (mask label >= 1000) may take.
+struct ExtractorOptions {
   int features = 2000;                      // keypoints per frame
-  int init_features_factor = 2;             // x features while initialising
   double scale_factor = 1.2;                // pyramid scale step
   int levels = 8;                           // pyramid levels
   int fast_initial = 20;                    // FAST threshold per cell
   int fast_fallback = 7;                    // FAST threshold of a cell that found nothing
   int static_object_fast = 7;               // FAST threshold on static objects (label >= 1000)
   double static_object_budget_share = 0.3;  // share of each level's budget reserved for static objects
-  double static_object_weight = 1.0;        // information multiplier of trusted (static object) points
+  int cell_size = 30;                       // FAST cell (px)
+  int border = 19;                          // keypoints keep this far from every level's border
+};
+
+// Every tunable with its default. validate() names the first violated constraint.
+struct Options {
+  // Features (features/).
+  ExtractorOptions extractor;
+  int init_features_factor = 2;       // x extractor.features while initialising
+  double static_object_weight = 1.0;  // information multiplier of trusted (static object) points
   // Matching / tracking.
   double fps = 10.0;                 // frame rate: max frames between keyframes
   int min_tracked_inliers = 30;      // local-map inliers for tracking to be OK

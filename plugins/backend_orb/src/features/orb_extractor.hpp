@@ -13,22 +13,11 @@
 #include <opencv2/features2d.hpp>
 #include <vector>
 
+#include "beslam_orb/orb_slam.hpp"  // ExtractorOptions
 #include "features/feature_set.hpp"
 #include "features/scale_pyramid.hpp"
 
 namespace beslam::orb {
-
-struct ExtractorOptions {
-  int features = 2000;
-  double scale_factor = 1.2;
-  int levels = 8;
-  int fast_initial = 20;
-  int fast_fallback = 7;
-  int static_object_fast = 7;
-  double static_object_budget_share = 0.3;
-  int cell_size = 30;  // FAST cell (px)
-  int border = 19;     // keypoints keep this far from every level's border
-};
 
 class OrbExtractor {
  public:

@@ -9,6 +9,7 @@
 
 #include "beslam/sdk/detail/named_values.hpp"
 #include "beslam/sdk/landmark.hpp"
+#include "beslam/sdk/plugin.hpp"
 
 namespace beslam::sdk {
 

@@ -2,7 +2,7 @@
 // detail/landmark.hpp.
 #pragma once
 
-#include "beslam/sdk/plugin.hpp"
+#include "beslam/sdk/views.hpp"
 
 namespace beslam::sdk {
 

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "beslam/sdk/landmark.hpp"
+#include "beslam/sdk/plugin.hpp"
 
 namespace beslam::sdk {
 

@@ -13,6 +13,7 @@
 
 #include "beslam/plugin.h"
 #include "beslam/registry/registry.hpp"
+#include "beslam/sdk/landmark.hpp"
 
 namespace beslam::registry {
 
@@ -73,21 +74,9 @@ class MaskGeneratorInstance : public Instance {
 };
 
 // One object a reconstructor returned, owned by the host (no pointer into plugin memory or into itself).
-struct ObjectLandmark {
-  int32_t track_id = -1;
-  int32_t class_id = 0;
-  float confidence = 0;
-  uint32_t flags = 0;  // BESLAM_LANDMARK_*
-  int32_t keyframes = 0;
-  double cost = 0;
-  Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();  // x heading, y left, z up
-  Eigen::Vector3d size = Eigen::Vector3d::Zero();                    // length, width, height
-  std::vector<float> shape_code;
-  std::vector<float> surface_points;  // x y z triples, object frame
-  std::vector<float> mesh_vertices;   // x y z triples, object frame
-  std::vector<uint32_t> mesh_faces;   // index triples
-  bool removed() const { return flags & BESLAM_LANDMARK_REMOVED; }
-};
+// A reconstructor's object landmark, owned by the host: the SDK's type, read through the SDK's checked copy
+// (sdk::fromC) and handed on to a backend through its C view (sdk::toC).
+using ObjectLandmark = sdk::Landmark;
 using Landmarks = std::vector<ObjectLandmark>;
 
 class ReconstructorInstance : public Instance {
