@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
@@ -396,6 +397,59 @@ TEST_F(RunTest, MotionCheckerGetsNoPoseUntilTheWorldIsMetric) {
       EXPECT_NE(summary.find("\"unknown\": 12"), std::string::npos) << summary;
     }
   }
+}
+
+// When the world turns metric late (here at frame 3), the motion checker is started again on the frames it
+// saw without a pose, placed with the backend's now metric poses: the boxes after it are decided with that
+// history (the boxes fixed in the camera move with it, so they are dynamic); with motion_replay_frames 0
+// the checker starts from nothing. The new checker's track ids follow every id given out before.
+TEST_F(RunTest, WhenTheWorldTurnsMetricTheMotionCheckerRunsAgainOnTheFramesBefore) {
+  // The objects.txt rows of frames >= first: {decided rows, smallest track id}; and the largest id before.
+  struct Rows {
+    int decided = 0, unknown = 0;
+    int min_id_after = 1 << 30, max_id_before = -1;
+  };
+  auto rows = [](const std::string& objects, int first) {
+    Rows r;
+    std::istringstream in(objects);
+    for (std::string line; std::getline(in, line);) {
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream fields(line);
+      int frame = 0, id = 0;
+      fields >> frame >> id;
+      if (frame < first) {
+        r.max_id_before = std::max(r.max_id_before, id);
+        continue;
+      }
+      r.min_id_after = std::min(r.min_id_after, id);
+      const bool unknown = line.size() >= 8 && line.compare(line.size() - 8, 8, " unknown") == 0;
+      (unknown ? r.unknown : r.decided) += 1;
+    }
+    return r;
+  };
+  std::map<int, Rows> by_replay;
+  for (const int replay : {0, 30}) {
+    SCOPED_TRACE("motion_replay_frames " + std::to_string(replay));
+    const fs::path path = dir_ / "pipeline.yaml";
+    std::ofstream(path) << "dataset: {type: kitti_odometry, root: data, sequence: \"00\"}\n"
+                        << "plugin_paths: [" << FIXTURE_DIR << "]\n"
+                        << "backend: {plugin: backend_pose_replay, poses: data/poses/00.txt, metric_from_frame: 3}\n"
+                        << "detector: {plugin: fixture_boxes, count: 2}\n"
+                        << "motion_checker: {plugin: motion_bev_tracker, min_observations: 2}\n"
+                        << "pipeline: {motion_replay_frames: " << replay << "}\n";
+    const fs::path out = dir_ / ("replay" + std::to_string(replay));
+    const Result r = beslam("run " + path.string() + " --out " + out.string(), dir_);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string summary = slurp(out / "summary.json");
+    EXPECT_NE(summary.find("\"metric_from_frame\": 3"), std::string::npos) << summary;
+    EXPECT_NE(summary.find("\"motion_replayed_frames\": " + std::string(replay ? "4" : "0")), std::string::npos)
+        << summary;
+    by_replay[replay] = rows(slurp(out / "objects.txt"), 4);
+    EXPECT_EQ(by_replay[replay].decided + by_replay[replay].unknown, 4);  // 2 boxes in frames 4 and 5
+  }
+  EXPECT_EQ(by_replay[30].decided, 4) << "with the history every box after the metric frame is decided";
+  EXPECT_LT(by_replay[0].decided, 4) << "without it the checker starts from nothing at frame 4";
+  EXPECT_GT(by_replay[30].min_id_after, by_replay[30].max_id_before) << "an id never names two tracks";
 }
 
 namespace {

@@ -199,7 +199,12 @@ int runCommand(const std::vector<std::string>& args) {
     std::cout << "APE (both alignments): Sim(3) " << s.ape_sim3_rmse << " m, SE(3) " << s.ape_se3_rmse << " m\n";
   if (!s.evaluation_error.empty()) std::cout << "no APE: " << s.evaluation_error << "\n";
   if (s.metric_from_frame >= 0)
-    std::cout << "map in metres from frame " << s.metric_from_frame << " (camera height " << s.camera_height << " m)\n";
+    std::cout << "map in metres from frame " << s.metric_from_frame << " (camera height " << s.camera_height << " m)"
+              << (s.motion_replayed_frames > 0
+                      ? "; the motion checker ran again on the " + std::to_string(s.motion_replayed_frames) +
+                            " frames before, with metric poses"
+                      : std::string())
+              << "\n";
   else
     std::cout << "map scale: not metric (monocular unit)\n";
   if (s.detections_static + s.detections_dynamic + s.detections_unknown > 0)

@@ -10,8 +10,10 @@
 #include <filesystem>
 #include <functional>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -89,6 +91,30 @@ SynthSource synthSource(const DatasetSpec& dataset) {
   for (const std::string& set : sets) applySetOverride(node, set);
   return {seq, sim::synthConfigFromYaml(node, "dataset.synth_set")};
 }
+
+// The ABI view of a loaded frame (it points into the frame, which must outlive it).
+beslam_frame frameView(const datasets::Frame& frame) {
+  beslam_frame cf{};
+  cf.struct_size = sizeof(cf);
+  cf.index = frame.index;
+  cf.timestamp = frame.timestamp;
+  cf.gray = sdk::toView(frame.gray, BESLAM_PIXEL_GRAY8);
+  cf.color = sdk::toView(frame.color, BESLAM_PIXEL_BGR8);
+  if (!frame.lidar_xyzi.empty()) {
+    cf.lidar.data = frame.lidar_xyzi.data();
+    cf.lidar.count = frame.lidar_xyzi.size() / 4;
+    cf.lidar.stride_bytes = 4 * sizeof(float);
+  }
+  cf.image_path = frame.image_path.c_str();
+  return cf;
+}
+
+// A frame the motion checker saw without a pose (the world not metric yet), kept so that a new checker
+// can be run on it once the backend's poses are metric (runner.hpp).
+struct UnposedFrame {
+  datasets::Frame frame;            // shares its images with the frame that was processed
+  std::vector<beslam_box3d> boxes;  // as the detector gave them
+};
 
 // Everything one frame carries from stage to stage.
 struct FrameState {
@@ -312,17 +338,9 @@ class Run {
     summary_.output_dir = out_dir_;
     summary_.camera_height = base.camera_height;
 
-    auto infoFor = [&](const SlotSpec& slot) {
-      beslam_create_info info = base;
-      info.config = slot.config.values().data();
-      info.config_count = static_cast<uint32_t>(slot.config.values().size());
-      return info;
-    };
+    base_info_ = base;
     auto make = [&](const char* name, auto& instance) {
-      const SlotSpec& slot = spec_.slots.at(name);
-      if (slot.plugin)
-        instance = std::make_unique<typename std::decay_t<decltype(instance)>::element_type>(*slot.plugin,
-                                                                                             infoFor(slot), log_);
+      instance = makeInstance<typename std::decay_t<decltype(instance)>::element_type>(name);
     };
     if (!spec_.slots.at("backend").plugin) throwAt(spec_.path, "backend: no plugin resolved");
     make("detector", detector_);
@@ -331,6 +349,17 @@ class Run {
     make("reconstructor", reconstructor_);
     make("backend", backend_);
     record_.has_reconstructor = reconstructor_ != nullptr;
+  }
+
+  // A new instance of the plugin in slot `name` (null when the slot is empty), with the slot's settings.
+  template <class Instance>
+  std::unique_ptr<Instance> makeInstance(const char* name) {
+    const SlotSpec& slot = spec_.slots.at(name);
+    if (!slot.plugin) return nullptr;
+    beslam_create_info info = base_info_;
+    info.config = slot.config.values().data();
+    info.config_count = static_cast<uint32_t>(slot.config.values().size());
+    return std::make_unique<Instance>(*slot.plugin, info, log_);
   }
 
   // The stages that may run ahead on the producer thread: load, detect and (see execute) mask. They
@@ -348,18 +377,7 @@ class Run {
     f.position = i;
     f.frame = dataset_->load(i);
     f.timing.index = f.frame.index;
-    beslam_frame& cf = f.view;
-    cf.struct_size = sizeof(cf);
-    cf.index = f.frame.index;
-    cf.timestamp = f.frame.timestamp;
-    cf.gray = sdk::toView(f.frame.gray, BESLAM_PIXEL_GRAY8);
-    cf.color = sdk::toView(f.frame.color, BESLAM_PIXEL_BGR8);
-    if (!f.frame.lidar_xyzi.empty()) {
-      cf.lidar.data = f.frame.lidar_xyzi.data();
-      cf.lidar.count = f.frame.lidar_xyzi.size() / 4;
-      cf.lidar.stride_bytes = 4 * sizeof(float);
-    }
-    cf.image_path = f.frame.image_path.c_str();
+    f.view = frameView(f.frame);
   }
 
   // predict: the backend's T_world_cam guess, asked only when the motion checker will use it. A pose in
@@ -383,7 +401,18 @@ class Run {
   void classify(FrameState& f) {
     if (motion_) {
       StageTimer timer(f.timing, "motion_checker");
+      if (!world_metric_ && spec_.run.motion_replay_frames > 0) {
+        unposed_.push_back({f.frame, f.boxes});
+        if (unposed_.size() > static_cast<size_t>(spec_.run.motion_replay_frames)) unposed_.pop_front();
+      }
+      std::vector<int32_t> detected_ids;
+      for (const beslam_box3d& b : f.boxes) detected_ids.push_back(b.track_id);
       motion_->classify(f.view, f.T_world_cam_predicted, f.boxes);
+      for (size_t i = 0; i < f.boxes.size(); ++i) {  // ids the checker made up (not the detector's) move on
+        beslam_box3d& b = f.boxes[i];
+        if (b.track_id >= 0 && b.track_id != detected_ids[i]) b.track_id += track_id_offset_;
+        max_track_id_ = std::max(max_track_id_, b.track_id);
+      }
     }
     for (const beslam_box3d& b : f.boxes)
       ++(b.motion_state == BESLAM_MOTION_STATIC    ? summary_.detections_static
@@ -417,7 +446,38 @@ class Run {
     if (f.tracked.worldIsMetric() != world_metric_) {
       world_metric_ = f.tracked.worldIsMetric();
       summary_.metric_from_frame = world_metric_ ? f.frame.index : -1;
+      // A world metric from the first frame the backend answered for needs no second look.
+      if (world_metric_ && unknown_world_seen_) replayMotionChecker(f.timing);
+      unposed_.clear();
     }
+    unknown_world_seen_ = !world_metric_;
+  }
+
+  // The motion checker again, on the frames it saw without a pose, now with the backend's metric poses
+  // (runner.hpp): a new instance takes over with their history. A backend that cannot give its trajectory
+  // between frames leaves the checker as it is (a warning).
+  void replayMotionChecker(detail::TimingRow& timing) {
+    if (!motion_ || unposed_.empty()) return;
+    StageTimer timer(timing, "motion_replay");
+    std::map<int64_t, Eigen::Isometry3d> T_world_cam;
+    try {
+      for (const registry::PoseEntry& p : backend_->trajectory(BESLAM_TRAJECTORY_FINAL))
+        T_world_cam[p.frame_index] = p.T_world_cam;
+    } catch (const Error& e) {
+      if (options_.log_level <= BESLAM_LOG_WARNING)
+        std::cerr << "warning: the motion checker starts without history: " << e.what() << "\n";
+      return;
+    }
+    auto fresh = makeInstance<registry::MotionCheckerInstance>("motion_checker");
+    for (UnposedFrame& u : unposed_) {
+      const auto pose = T_world_cam.find(u.frame.index);
+      fresh->classify(frameView(u.frame),
+                      pose == T_world_cam.end() ? std::nullopt : std::optional<Eigen::Isometry3d>(pose->second),
+                      u.boxes);
+    }
+    motion_ = std::move(fresh);
+    track_id_offset_ = max_track_id_ + 1;  // past every id given out so far
+    summary_.motion_replayed_frames += static_cast<int64_t>(unposed_.size());
   }
 
   // reconstruct: objects on new keyframes, in metres only (nothing before the world is metric); the
@@ -482,8 +542,13 @@ class Run {
   std::unique_ptr<registry::MaskGeneratorInstance> masker_;
   std::unique_ptr<registry::ReconstructorInstance> reconstructor_;
   std::unique_ptr<registry::BackendInstance> backend_;
-  bool world_metric_ = false;  // the backend's world unit, as its last track() said (data.h)
-  bool mask_ahead_ = false;    // the mask is made on the producer thread (no motion checker)
+  beslam_create_info base_info_{};    // what every instance is created with, before its slot's settings
+  bool world_metric_ = false;         // the backend's world unit, as its last track() said (data.h)
+  std::deque<UnposedFrame> unposed_;  // the latest frames classified without a pose (motion_replay_frames)
+  bool unknown_world_seen_ = false;   // the backend's last track() said its world was not metric
+  int32_t track_id_offset_ = 0;       // added to the track ids the current motion checker makes up
+  int32_t max_track_id_ = -1;         // the largest track id given out
+  bool mask_ahead_ = false;           // the mask is made on the producer thread (no motion checker)
   std::set<size_t> sample_positions_;
   std::unique_ptr<static_map::StaticMapBuilder> static_map_;  // with output.octomap
   detail::RunRecord record_;

@@ -316,6 +316,7 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
   if (!doc["pipeline"].IsDefined() || doc["pipeline"].IsNull()) doc["pipeline"] = YAML::Node(YAML::NodeType::Map);
   const PluginConfig run = validateSettings(doc["pipeline"], runFields(), "pipeline", path, "");
   spec.run.prefetch = static_cast<int>(value(run, "prefetch").number);
+  spec.run.motion_replay_frames = static_cast<int>(value(run, "motion_replay_frames").number);
 
   if (YAML::Node paths = doc["plugin_paths"]; paths.IsDefined() && !paths.IsNull()) {
     if (!paths.IsSequence()) fail(path, paths, "plugin_paths", "expected a list of folders");

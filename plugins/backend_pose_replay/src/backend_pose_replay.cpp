@@ -52,7 +52,7 @@ class PoseReplay : public beslam::sdk::Backend {
   beslam::sdk::TrackResult track(const beslam::sdk::Frame& frame, const cv::Mat&,
                                  const std::vector<beslam_box3d>&) override {
     beslam::sdk::TrackResult result;
-    result.world_is_metric = options_.metric;
+    result.world_is_metric = options_.metric && frame.index >= options_.metric_from_frame;
     const long i = lookup(frame);
     if (i < 0) {
       result.state = tracked_.empty() ? BESLAM_TRACKING_NOT_INITIALIZED : BESLAM_TRACKING_LOST;

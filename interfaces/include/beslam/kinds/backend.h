@@ -4,7 +4,9 @@
  * metres (then and for every later prediction, until a track() says otherwise: a backend that resets its
  * map starts an unknown world again); while it is not, the host gives the motion checker no pose; after a keyframe the
  * reconstructor's landmarks come back through add_landmarks. finish() ends the run (final optimisation); then the host
- * reads the trajectories and map points. Frames a backend did not track are absent from its trajectories. */
+ * reads the trajectories and map points. Frames a backend did not track are absent from its trajectories. With the
+ * pipeline's motion_replay_frames the host also reads trajectory(FINAL) once between two frames, right after the
+ * track() that first says metric; a backend that cannot answer then returns an error and the run goes on. */
 #ifndef BESLAM_KINDS_BACKEND_H
 #define BESLAM_KINDS_BACKEND_H
 

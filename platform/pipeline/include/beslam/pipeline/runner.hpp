@@ -12,12 +12,18 @@
 // error nothing partial replaces an earlier run's files. When options.stop_requested says so after a
 // frame (SIGINT/SIGTERM in the CLI), the loop ends there and the outputs of the frames done are written,
 // with summary.json "interrupted": true.
-// Scheduling (spec.run.prefetch > 0, the default): a producer thread loads the next frames and runs the
-// detector on them (and the mask generator, when no motion checker needs the backend's pose first) while
-// the backend works on the current one; at most `prefetch` frames wait. Each plugin is still called from
-// one thread at a time, frame after frame in order, with the same inputs as in the strictly sequential
-// loop (prefetch 0), so the results are the same; an interrupted run may have loaded and detected up to
-// `prefetch` frames past the last one processed, which nothing else sees.
+// The motion checker's history (spec.run.motion_replay_frames > 0; off by default, docs/motion.md): until the backend's
+// world is metric the checker gets no pose, so it cannot tell parked from moving. The runner keeps the frames it saw so
+// (at most motion_replay_frames, the latest) with their boxes as detected; on the frame the world turns metric it asks
+// the backend for its trajectory (now in metres), starts a new checker instance with the same settings and runs it over
+// those frames with their poses, then goes on with it. The states of the frames already processed are not changed;
+// later frames are decided with the history. The track ids the new instance makes up (not the detector's own, passed
+// through) are moved past every id given out before, so such an id never names two objects. Scheduling
+// (spec.run.prefetch > 0, the default): a producer thread loads the next frames and runs the detector on them (and the
+// mask generator, when no motion checker needs the backend's pose first) while the backend works on the current one; at
+// most `prefetch` frames wait. Each plugin is still called from one thread at a time, frame after frame in order, with
+// the same inputs as in the strictly sequential loop (prefetch 0), so the results are the same; an interrupted run may
+// have loaded and detected up to `prefetch` frames past the last one processed, which nothing else sees.
 #pragma once
 
 #include <functional>
@@ -58,7 +64,8 @@ struct RunSummary {
   double fps = 0;  // frames processed per second of the frame loop's wall time (not the setup, not the writing)
   // The world unit: the first frame the backend said its world was in metres (-1: never).
   int64_t metric_from_frame = -1;
-  double camera_height = 0;  // the rig value handed to the plugins (0: unknown)
+  int64_t motion_replayed_frames = 0;  // frames the motion checker was run on again when the world turned metric
+  double camera_height = 0;            // the rig value handed to the plugins (0: unknown)
   // Detections after the motion checker, by motion state; frames whose mask marks any pixel.
   int64_t detections_static = 0, detections_dynamic = 0, detections_unknown = 0;
   int64_t frames_with_masks = 0;

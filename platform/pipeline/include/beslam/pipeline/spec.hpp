@@ -4,7 +4,7 @@
 //   backend:  {plugin: backend_orb, features: 2000}
 //   detector: {plugin: detector_oracle, position_noise: 0.3}      # optional slots may be left out
 //   output:   {dir: out/run, masks: false}
-//   pipeline: {prefetch: 3}                                       # scheduling only (runner.hpp)
+//   pipeline: {prefetch: 3}                                       # scheduling (runner.hpp)
 //
 // loadPipeline() applies --set overrides, then validates everything the host knows at load time:
 // unknown keys, wrong types, out-of-range values and unknown choices are beslam::Error messages naming
@@ -81,9 +81,11 @@ struct EvaluationSpec {
   int64_t rpe_delta = 1;
 };
 
-// How the runner schedules the stages (never what they compute).
+// How the runner schedules the stages (prefetch never changes what they compute) and the motion
+// checker's history when the world turns metric (runner.hpp).
 struct RunSpec {
-  int prefetch = 3;  // frames prepared ahead on a producer thread (0: strictly one stage after another)
+  int prefetch = 3;              // frames prepared ahead on a producer thread (0: strictly one stage after another)
+  int motion_replay_frames = 0;  // frames the motion checker is run on again with metric poses (0: none)
 };
 
 struct PipelineSpec {
