@@ -15,10 +15,13 @@
 #include "beslam_orb/orb_slam.hpp"
 #include "features/orb_extractor.hpp"
 #include "map/frame.hpp"
+#include "map/keyframe.hpp"
 #include "map/map.hpp"
+#include "map_io/map_file.hpp"
 #include "place/keyframe_database.hpp"
 #include "place/vocabulary.hpp"
 #include "synthetic_world.hpp"
+#include "tracking/tracker.hpp"
 
 namespace beslam::orb {
 namespace {
@@ -286,6 +289,46 @@ TEST(Relocalisation, ResumesAfterABlackout) {
     const Eigen::Matrix3d dR = first_visit[v].linear().transpose() * p.T_world_cam.linear();
     EXPECT_LT(Eigen::AngleAxisd(dR).angle(), 1.0 * M_PI / 180) << "frame " << p.frame_index;
   }
+}
+
+// A map file keeps descriptors, not words: the keyframes of a loaded map join the keyframe database with
+// the current vocabulary's words, so a frame from anywhere in the map finds its place by bag of words.
+TEST(Relocalisation, ALoadedMapsKeyFramesAreFoundByBagOfWords) {
+  place::VocabularyTrainOptions vo;
+  vo.seed = 1;
+  Vocabulary::train(trainingDescriptors(), vo).save(tempPath("loaded.bvoc"));
+  Options options;
+  options.extractor.features = 1000;
+  options.vocabulary = tempPath("loaded.bvoc");
+  const test::CorridorWorld world;
+  {
+    OrbSlam slam(world.camera(), options);
+    for (int i = 0; i < 24; ++i) slam.track(corridorImages()[i], cv::Mat(), 0.1 * i, i);
+    slam.finish();
+    slam.saveMap(tempPath("loaded.map"));
+  }
+  const OrbExtractor extractor(options.extractor);
+  MapFileInfo expected;
+  expected.camera = world.camera();
+  expected.levels = options.extractor.levels;
+  expected.scale_factor = options.extractor.scale_factor;
+  Map map;
+  std::vector<ObjectLandmark> landmarks;
+  loadMapFile(tempPath("loaded.map"), expected, extractor.pyramid(), map, landmarks);
+  ASSERT_GT(map.numKeyFrames(), 5u);
+  const Vocabulary vocabulary = Vocabulary::load(tempPath("loaded.bvoc"));
+  KeyFrameDatabase database;
+  Tracker tracker(
+      world.camera(), options, extractor.pyramid(), map, [](KeyFrame*, bool) {}, [] {}, &vocabulary, &database);
+  BowVector bow;
+  vocabulary.transform(describe(corridorImages()[16]), bow);
+  EXPECT_TRUE(database.relocalisationCandidates(bow).empty()) << "nothing indexed before the map is handed over";
+  tracker.mapLoaded();
+  const std::vector<KeyFrame*> candidates = database.relocalisationCandidates(bow);
+  ASSERT_FALSE(candidates.empty());
+  EXPECT_LE(std::abs(candidates.front()->frame_index - 16), 3)
+      << "keyframe of frame " << candidates.front()->frame_index;
+  for (KeyFrame* kf : map.keyframes()) EXPECT_FALSE(kf->bow.empty()) << "keyframe " << kf->id;
 }
 
 TEST(Relocalisation, WithoutAVocabularyTheBackendStillTracks) {

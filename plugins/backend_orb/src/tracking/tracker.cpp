@@ -53,6 +53,17 @@ void Tracker::computeBow(Frame& f) const {
   f.has_bow = true;
 }
 
+void Tracker::mapLoaded() {
+  state_ = TrackingState::Lost;
+  map_loaded_ = true;
+  if (!vocabulary_ || !database_) return;
+  for (KeyFrame* kf : map_.keyframes()) {  // a map file keeps descriptors, not words: this vocabulary's words
+    if (kf->bad || !kf->features) continue;
+    vocabulary_->transform(kf->features->descriptors, kf->bow, &kf->feature_vector, kBowDirectLevelsUp);
+    database_->add(kf);
+  }
+}
+
 std::optional<Eigen::Isometry3d> Tracker::predictPose() const {
   if (state_ != TrackingState::Ok || !velocity_ || !last_.has_pose) return std::nullopt;
   return ((*velocity_) * last_.T_cw).inverse();

@@ -63,11 +63,10 @@ class Tracker {
   void rescale(double s);
   // The map's newer part was scaled about c (Map::rescaleFrom): frames after keyframe first_kf follow.
   void rescaleFrom(const KeyFrame* first_kf, const Eigen::Vector3d& c, double s);
-  // A map was loaded into the (empty) map: tracking starts lost and localises in it (map_io/localise_in_map).
-  void mapLoaded() {
-    state_ = TrackingState::Lost;
-    map_loaded_ = true;
-  }
+  // A map was loaded into the (empty) map: tracking starts lost and localises in it, by bag of words from its
+  // keyframes (with a vocabulary: they join the keyframe database, which loop closing uses too), else by
+  // the keyframes nearest in frame order (map_io/localise_in_map).
+  void mapLoaded();
   // Culled keyframes and map points are about to be freed (Map::releaseCulled): records referenced to a
   // culled keyframe are re-anchored to its live ancestor, replaced points followed, culled ones dropped
   // from the frames, the local map and the reference / last keyframe.
