@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <unordered_set>
@@ -19,6 +20,7 @@
 #include "map/keyframe.hpp"
 #include "map/map.hpp"
 #include "map/map_point.hpp"
+#include "map_io/map_file.hpp"
 #include "mapping/local_mapper.hpp"
 #include "synthetic_world.hpp"
 #include "tracking/tracker.hpp"
@@ -183,9 +185,39 @@ TEST_F(MapFileTest, TruncatedFileIsRefused) {
 
 TEST_F(MapFileTest, OtherFormatVersionIsRefused) {
   std::string bytes = readBytes(path("map.bin"));
-  bytes[8] = 3;  // the u32 version after the 8-byte magic
-  writeBytes(path("v3.bin"), bytes);
-  expectOneError(loadError(path("v3.bin")), path("v3.bin"), "format version 3; this build reads versions 1 to 2");
+  bytes[8] = 4;  // the u32 version after the 8-byte magic
+  writeBytes(path("v4.bin"), bytes);
+  expectOneError(loadError(path("v4.bin")), path("v4.bin"), "format version 4; this build reads versions 1 to 3");
+}
+
+// Loop edges (the essential graph's, which keep their keyframes from culling) are saved and loaded.
+TEST_F(MapFileTest, LoopEdgesAreSavedAndLoaded) {
+  const Camera camera = test::CorridorWorld().camera();
+  const Options o = smallOptions();
+  const OrbExtractor extractor(o.extractor);
+  MapFileInfo info;
+  info.camera = camera;
+  info.levels = o.extractor.levels;
+  info.scale_factor = o.extractor.scale_factor;
+  auto load = [&](const std::string& file, Map& map) {
+    std::vector<ObjectLandmark> landmarks;
+    loadMapFile(file, info, extractor.pyramid(), map, landmarks);
+  };
+  Map map;
+  load(path("map.bin"), map);
+  ASSERT_GT(map.numKeyFrames(), 3u);
+  KeyFrame* first = *map.keyframes().begin();
+  KeyFrame* last = *map.keyframes().rbegin();
+  for (const KeyFrame* kf : map.keyframes()) EXPECT_TRUE(kf->loop_edges.empty());
+  first->loop_edges.insert(last);
+  last->loop_edges.insert(first);
+  saveMapFile(path("loop.bin"), map, info, {});
+  Map again;
+  load(path("loop.bin"), again);
+  std::map<long, std::vector<long>> edges;
+  for (const KeyFrame* kf : again.keyframes())
+    for (const KeyFrame* other : kf->loop_edges) edges[kf->id].push_back(other->id);
+  EXPECT_EQ(edges, (std::map<long, std::vector<long>>{{first->id, {last->id}}, {last->id, {first->id}}}));
 }
 
 TEST_F(MapFileTest, OtherCameraIsRefused) {

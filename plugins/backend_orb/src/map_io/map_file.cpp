@@ -227,6 +227,7 @@ struct KeyFrameRecord {
   std::shared_ptr<FeatureSet> features;
   std::vector<std::pair<uint32_t, int64_t>> points;  // keypoint index, map point id
   std::vector<std::pair<int64_t, int32_t>> links;    // covisible keyframe id, weight
+  std::vector<int64_t> loop_edges;                   // keyframe ids (version 3 on)
 };
 
 struct PointRecord {
@@ -298,6 +299,11 @@ void saveMapFile(const std::string& path, const Map& map, const MapFileInfo& inf
       w.i64(id);
       w.i32(weight);
     }
+    std::vector<int64_t> loop_edges;  // the keyframes it closed a loop with (essential graph, never culled)
+    for (const KeyFrame* other : kf->loop_edges)
+      if (!other->bad) loop_edges.push_back(other->id);
+    w.u32(static_cast<uint32_t>(loop_edges.size()));
+    for (int64_t id : loop_edges) w.i64(id);
   }
 
   w.u32(static_cast<uint32_t>(map.points().size()));
@@ -458,6 +464,10 @@ MapFileInfo loadMapFile(const std::string& path, const MapFileInfo& expected, co
         id = r.i64();
         weight = r.i32();
       }
+      if (version >= 3) {  // version 2 had no loop edges
+        k.loop_edges.resize(r.count(kMaxLinks, 8, "loop edge count"));
+        for (int64_t& id : k.loop_edges) id = r.i64();
+      }
     }
 
     constexpr size_t kPointMinBytes = 8 * 3 + 8 * 6 + 4 * 2 + 32 + 4 * 2 + 1 + 4 + 4 + 4;
@@ -519,6 +529,9 @@ MapFileInfo loadMapFile(const std::string& path, const MapFileInfo& expected, co
       for (const auto& [id, weight] : k.links)
         if (!kf_by_id.count(id) || id == k.id)
           r.fail("keyframe " + std::to_string(k.id) + ": covisible keyframe " + std::to_string(id) + " missing");
+      for (int64_t id : k.loop_edges)
+        if (!kf_by_id.count(id) || id == k.id)
+          r.fail("keyframe " + std::to_string(k.id) + ": loop edge to keyframe " + std::to_string(id) + " missing");
     }
     for (const PointRecord& p : points) {
       if (!kf_by_id.count(p.reference))
@@ -567,6 +580,7 @@ MapFileInfo loadMapFile(const std::string& path, const MapFileInfo& expected, co
     std::map<KeyFrame*, int, IdLess<KeyFrame>> weights;
     for (const auto& [id, weight] : k.links) weights[kf_ptr.at(id)] = weight;
     kf->restoreLinks(k.parent >= 0 ? kf_ptr.at(k.parent) : nullptr, weights);
+    for (int64_t id : k.loop_edges) kf->loop_edges.insert(kf_ptr.at(id));
   }
   landmarks = std::move(objects);
   return info;

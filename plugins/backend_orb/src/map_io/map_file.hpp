@@ -1,6 +1,7 @@
 // Map files: a saved map (keyframes with poses, keypoints and descriptors; map points with positions,
-// descriptors and observations; covisibility and spanning tree; object landmarks), the camera and pyramid
-// it was made with and the identity of the place-recognition vocabulary ("" while there is none).
+// descriptors and observations; covisibility, spanning tree and loop edges; object landmarks), the camera
+// and pyramid it was made with and the identity of the place-recognition vocabulary ("" while there is
+// none).
 //
 // Layout (little-endian): 8-byte magic "BESLAMAP", u32 format version, u64 payload size, the payload,
 // u64 FNV-1a checksum of the payload. Saving is atomic: a temporary file next to the target, flushed to
@@ -23,7 +24,8 @@ namespace beslam::orb {
 class Map;
 
 // 2: object landmarks carry their confidence (version 1 files still load, with confidence 1).
-constexpr uint32_t kMapFileVersion = 2;
+// 3: keyframes carry their loop edges (older files load without).
+constexpr uint32_t kMapFileVersion = 3;
 
 // What a map file records besides the map, and what loading checks it against.
 struct MapFileInfo {
