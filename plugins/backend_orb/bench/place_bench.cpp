@@ -83,7 +83,8 @@ void BM_PlaceQuery300(benchmark::State& state) {
     benchmark::DoNotOptimize(found.data());
   }
   state.counters["keyframes"] = static_cast<double>(f.keyframes.size());
-  state.counters["candidates"] = benchmark::Counter(static_cast<double>(candidates), benchmark::Counter::kAvgIterations);
+  state.counters["candidates"] =
+      benchmark::Counter(static_cast<double>(candidates), benchmark::Counter::kAvgIterations);
 }
 BENCHMARK(BM_PlaceQuery300)->Unit(benchmark::kMillisecond);
 
@@ -103,7 +104,7 @@ loop::PoseGraph drifted(int n) {
   g.S_cw.push_back(truth(0));
   for (int k = 1; k < n; ++k) {
     loop::Sim3 step = truth(k) * truth(k - 1).inverse();  // camera k-1 -> k
-    step.t *= 1.0 + 0.02 * k / n;                          // the map shrinks along the loop
+    step.t *= 1.0 + 0.02 * k / n;                         // the map shrinks along the loop
     step.R = Eigen::AngleAxisd(1e-4, Eigen::Vector3d::UnitY()).toRotationMatrix() * step.R;
     g.S_cw.push_back(step * g.S_cw.back());
   }

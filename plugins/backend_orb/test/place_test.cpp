@@ -222,17 +222,23 @@ TEST(KeyFrameDatabase, FindsKeyFramesSharingWordsAndForgetsErasedOnes) {
   EXPECT_TRUE(db.sharedWords({{4, 1.0f}}).empty());
 }
 
+// Backend options (1000 features) with a vocabulary trained on the corridor, saved as `name`.
+Options withCorridorVocabulary(const std::string& name) {
+  place::VocabularyTrainOptions vo;
+  vo.seed = 1;
+  Vocabulary::train(trainingDescriptors(), vo).save(tempPath(name));
+  Options options;
+  options.extractor.features = 1000;
+  options.vocabulary = tempPath(name);
+  return options;
+}
+
 // Tracking lost in 5 black frames relocalises by bag of words within 3 frames of the images returning,
 // at the true pose (Sim(3)-aligned to the truth on the frames before the blackout). After the blackout
 // the camera is back at a place it mapped 4-5 m earlier (a revisit, as on a second lap), so the last
 // pose's neighbourhood does not help: only the keyframe database can find it.
 TEST(Relocalisation, ResumesAfterABlackout) {
-  place::VocabularyTrainOptions vo;
-  vo.seed = 1;
-  Vocabulary::train(trainingDescriptors(), vo).save(tempPath("reloc.bvoc"));
-  Options options;
-  options.extractor.features = 1000;
-  options.vocabulary = tempPath("reloc.bvoc");
+  const Options options = withCorridorVocabulary("reloc.bvoc");
   const test::CorridorWorld world;
   OrbSlam slam(world.camera(), options);
   // Frame k shows corridor view view[k]; -1 = black.
@@ -294,12 +300,7 @@ TEST(Relocalisation, ResumesAfterABlackout) {
 // A map file keeps descriptors, not words: the keyframes of a loaded map join the keyframe database with
 // the current vocabulary's words, so a frame from anywhere in the map finds its place by bag of words.
 TEST(Relocalisation, ALoadedMapsKeyFramesAreFoundByBagOfWords) {
-  place::VocabularyTrainOptions vo;
-  vo.seed = 1;
-  Vocabulary::train(trainingDescriptors(), vo).save(tempPath("loaded.bvoc"));
-  Options options;
-  options.extractor.features = 1000;
-  options.vocabulary = tempPath("loaded.bvoc");
+  const Options options = withCorridorVocabulary("loaded.bvoc");
   const test::CorridorWorld world;
   {
     OrbSlam slam(world.camera(), options);
