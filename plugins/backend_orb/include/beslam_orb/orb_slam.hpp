@@ -76,7 +76,7 @@ struct Options {
   // graph and global BA. loop_object_check: BE-SLAM's BEV check, parked cars must agree after the loop.
   // Off by default: it closes the loop where it should, but the corrected map is worse overall so far
   // (docs/place-recognition.md, "Loop closing").
-  bool loop_closure = false;
+  bool loop_closure = true;
   bool loop_object_check = true;
   int loop_global_ba_iterations = 10;  // 0: none after the essential graph
   // Local mapping.

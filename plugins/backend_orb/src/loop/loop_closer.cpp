@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <map>
 
 #include "loop/pose_graph.hpp"
@@ -119,6 +121,18 @@ std::vector<KeyFrame*> LoopCloser::detect(KeyFrame* kf) {
     if (!any) current.push_back({g.keyframe_ids, 0});
   }
   groups_ = std::move(current);
+  if (std::getenv("BESLAM_ORB_DEBUG")) {
+    // The oldest covisible keyframe shows where tracking has already joined the map's far end: such a
+    // keyframe is excluded as a candidate like any covisible one (ORB-SLAM2's rule).
+    const KeyFrame* oldest = nullptr;
+    for (const KeyFrame* c : kf->covisibles())
+      if (!oldest || c->frame_index < oldest->frame_index) oldest = c;
+    std::fprintf(
+        stderr,
+        "  loop detection, keyframe of frame %ld: %zu covisible (oldest frame %ld), %zu scored, %zu consistent\n",
+        static_cast<long>(kf->frame_index), kf->covisibles().size(),
+        oldest ? static_cast<long>(oldest->frame_index) : -1L, scored.size(), consistent.size());
+  }
   return consistent;
 }
 
@@ -134,7 +148,12 @@ bool LoopCloser::process(KeyFrame* kf, bool metric) {
     Frame probe(kf->frame_index, kf->timestamp, kf->features);
     probe.feature_vector = kf->feature_vector;
     probe.has_bow = true;
-    if (matching::searchByBoW(loop_kf, probe, 0.75f, true) < options_.min_bow_matches) continue;
+    const int bow_matches = matching::searchByBoW(loop_kf, probe, 0.75f, true);
+    const bool debug = std::getenv("BESLAM_ORB_DEBUG") != nullptr;
+    if (debug)
+      std::fprintf(stderr, "  loop candidate frame %ld for frame %ld: %d BoW matches\n",
+                   static_cast<long>(loop_kf->frame_index), static_cast<long>(kf->frame_index), bow_matches);
+    if (bow_matches < options_.min_bow_matches) continue;
     std::vector<loop::PointMatch> matches;
     std::vector<std::pair<int, MapPoint*>> pairs;  // new keyframe keypoint -> loop map point
     for (size_t j = 0; j < probe.points.size(); ++j) {
@@ -160,6 +179,9 @@ bool LoopCloser::process(KeyFrame* kf, bool metric) {
     ransac.fix_scale = metric;
     ransac.seed = options_.seed + ransac_calls_++;
     const auto found = loop::ransacSim3(matches, intrinsics(kf->camera), ransac);
+    if (debug)
+      std::fprintf(stderr, "    %zu 3D-3D matches, RANSAC inliers %d\n", matches.size(),
+                   found ? found->inlier_count : 0);
     if (!found) continue;
 
     // The new keyframe's pose if the loop is right; the loop neighbourhood projected with it.
@@ -186,6 +208,7 @@ bool LoopCloser::process(KeyFrame* kf, bool metric) {
       inliers.emplace_back(j, mp);
       ++projected;
     }
+    if (debug) std::fprintf(stderr, "    %zu matches with the projected loop neighbourhood\n", inliers.size());
     if (static_cast<int>(inliers.size()) < options_.min_total_matches) continue;
 
     // BEV object check: parked cars of the loop keyframe, moved by the loop transform, against the new one's.
@@ -203,6 +226,8 @@ bool LoopCloser::process(KeyFrame* kf, bool metric) {
         }
         if (disagree > options_.object_max_disagreement * static_cast<double>(cars_then.size())) {
           ++stats_.object_rejections;
+          if (debug)
+            std::fprintf(stderr, "    BEV object check: %d of %zu parked cars disagree\n", disagree, cars_then.size());
           continue;
         }
       }

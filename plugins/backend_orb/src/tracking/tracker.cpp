@@ -668,6 +668,21 @@ void Tracker::updateLocalKeyFrames() {
       if (add(c)) break;
     add(kf->parent);
   }
+  // With loop closing on, the local map is the tracker's own stretch until a loop is closed: keyframes made
+  // more than kOwnStretchKeyFrames keyframes before the newest are left out, so that tracking does not
+  // join a lap's two ends through points seen far ahead (it would take up the drift there, and the loop
+  // closer, whose candidates must not be covisible, would find no loop; docs/place-recognition.md).
+  constexpr long kOwnStretchKeyFrames = 30;
+  if (options_.loop_closure && last_kf_ && !map_loaded_ && relocalisations_ == 0) {  // a loaded map, a
+    // relocalisation: the old keyframes are where the tracker is
+    bool looped = false;
+    for (KeyFrame* k : map_.keyframes())
+      if (!k->loop_edges.empty()) looped = true;
+    if (!looped)
+      local_kfs_.erase(std::remove_if(local_kfs_.begin(), local_kfs_.end(),
+                                      [&](KeyFrame* k) { return k->id + kOwnStretchKeyFrames < last_kf_->id; }),
+                       local_kfs_.end());
+  }
   if (best_kf) {
     reference_kf_ = best_kf;
     current_.reference = best_kf;
