@@ -110,6 +110,7 @@ bool Options::validate(std::string* error) const {
         "object_box_sigma_per_m >= 0");
   if (local_ba_iterations_robust < 0 || local_ba_iterations_refine < 0) return fail("BA iterations must be >= 0");
   if (local_ba_max_keyframes < 0) return fail("local_ba_max_keyframes must be >= 0");
+  if (loop_own_stretch_keyframes < 0) return fail("loop_own_stretch_keyframes must be >= 0");
   if (init_min_parallax_deg <= 0) return fail("init_min_parallax_deg must be > 0");
   if (ransac_iterations < 1) return fail("ransac_iterations must be >= 1");
   return true;

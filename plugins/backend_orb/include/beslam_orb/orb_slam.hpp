@@ -74,10 +74,12 @@ struct Options {
       true;  // when lost: BoW candidates + PnP (with a vocabulary), else a search around the last pose
   // Loop closing (loop/loop_closer.hpp; needs a vocabulary): detection, Sim3 (SE3 once metric), essential
   // graph and global BA. loop_object_check: BE-SLAM's BEV check, parked cars must agree after the loop.
-  // Off by default: it closes the loop where it should, but the corrected map is worse overall so far
-  // (docs/place-recognition.md, "Loop closing").
+  // Until a loop is closed the tracker's local map keeps to the last loop_own_stretch_keyframes keyframes
+  // (0: every covisible keyframe, as ORB-SLAM2), so that tracking does not join a lap's two ends through
+  // points seen far ahead before the loop closer can (docs/place-recognition.md, "Loop closing").
   bool loop_closure = true;
   bool loop_object_check = true;
+  int loop_own_stretch_keyframes = 30;
   int loop_global_ba_iterations = 10;  // 0: none after the essential graph
   // Local mapping.
   int triangulation_neighbours = 20;  // covisible keyframes to triangulate with

@@ -128,4 +128,10 @@ int Map::dropObjectPoints(int32_t object_id) {
   return static_cast<int>(doomed.size());
 }
 
+bool Map::hasLoop() const {
+  for (const KeyFrame* kf : keyframes_)
+    if (!kf->loop_edges.empty()) return true;
+  return false;
+}
+
 }  // namespace beslam::orb

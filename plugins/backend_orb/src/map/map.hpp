@@ -55,6 +55,7 @@ class Map {
   KeyFrame* keyFrameFrom(long id) const;
   long lastKeyFrameId() const { return next_kf_id_ - 1; }  // -1: none made yet
   size_t numKeyFrames() const { return keyframes_.size(); }
+  bool hasLoop() const;  // a loop was closed in it (a live keyframe has a loop edge)
   int culledKeyFrames() const { return culled_; }
   // Allocated objects: the live ones plus those culled and not yet released.
   size_t allocatedKeyFrames() const { return owned_keyframes_.size(); }

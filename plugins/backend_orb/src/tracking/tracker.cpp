@@ -669,19 +669,20 @@ void Tracker::updateLocalKeyFrames() {
     add(kf->parent);
   }
   // With loop closing on, the local map is the tracker's own stretch until a loop is closed: keyframes made
-  // more than kOwnStretchKeyFrames keyframes before the newest are left out, so that tracking does not
-  // join a lap's two ends through points seen far ahead (it would take up the drift there, and the loop
-  // closer, whose candidates must not be covisible, would find no loop; docs/place-recognition.md).
-  constexpr long kOwnStretchKeyFrames = 30;
-  if (options_.loop_closure && last_kf_ && !map_loaded_ && relocalisations_ == 0) {  // a loaded map, a
-    // relocalisation: the old keyframes are where the tracker is
-    bool looped = false;
-    for (KeyFrame* k : map_.keyframes())
-      if (!k->loop_edges.empty()) looped = true;
-    if (!looped)
-      local_kfs_.erase(std::remove_if(local_kfs_.begin(), local_kfs_.end(),
-                                      [&](KeyFrame* k) { return k->id + kOwnStretchKeyFrames < last_kf_->id; }),
-                       local_kfs_.end());
+  // more than loop_own_stretch_keyframes before the newest are left out, so that tracking does not join a
+  // lap's two ends through points seen far ahead (it would take up the drift there, and the loop closer,
+  // whose candidates must not be covisible, would find no loop; docs/place-recognition.md). Not in a
+  // loaded map nor after a relocalisation: there the old keyframes are where the tracker is.
+  const long stretch = options_.loop_own_stretch_keyframes;
+  if (options_.loop_closure && stretch > 0 && last_kf_ && !map_loaded_ && relocalisations_ == 0 && !map_.hasLoop()) {
+    auto old = [&](const KeyFrame* k) { return k->id + stretch < last_kf_->id; };
+    local_kfs_.erase(std::remove_if(local_kfs_.begin(), local_kfs_.end(), old), local_kfs_.end());
+    if (best_kf && old(best_kf)) {  // the reference keyframe too is one of the stretch
+      best = 0;
+      best_kf = nullptr;
+      for (auto& [kf, n] : counter)
+        if (!kf->bad && !old(kf) && n > best) best = n, best_kf = kf;
+    }
   }
   if (best_kf) {
     reference_kf_ = best_kf;
