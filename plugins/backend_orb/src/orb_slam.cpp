@@ -61,9 +61,12 @@ LocalMapperOptions mapperOptions(const Options& o) {
   m.metric_correction_min = o.metric_correction_min;
   m.object_range_sigma = o.metric_scale && o.object_scale ? o.object_range_sigma : 0;
   m.object_range_sigma_per_m = o.object_range_sigma_per_m;
+  m.ba.object_anchors = o.object_scale_hold == ObjectScaleHold::Anchors;
+  m.ba.object_range_priors = o.object_scale_hold == ObjectScaleHold::Ranges;
   m.ground.sigma_ratio = o.ground_prior_sigma;
   m.ground.reference_keyframes = o.ground_reference_keyframes;
   m.ground.min_inliers = o.ground_min_inliers;
+  m.ground.pool_keyframes = o.ground_pool_keyframes;
   return m;
 }
 
@@ -110,6 +113,7 @@ bool Options::validate(std::string* error) const {
         "object_box_sigma_per_m >= 0");
   if (local_ba_iterations_robust < 0 || local_ba_iterations_refine < 0) return fail("BA iterations must be >= 0");
   if (local_ba_max_keyframes < 0) return fail("local_ba_max_keyframes must be >= 0");
+  if (ground_pool_keyframes < 0) return fail("ground_pool_keyframes must be >= 0");
   if (loop_own_stretch_keyframes < 0) return fail("loop_own_stretch_keyframes must be >= 0");
   if (init_min_parallax_deg <= 0) return fail("init_min_parallax_deg must be > 0");
   if (ransac_iterations < 1) return fail("ransac_iterations must be >= 1");
@@ -242,7 +246,9 @@ struct OrbSlam::Impl {
         tracker.initialising() ? options.extractor.features * options.init_features_factor : options.extractor.features;
     auto features = extractor.extract(image, labels, budget);
     if (options.object_scale && options.metric_scale && !boxes.empty()) setObjectRanges(*features, boxes);
-    if (options.object_landmarks != ObjectLandmarkMode::Off)  // kept with a keyframe for its camera-object factors
+    // Kept with a keyframe for the parked cars' anchors and the object landmarks' camera-object factors.
+    if (options.object_landmarks != ObjectLandmarkMode::Off ||
+        (options.metric_scale && options.object_scale && options.object_scale_hold == ObjectScaleHold::Anchors))
       for (const ObjectBox& b : boxes)
         if (b.parked && b.object_id >= 0) features->object_boxes.push_back(b);
     const double extract_ms = msSince(t0);

@@ -1,5 +1,6 @@
 // Ground plane and ground-height prior on simulated geometry: the fit finds the road under a pitched
-// camera among walls and a car's hood, refuses too few points and a steep ramp; the reference is a
+// camera among walls and a car's hood, refuses too few points and a steep ramp, and pools the road points
+// of neighbouring keyframes; the reference is a
 // median; local BA with the prior pulls a map whose scale is free (only the origin fixed) back to the
 // reference height, where plain BA leaves the scale where it was.
 #include <gtest/gtest.h>
@@ -95,6 +96,45 @@ TEST(GroundPlane, ASteepRampIsNotTheGround) {
   KeyFrame* kf = singleKeyFrame(map, pyr, Eigen::Isometry3d::Identity(), points);
   EXPECT_FALSE(fitGroundPlane(*kf, GroundPlaneOptions{}, Eigen::Vector3d::UnitY(), 20.0).has_value());
   EXPECT_TRUE(fitGroundPlane(*kf, GroundPlaneOptions{}, Eigen::Vector3d::UnitY(), 35.0).has_value());
+}
+
+TEST(GroundPlane, AKeyFrameWithFewRoadPointsOfItsOwnFitsItWithItsNeighboursRoad) {
+  std::mt19937 rng(6);
+  const int n = GroundPlaneOptions{}.min_inliers - 10;  // too few road points for any keyframe alone
+  const auto road_a = roadPoints(n, rng, 0.005), road_b = roadPoints(n, rng, 0.005);
+  auto points = clutter(rng);
+  points.resize(60);  // the walls, seen by every keyframe: they make them covisible
+  const size_t first_a = points.size(), first_b = first_a + road_a.size();
+  points.insert(points.end(), road_a.begin(), road_a.end());
+  points.insert(points.end(), road_b.begin(), road_b.end());
+  std::vector<Eigen::Isometry3d> T_cw(6, Eigen::Isometry3d::Identity());  // 0.5 m apart down the road
+  for (size_t k = 0; k < T_cw.size(); ++k) T_cw[k].translation() = Eigen::Vector3d(0, 0, -0.5 * k);
+  const ScalePyramid pyr(8, 1.2);
+  Map map;
+  const auto kfs = test::buildMap(map, kCam, pyr, T_cw, T_cw, points, points, 0.0, 1);
+  // Keyframes 0-2 see only road a, keyframes 3-5 only road b (three observations each stay).
+  auto unsee = [&](KeyFrame* kf, size_t from, size_t to) {
+    for (size_t i = from; i < to; ++i) {
+      kf->points[i]->eraseObservation(kf);
+      kf->erasePoint(i);
+    }
+  };
+  for (int k = 0; k < 3; ++k) unsee(kfs[k], first_b, points.size());
+  for (int k = 3; k < 6; ++k) unsee(kfs[k], first_a, first_b);
+  for (KeyFrame* kf : kfs) kf->updateConnections();
+
+  GroundPlaneOptions own, pooled;
+  own.pool_keyframes = 0;
+  pooled.pool_keyframes = 1;  // keyframes 2 and 3 pool both roads, 0 and 5 one only
+  for (KeyFrame* kf : kfs) EXPECT_FALSE(fitGroundPlane(*kf, own, Eigen::Vector3d::UnitY(), 20.0).has_value());
+  EXPECT_FALSE(fitGroundPlane(*kfs[0], pooled, Eigen::Vector3d::UnitY(), 20.0).has_value());
+  for (int k : {2, 3}) {
+    const auto plane = fitGroundPlane(*kfs[k], pooled, Eigen::Vector3d::UnitY(), 20.0);
+    ASSERT_TRUE(plane.has_value()) << "keyframe " << k;
+    EXPECT_NEAR(plane->height, kHeight, 0.02 * kHeight);
+    EXPECT_GE(plane->inliers.size(), static_cast<size_t>(2 * n - 2)) << "both roads' points";
+    for (MapPoint* mp : plane->inliers) EXPECT_NEAR(mp->position.y(), kHeight, 0.06) << "a non-road point is an inlier";
+  }
 }
 
 TEST(GroundReference, IsTheMedianHeightAndMeanNormalOfTheFirstFits) {

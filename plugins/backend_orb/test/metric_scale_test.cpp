@@ -1,9 +1,10 @@
 // Metric scale from static objects: the ray-box entry that gives a keypoint its metric range, the range
-// prior's Jacobians against numeric ones, and that a rescaled map keeps every reprojection.
+// prior's and the box-centre anchor's Jacobians against numeric ones, and that a rescaled map keeps every reprojection.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include "optimize/cost_functions.hpp"
 #include "optimize/se3.hpp"
@@ -42,23 +43,23 @@ TEST(RayBoxEntry, MissesAndInsideGiveNothing) {
   EXPECT_FALSE(rayBoxEntry(Eigen::Vector3d(0, 0, 1), around)) << "a camera inside the box has no range";
 }
 
-TEST(ObjectRangeCost, JacobiansMatchNumericOnes) {
-  Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
-  T_cw.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, 1, 0.1).normalized()).toRotationMatrix();
-  T_cw.translation() = Eigen::Vector3d(0.4, -0.2, 1.5);
-  double pose[7], point[3] = {1.0, 0.5, 9.0};
+// A cost over (pose [qx qy qz qw tx ty tz], point [3]) with `rows` residuals: its analytic Jacobians against
+// central differences, the pose on the SE(3) left tangent [rho, phi] (the manifold's 7th column is zero).
+void expectJacobiansMatchNumericOnes(const ceres::CostFunction& cost, int rows, const Eigen::Isometry3d& T_cw,
+                                     const double* point) {
+  double pose[7];
   optimize::poseToParams(T_cw, pose);
-  const optimize::ObjectRangeCost cost(9.5, 0.3);
-  double r0, J_pose[7], J_point[3];
+  std::vector<double> r0(rows), J_pose(rows * 7), J_point(rows * 3);
   const double* params[] = {pose, point};
-  double* jac[] = {J_pose, J_point};
-  ASSERT_TRUE(cost.Evaluate(params, &r0, jac));
+  double* jac[] = {J_pose.data(), J_point.data()};
+  ASSERT_TRUE(cost.Evaluate(params, r0.data(), jac));
   const double eps = 1e-6;
-  auto residualAt = [&](const Eigen::Isometry3d& T, const double* X) {
-    double p[7], r;
+  auto residualsAt = [&](const Eigen::Isometry3d& T, const double* X) {
+    double p[7];
     optimize::poseToParams(T, p);
+    std::vector<double> r(rows);
     const double* ps[] = {p, X};
-    cost.Evaluate(ps, &r, nullptr);
+    cost.Evaluate(ps, r.data(), nullptr);
     return r;
   };
   for (int k = 0; k < 6; ++k) {  // left update [rho, phi]
@@ -69,18 +70,53 @@ TEST(ObjectRangeCost, JacobiansMatchNumericOnes) {
     plus.translation() = delta.head<3>();
     minus.linear() = optimize::expSO3(-delta.tail<3>()).toRotationMatrix();
     minus.translation() = -delta.head<3>();
-    const double numeric = (residualAt(plus * T_cw, point) - residualAt(minus * T_cw, point)) / (2 * eps);
-    EXPECT_NEAR(J_pose[k], numeric, 1e-5) << "pose tangent " << k;
+    const auto rp = residualsAt(plus * T_cw, point), rm = residualsAt(minus * T_cw, point);
+    for (int i = 0; i < rows; ++i)
+      EXPECT_NEAR(J_pose[i * 7 + k], (rp[i] - rm[i]) / (2 * eps), 1e-5) << "residual " << i << ", pose tangent " << k;
   }
-  EXPECT_EQ(J_pose[6], 0.0);
+  for (int i = 0; i < rows; ++i) EXPECT_EQ(J_pose[i * 7 + 6], 0.0);
   for (int k = 0; k < 3; ++k) {
     double xp[3] = {point[0], point[1], point[2]}, xm[3] = {point[0], point[1], point[2]};
     xp[k] += eps, xm[k] -= eps;
-    EXPECT_NEAR(J_point[k], (residualAt(T_cw, xp) - residualAt(T_cw, xm)) / (2 * eps), 1e-5) << "point " << k;
+    const auto rp = residualsAt(T_cw, xp), rm = residualsAt(T_cw, xm);
+    for (int i = 0; i < rows; ++i)
+      EXPECT_NEAR(J_point[i * 3 + k], (rp[i] - rm[i]) / (2 * eps), 1e-5) << "residual " << i << ", point " << k;
   }
+}
+
+Eigen::Isometry3d someCameraPose() {
+  Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
+  T_cw.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, 1, 0.1).normalized()).toRotationMatrix();
+  T_cw.translation() = Eigen::Vector3d(0.4, -0.2, 1.5);
+  return T_cw;
+}
+
+TEST(ObjectRangeCost, JacobiansMatchNumericOnes) {
+  const Eigen::Isometry3d T_cw = someCameraPose();
+  const double point[3] = {1.0, 0.5, 9.0};
+  const optimize::ObjectRangeCost cost(9.5, 0.3);
+  expectJacobiansMatchNumericOnes(cost, 1, T_cw, point);
   // The residual is (|p_cam| - range) / sigma.
+  double pose[7], r;
+  optimize::poseToParams(T_cw, pose);
+  const double* params[] = {pose, point};
+  ASSERT_TRUE(cost.Evaluate(params, &r, nullptr));
   const Eigen::Vector3d p_cam = T_cw * Eigen::Vector3d(point[0], point[1], point[2]);
-  EXPECT_NEAR(r0, (p_cam.norm() - 9.5) / 0.3, 1e-12);
+  EXPECT_NEAR(r, (p_cam.norm() - 9.5) / 0.3, 1e-12);
+}
+
+TEST(BoxCentreCost, JacobiansMatchNumericOnesAndTheResidualIsTheCentreOffset) {
+  const Eigen::Isometry3d T_cw = someCameraPose();
+  const double anchor[3] = {1.0, 0.5, 9.0};
+  const Eigen::Vector3d b_cam(2.0, 1.1, 10.5);
+  const optimize::BoxCentreCost cost(b_cam, 0.25);
+  expectJacobiansMatchNumericOnes(cost, 3, T_cw, anchor);
+  double pose[7], r[3];
+  optimize::poseToParams(T_cw, pose);
+  const double* params[] = {pose, anchor};
+  ASSERT_TRUE(cost.Evaluate(params, r, nullptr));
+  const Eigen::Vector3d expected = (T_cw * Eigen::Vector3d(anchor[0], anchor[1], anchor[2]) - b_cam) / 0.25;
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(r[i], expected[i], 1e-12);
 }
 
 // A street: the camera drives 1 m a frame along z in a map whose unit is 20 m (true scale 20); parked

@@ -325,6 +325,39 @@ TEST(ObjectBundleAdjustment, ZeroConfidenceOrNoLandmarkAddsNothing) {
   EXPECT_GT(b.error(4), 0.25);
 }
 
+// Issue 14: a metric map's scale held by the parked car's box centres alone (no landmark, no shape): one
+// anchor for the car, measured by the boxes of all five keyframes, pulls keyframe 4 back as the landmark does.
+TEST(ParkedCarAnchors, PullAKeyframeWithAWrongBaselineBack) {
+  const ScalePyramid pyr(8, 1.2);
+  optimize::BundleAdjustmentOptions anchors;
+  anchors.object_range_sigma = 0.05;  // the scene's boxes have 3 cm noise
+  anchors.object_range_sigma_per_m = 0;
+  optimize::BundleAdjustmentOptions none = anchors;
+  none.object_anchors = false;
+  for (uint64_t seed : {1, 2, 3}) {
+    ObjectScene a(pyr, seed), b(pyr, seed);
+    a.map.objects().erase(7, -1);  // no landmark: the boxes alone
+    b.map.objects().erase(7, -1);
+    const auto ra = optimize::localBundleAdjustment(a.kfs[4], a.map, none);
+    const auto rb = optimize::localBundleAdjustment(b.kfs[4], b.map, anchors);
+    EXPECT_EQ(ra.object_anchor_residuals, 0);
+    EXPECT_EQ(rb.object_anchor_residuals, 5) << "one box a keyframe, fixed ones included";
+    EXPECT_GT(a.error(4), 0.25) << "reprojection alone cannot see the baseline";
+    EXPECT_LT(b.error(4), b.start_error / 5) << "the car's box in keyframe 4 pulls it back";
+  }
+  // Boxes from before the car was called moving no longer count: they belong to where it was parked then.
+  ObjectScene c(pyr, 1);
+  c.map.objects().erase(7, c.map.lastKeyFrameId());
+  EXPECT_EQ(optimize::localBundleAdjustment(c.kfs[4], c.map, anchors).object_anchor_residuals, 0);
+  // A car that is an object node of the BA has its boxes there (camera-object factors), not twice.
+  ObjectScene d(pyr, 1);
+  optimize::BundleAdjustmentOptions both = anchors;
+  both.objects.enabled = true;
+  const auto rd = optimize::localBundleAdjustment(d.kfs[4], d.map, both);
+  EXPECT_EQ(rd.object_box_factors, 5);
+  EXPECT_EQ(rd.object_anchor_residuals, 0);
+}
+
 ObjectLandmark carLandmark(int64_t id) {
   ObjectLandmark l;
   l.id = id;

@@ -37,6 +37,10 @@ struct Camera {
 // Object landmarks (addObjectLandmarks) in the optimisation: Off stores them only; BA adds an object-pose node
 // per landmark with camera-object and map-point-on-surface factors to local BA (docs/object-ba.md).
 enum class ObjectLandmarkMode { Off, BA };
+// How parked cars' metric boxes hold a metric map's scale in local BA (docs/metric-scale.md): one anchor
+// per car measured by its box centres (unbiased), or a range prior per keypoint where its ray enters the
+// box (biased short by how a car fills its box; kept for ablations).
+enum class ObjectScaleHold { Anchors, Ranges };
 
 // ORB extraction (features/orb_extractor.hpp): the pyramid, the FAST thresholds and the share of the
 // budget that static objects (mask label >= 1000) may take.
@@ -101,6 +105,7 @@ struct Options {
   double ground_prior_sigma = 0.2;     // std-dev of one ground point's height, share of the height
   int ground_reference_keyframes = 5;  // keyframes whose median camera height is the reference
   int ground_min_inliers = 25;         // a keyframe's ground plane needs this many points
+  int ground_pool_keyframes = 5;       // its fit also takes the road points of covisible keyframes this close
   // Metric scale (beyond ORB-SLAM2; docs/metric-scale.md): once the ground planes of the first keyframes
   // agree, the map is rescaled so the camera sits camera_height metres over them, and the ground prior
   // (switched on with it) holds that height: poses and points are in metres from then on.
@@ -110,8 +115,10 @@ struct Options {
   // Once metric: the last ground_reference_keyframes fits that say the camera height is off by more than
   // this share (and more than twice their standard error) scale the map back from the oldest of them on.
   double metric_correction_min = 0.02;  // 0: no correction, the ground prior alone holds the scale
-  // Static objects' boxes as a metric source (ObjectBox): range prior std-dev, metres and per metre.
+  // Static objects' boxes as a metric source (ObjectBox), and how they hold the scale once metric; the
+  // std-dev of a box's range (anchors: of its centre), metres and per metre.
   bool object_scale = true;
+  ObjectScaleHold object_scale_hold = ObjectScaleHold::Anchors;
   double object_range_sigma = 0.15;
   double object_range_sigma_per_m = 0.02;
   // Object landmarks in local BA (objects/object_factors.hpp, docs/object-ba.md). Off by default until measured.

@@ -42,8 +42,9 @@ struct FeatureSet {
   // Metres from the camera to where the keypoint's ray enters the metric 3D box of the static object it
   // lies on (OrbSlam::ObjectBox), 0 where there is none. Empty when the frame had no boxes.
   std::vector<float> object_range;
-  // The frame's boxes of parked (static) tracked cars, kept with the keyframe for the camera-object factors
-  // of local BA (objects/object_factors.hpp). Filled only when object landmarks are on.
+  // The frame's boxes of parked (static) tracked cars, kept with the keyframe for local BA: the parked cars'
+  // anchors (metric scale) and the object landmarks' camera-object factors (objects/object_factors.hpp).
+  // Filled only when one of them is on.
   std::vector<ObjectBox> object_boxes;
   FeatureGrid grid;
 

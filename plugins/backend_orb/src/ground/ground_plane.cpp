@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <set>
 
 #include "map/keyframe.hpp"
 #include "map/map_point.hpp"
@@ -60,12 +61,24 @@ std::optional<GroundPlane> fitGroundPlane(const KeyFrame& kf, const GroundPlaneO
   const Eigen::Vector3d down = expected_normal_cam.normalized();
   std::vector<Eigen::Vector3d> pts;
   std::vector<MapPoint*> owners;
-  for (MapPoint* mp : kf.validPoints()) {
-    const Eigen::Vector3d p_cam = kf.T_cw * mp->position;
-    if (p_cam.z() <= 0 || down.dot(p_cam) < options.min_ray_below_horizon * p_cam.z()) continue;
-    pts.push_back(p_cam);
-    owners.push_back(mp);
-  }
+  std::set<const MapPoint*> taken;
+  // Points under the horizon of the keyframe `seen_by` (its own down direction: the same world direction),
+  // in kf's camera frame.
+  auto collect = [&](const KeyFrame& seen_by) {
+    const Eigen::Matrix3d R_seen_kf = seen_by.T_cw.linear() * kf.T_cw.linear().transpose();
+    const Eigen::Vector3d down_seen = R_seen_kf * down;
+    for (MapPoint* mp : seen_by.validPoints()) {
+      const Eigen::Vector3d p_seen = seen_by.T_cw * mp->position;
+      if (p_seen.z() <= 0 || down_seen.dot(p_seen) < options.min_ray_below_horizon * p_seen.z()) continue;
+      if (!taken.insert(mp).second && &seen_by != &kf) continue;  // (the keyframe's own list as it is)
+      pts.push_back(kf.T_cw * mp->position);
+      owners.push_back(mp);
+    }
+  };
+  collect(kf);
+  if (options.pool_keyframes > 0)  // the road the camera drove over since, or will: planar over a few metres
+    for (const KeyFrame* n : kf.covisibles())
+      if (!n->bad && n != &kf && std::abs(n->id - kf.id) <= options.pool_keyframes) collect(*n);
   if (static_cast<int>(pts.size()) < options.min_inliers) return std::nullopt;
 
   const double min_cos_tilt = std::cos(max_tilt_deg * kPi / 180.0);

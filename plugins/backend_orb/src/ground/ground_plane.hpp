@@ -1,7 +1,8 @@
 // Ground plane under a keyframe, from its map points, and the camera's height above it.
 //
-// Contract: fitGroundPlane() looks only at the keyframe's own map points that lie at least
-// `min_ray_below_horizon` (n_expected . p_cam / z) under the horizon, runs a seeded RANSAC over planes
+// Contract: fitGroundPlane() looks at the keyframe's own map points (and, with pool_keyframes, those of its
+// covisible keyframes close in time) that lie at least `min_ray_below_horizon` (n_expected . p_cam / z)
+// under the horizon, runs a seeded RANSAC over planes
 // whose normal is within a given tilt of the expected down direction (the camera's +y axis until a
 // reference exists, then the reference normal), keeps the plane with most inliers
 // (|n . p_cam - h| < inlier_ratio * h) and refines it by least squares.
@@ -32,7 +33,11 @@ struct GroundPlaneOptions {
   int min_inliers = 25;                      // fewer: no plane
   int ransac_iterations = 150;
   int reference_keyframes = 5;  // reference height: median over the first fits
-  double sigma_ratio = 0.2;     // prior std-dev of one ground point's height, as a share of h
+  // Also the road points of covisible keyframes at most this many keyframes older or newer (each under the
+  // horizon of a keyframe that sees it), in this keyframe's frame: a road is planar over a few metres, and a
+  // keyframe alone may see too few road points (KITTI 06). 0: the keyframe's own points only.
+  int pool_keyframes = 0;
+  double sigma_ratio = 0.2;  // prior std-dev of one ground point's height, as a share of h
 };
 
 struct GroundPlane {

@@ -91,11 +91,11 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
     for (MapPoint* mp : kf->validPoints()) ++obs_hist[std::min(mp->numObservations(), 5)];
     std::fprintf(stderr,
                  "  kf %ld frame %ld: points %zu (obs 2:%d 3:%d 4:%d 5+:%d) new %d covis %zu recent %zu culled %d "
-                 "map %zu/%zu ground %d kfs %d res (h_ref %.4f)\n",
+                 "map %zu/%zu ground %d kfs %d res (h_ref %.4f) ba outliers %d anchors %d\n",
                  kf->id, static_cast<long>(kf->frame_index), kf->validPoints().size(), obs_hist[2], obs_hist[3],
                  obs_hist[4], obs_hist[5], last_new_points_, kf->covisibles().size(), recent_.size(), culled,
                  map_.numKeyFrames(), map_.points().size(), last_ba_.ground_keyframes, last_ba_.ground_residuals,
-                 groundReferenceHeight());
+                 groundReferenceHeight(), last_ba_.outliers_removed, last_ba_.object_anchor_residuals);
   }
 }
 

@@ -40,7 +40,8 @@ struct LocalMapperOptions {
   double metric_correction_min = 0.02;
   double metric_correction_max = 0.05;  // after settling: larger local corrections are not trusted
   // Static objects' metric boxes (FeatureSet::object_range): a scale source like the ground fits, and once
-  // metric a range prior in local BA with this std-dev (m, plus per metre). 0: not used.
+  // metric they hold the scale in local BA (ba.object_anchors or ba.object_range_priors) with this std-dev
+  // (m, plus per metre). 0: not used.
   double object_range_sigma = 0;
   double object_range_sigma_per_m = 0.02;
 };

@@ -45,6 +45,9 @@ struct Problem {
   };
   std::vector<GroundEdge> ground_edges;
   std::vector<GroundEdge> range_edges;              // ObjectRangeCost, same shape
+  std::vector<GroundEdge> anchor_edges;             // BoxCentreCost: pose and anchor
+  std::vector<int32_t> anchor_ids;                  // parked cars with an anchor, increasing
+  std::vector<double> anchor_storage;               // 3 numbers an anchor, in anchor_ids' order
   std::unique_ptr<objects::ObjectProblem> objects;  // object landmarks' nodes and factors (or none)
 
   void allocate() {
@@ -99,6 +102,9 @@ double solve(Problem& P, bool robust, int iterations, double chi2_threshold, boo
     for (auto& g : *edges)
       if (problem.HasParameterBlock(g.pose) && problem.HasParameterBlock(g.point))
         problem.AddResidualBlock(g.cost.get(), &ground_huber, g.pose, g.point);
+  ceres::HuberLoss anchor_huber(std::sqrt(7.815));  // residuals in sigmas: chi-square 95 % of 3 dof
+  for (auto& a : P.anchor_edges)
+    if (problem.HasParameterBlock(a.pose)) problem.AddResidualBlock(a.cost.get(), &anchor_huber, a.pose, a.point);
   std::vector<std::unique_ptr<ceres::HuberLoss>> object_losses;
   if (P.objects)
     for (auto& f : P.objects->factors) {
@@ -122,6 +128,9 @@ double solve(Problem& P, bool robust, int iterations, double chi2_threshold, boo
   if (P.objects)
     for (size_t i = 0; i < P.objects->entries.size(); ++i)
       if (problem.HasParameterBlock(P.objects->node(i))) ordering->AddElementToGroup(P.objects->node(i), 2);
+  // Anchors in a group of their own, in id order (their array is).
+  for (size_t i = 0; i < P.anchor_ids.size(); ++i)
+    if (problem.HasParameterBlock(&P.anchor_storage[3 * i])) ordering->AddElementToGroup(&P.anchor_storage[3 * i], 3);
   for (KeyFrame* kf : P.fixed)
     if (problem.HasParameterBlock(P.poses[kf])) problem.SetParameterBlockConstant(P.poses[kf]);
   if (fix_origin_only || origin) {
@@ -207,6 +216,51 @@ void addObjectRangeEdges(Problem& P, const BundleAdjustmentOptions& options, Bun
   }
 }
 
+// One anchor per parked car that a keyframe of the problem saw, if one that moves did and at least two did:
+// started at the mean of the boxes' centres in the world, with a BoxCentreCost per box.
+void addObjectAnchors(Problem& P, const Map& map, const BundleAdjustmentOptions& options,
+                      BundleAdjustmentReport* report) {
+  struct Seen {
+    double* pose;
+    Eigen::Vector3d b_cam, b_world;
+    bool moving;
+  };
+  std::map<int32_t, std::vector<Seen>> seen;  // by object id
+  const std::set<const KeyFrame*> moving_kfs(P.moving.begin(), P.moving.end());
+  for (const auto& [kf, pose] : P.poses) {
+    if (kf->bad) continue;
+    const bool moving = moving_kfs.count(kf) > 0;
+    for (const ObjectBox& b : kf->features->object_boxes) {
+      // Boxes from before the car was called moving belong to where it was parked then.
+      if (!b.parked || b.object_id < 0 || kf->id <= map.objects().boxesAfter(b.object_id)) continue;
+      const Eigen::Vector3d b_cam = b.T_cam_box.translation();
+      seen[b.object_id].push_back({pose, b_cam, kf->T_cw.inverse() * b_cam, moving});
+    }
+  }
+  // A car that is an object node of this BA has its boxes there already (camera-object factors).
+  if (P.objects && options.objects.use_boxes)
+    for (const objects::ObjectEntry* e : P.objects->entries) seen.erase(static_cast<int32_t>(e->landmark.id));
+  for (auto it = seen.begin(); it != seen.end();) {
+    const auto& v = it->second;
+    const bool useful = v.size() >= 2 && std::any_of(v.begin(), v.end(), [](const Seen& s) { return s.moving; });
+    it = useful ? std::next(it) : seen.erase(it);
+  }
+  P.anchor_storage.assign(3 * seen.size(), 0.0);  // allocated once: the edges point into it
+  for (const auto& [id, views] : seen) {
+    double* anchor = &P.anchor_storage[3 * P.anchor_ids.size()];
+    P.anchor_ids.push_back(id);
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const Seen& s : views) mean += s.b_world;
+    Eigen::Map<Eigen::Vector3d> start(anchor);
+    start = mean / static_cast<double>(views.size());
+    for (const Seen& s : views) {
+      const double sigma = options.object_range_sigma + options.object_range_sigma_per_m * s.b_cam.norm();
+      P.anchor_edges.push_back({s.pose, anchor, std::make_unique<BoxCentreCost>(s.b_cam, sigma)});
+      ++report->object_anchor_residuals;
+    }
+  }
+}
+
 }  // namespace
 
 BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const BundleAdjustmentOptions& options,
@@ -239,7 +293,7 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   P.allocate();
   addEdges(P, options.chi2_threshold, options.trusted_weight);
   if (ground && ground->reference && ground->reference->ready()) addGroundEdges(P, *ground, &report);
-  if (options.object_range_sigma > 0) addObjectRangeEdges(P, options, &report);
+  if (options.object_range_sigma > 0 && options.object_range_priors) addObjectRangeEdges(P, options, &report);
   if (options.objects.enabled && map.objects().size() > 0) {
     const std::set<const KeyFrame*> moving(P.moving.begin(), P.moving.end());
     P.objects = objects::buildObjectProblem(map.objects(), P.poses, moving, P.positions, options.objects);
@@ -247,6 +301,7 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
     report.object_box_factors = P.objects->box_factors;
     report.object_surface_factors = P.objects->surface_factors;
   }
+  if (options.object_range_sigma > 0 && options.object_anchors) addObjectAnchors(P, map, options, &report);
   report.keyframes = static_cast<int>(P.moving.size());
   report.fixed_keyframes = static_cast<int>(P.fixed.size());
   report.points = static_cast<int>(P.points.size());

@@ -22,17 +22,25 @@ struct BundleAdjustmentOptions {
   double chi2_threshold = 5.991;
   int max_local_keyframes = 0;  // 0 = every covisible keyframe
   double trusted_weight = 1.0;  // information multiplier for points on static objects
-  // Metric range priors from static objects' 3D boxes (FeatureSet::object_range), once the map is metric:
-  // sigma = object_range_sigma + object_range_sigma_per_m * range. Off while object_range_sigma is 0.
+  // Parked cars' metric 3D boxes hold a metric map's scale (off while object_range_sigma is 0), with
+  // sigma = object_range_sigma + object_range_sigma_per_m * range:
+  // - object_anchors: one anchor per parked car (its box centre in the world) that every keyframe's box of
+  //   the car measures (BoxCentreCost; boxes in FeatureSet::object_boxes). Unbiased: a detector's box centre
+  //   does not depend on how the car fills its box.
+  // - object_range_priors: each keypoint on a parked car at the range where its ray enters the car's box
+  //   (ObjectRangeCost, FeatureSet::object_range). Biased short: a car's visible surface lies behind its
+  //   box's faces (windows, sloping screens, wheels; docs/metric-scale.md).
   double object_range_sigma = 0;
   double object_range_sigma_per_m = 0.02;
+  bool object_anchors = true;
+  bool object_range_priors = false;
   // Object landmarks of the map (Map::objects()) as 4-DoF nodes with box and surface factors (off by default).
   objects::ObjectFactorOptions objects;
 };
 
 struct BundleAdjustmentReport {
   int keyframes = 0, fixed_keyframes = 0, points = 0, observations = 0, outliers_removed = 0;
-  int ground_keyframes = 0, ground_residuals = 0, object_range_residuals = 0;
+  int ground_keyframes = 0, ground_residuals = 0, object_range_residuals = 0, object_anchor_residuals = 0;
   int object_nodes = 0, object_box_factors = 0, object_surface_factors = 0;
   double initial_cost = 0, final_cost = 0;
 };

@@ -37,13 +37,23 @@ inline bool reproject(const double* pose, const Eigen::Vector3d& pw, const Intri
   return true;
 }
 
-inline void poseJacobian(const Eigen::Matrix<double, 2, 3>& J_proj, const Eigen::Vector3d& pc, double* out) {
-  Eigen::Map<Eigen::Matrix<double, 2, 7, Eigen::RowMajor>> J(out);
+// The Jacobian on the pose's left tangent [rho, phi] (d pc = rho + phi x pc) of a residual whose Jacobian on
+// the camera-frame point pc is J_pc (rows x 3); the 7th column (the quaternion's 4th number) is zero.
+template <int Rows>
+void poseJacobian(const Eigen::Matrix<double, Rows, 3>& J_pc, const Eigen::Vector3d& pc, double* out) {
+  Eigen::Map<Eigen::Matrix<double, Rows, 7, Eigen::RowMajor>> J(out);
   Eigen::Matrix3d skew;
   skew << 0, -pc.z(), pc.y(), pc.z(), 0, -pc.x(), -pc.y(), pc.x(), 0;
-  J.leftCols<3>() = J_proj;
-  J.block<2, 3>(0, 3) = -J_proj * skew;
+  J.template leftCols<3>() = J_pc;
+  J.template block<Rows, 3>(0, 3) = -J_pc * skew;
   J.col(6).setZero();
+}
+
+// A Jacobian block into Ceres' row-major array.
+template <int Rows, int Cols>
+void writeJacobian(const Eigen::Matrix<double, Rows, Cols>& J, double* out) {
+  Eigen::Map<Eigen::Matrix<double, Rows, Cols, Eigen::RowMajor>> m(out);
+  m = J;
 }
 }  // namespace detail
 
@@ -82,10 +92,7 @@ class ReprojectionCost : public ceres::SizedCostFunction<2, 7, 3> {
     detail::reproject(params[0], Eigen::Vector3d(params[1][0], params[1][1], params[1][2]), K_, obs_, inv_sigma_,
                       residuals, pc, J_proj, R, need);
     if (need && jacobians[0]) detail::poseJacobian(J_proj, pc, jacobians[0]);
-    if (need && jacobians[1]) {
-      Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> Jp(jacobians[1]);
-      Jp = J_proj * R;
-    }
+    if (need && jacobians[1]) detail::writeJacobian<2, 3>(J_proj * R, jacobians[1]);
     return true;
   }
 
@@ -152,6 +159,30 @@ class ObjectRangeCost : public ceres::SizedCostFunction<1, 7, 3> {
 
  private:
   double d_, inv_sigma_;
+};
+
+// A parked car's box centre as a metric 3D measurement: the camera sees the car's anchor p_world (one per
+// parked track, the box centre in the world) at b_cam, the centre of its metric 3D box in this frame.
+// Residual in sigmas: (T_cw p_world - b_cam) / sigma. Unlike ObjectRangeCost it does not depend on how a
+// car fills its box, only on the detector's centre.
+class BoxCentreCost : public ceres::SizedCostFunction<3, 7, 3> {
+ public:
+  BoxCentreCost(const Eigen::Vector3d& b_cam, double sigma) : b_(b_cam), inv_sigma_(1.0 / sigma) {}
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    Eigen::Matrix3d R;
+    const Eigen::Vector3d pc =
+        detail::toCamera(params[0], Eigen::Vector3d(params[1][0], params[1][1], params[1][2]), R);
+    Eigen::Map<Eigen::Vector3d> r(residuals);
+    r = (pc - b_) * inv_sigma_;
+    const Eigen::Matrix3d J_pc = Eigen::Matrix3d::Identity() * inv_sigma_;
+    if (jacobians && jacobians[0]) detail::poseJacobian<3>(J_pc, pc, jacobians[0]);
+    if (jacobians && jacobians[1]) detail::writeJacobian<3, 3>(J_pc * R, jacobians[1]);
+    return true;
+  }
+
+ private:
+  Eigen::Vector3d b_;
+  double inv_sigma_;
 };
 
 }  // namespace beslam::orb::optimize
