@@ -15,9 +15,8 @@ std::string rangeText(const FrameRange& r) {
 
 // A frame number: digits only (no sign, no spaces inside), at most 12 of them.
 std::int64_t frameNumberOf(const std::string& text, const std::string& item) {
-  if (text.empty() || text.size() > 12 || !std::all_of(text.begin(), text.end(), [](unsigned char c) {
-        return std::isdigit(c) != 0;
-      }))
+  if (text.empty() || text.size() > 12 ||
+      !std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c) != 0; }))
     throw Error("'" + item + "' is not a frame number or a range FIRST-LAST of frame numbers");
   return std::stoll(text);
 }
@@ -35,7 +34,8 @@ std::vector<FrameRange> parseFrameRanges(const std::string& text) {
   std::size_t start = 0;
   while (true) {
     const std::size_t comma = text.find(',', start);
-    const std::string item = trimmed(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    const std::string item =
+        trimmed(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     if (item.empty()) throw Error("empty entry in '" + text + "' (expected e.g. \"520-539\" or \"520-539,600\")");
     const std::size_t dash = item.find('-');
     FrameRange r;

@@ -11,9 +11,7 @@ class BlackedOutDataset final : public Dataset {
  public:
   BlackedOutDataset(std::unique_ptr<Dataset> inner, std::vector<FrameRange> ranges)
       : inner_(std::move(inner)), ranges_(std::move(ranges)) {}
-  std::string describe() const override {
-    return inner_->describe() + ", black frames " + frameRangesText(ranges_);
-  }
+  std::string describe() const override { return inner_->describe() + ", black frames " + frameRangesText(ranges_); }
   std::size_t size() const override { return inner_->size(); }
   Frame load(std::size_t i) const override {
     Frame frame = inner_->load(i);
@@ -49,11 +47,11 @@ std::unique_ptr<Dataset> blackOut(std::unique_ptr<Dataset> dataset, const std::v
       holds = r.contains(f);
     }
     if (!holds)
-      throw Error("range " + frameRangesText({r}) + " holds none of the " + std::to_string(n) + " selected frames (" +
-                  (n ? "numbers " + std::to_string(dataset->frameNumber(0)) + ".." +
-                           std::to_string(dataset->frameNumber(n - 1))
-                     : std::string("none")) +
-                  ")");
+      throw Error(
+          "range " + frameRangesText({r}) + " holds none of the " + std::to_string(n) + " selected frames (" +
+          (n ? "numbers " + std::to_string(dataset->frameNumber(0)) + ".." + std::to_string(dataset->frameNumber(n - 1))
+             : std::string("none")) +
+          ")");
   }
   return std::make_unique<BlackedOutDataset>(std::move(dataset), ranges);
 }
