@@ -118,6 +118,21 @@ TEST_F(RunTest, WritesEveryOutput) {
   EXPECT_EQ(mask.type(), CV_16UC1);
 }
 
+// dataset.black_frames (a camera blackout): the run describes it, and a range past the sequence is one error
+// line naming the pipeline file and the key.
+TEST_F(RunTest, BlackFramesRunAndARangePastTheSequenceIsOneError) {
+  const std::string p = pipeline();
+  const Result good = beslam("run " + p + " --set dataset.black_frames=2-3 --out " + (dir_ / "black").string(), dir_);
+  ASSERT_EQ(good.code, 0) << good.err;
+  EXPECT_NE(slurp(dir_ / "black/summary.json").find(", black frames 2-3"), std::string::npos);
+  const Result bad = beslam("run " + p + " --set dataset.black_frames=10-19 --out " + (dir_ / "past").string(), dir_);
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_EQ(lines(bad.err), 1) << bad.err;
+  EXPECT_NE(bad.err.find(p + ": dataset.black_frames: range 10-19 holds none of the 6 selected frames"),
+            std::string::npos)
+      << bad.err;
+}
+
 // SIGTERM or SIGINT at any frame: the run ends after that frame, exits 128 + the signal, and leaves the
 // outputs of the frames done (a trajectory `beslam eval` scores, a summary marked interrupted).
 TEST_F(RunTest, InterruptKeepsTheFramesDone) {

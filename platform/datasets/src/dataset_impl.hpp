@@ -43,6 +43,7 @@ class LoadedDataset final : public Dataset {
   std::optional<trajectory::Trajectory> groundTruth() const override { return c_.ground_truth; }
   std::string labelPath() const override { return c_.label_path; }
   std::optional<double> cameraHeight() const override { return c_.camera_height; }
+  std::int64_t frameNumber(std::size_t i) const override { return c_.frames.at(i).index; }
 
  private:
   DatasetContents c_;

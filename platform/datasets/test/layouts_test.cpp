@@ -115,6 +115,57 @@ TEST(KittiOdometry, FrameRangeAndColourCamera) {
   EXPECT_TRUE(ds->T_cam_lidar()->isApprox(T_cam2_cam0 * *ds0->T_cam_lidar()));
 }
 
+// A camera blackout: the frames in the ranges load all black (grey and colour, same size and type), every
+// other frame and everything else about the dataset unchanged; a range holding no selected frame is an error.
+TEST(BlackFrames, FramesInTheRangesAreBlackOthersUntouched) {
+  OdometryFixture fx(7);
+  DatasetOptions o = fx.options();
+  o.camera = "image_2";
+  o.load_color = true;
+  o.load_lidar = true;
+  const auto plain = openDataset(o);
+  const auto ds = blackOut(openDataset(o), parseFrameRanges("2-3,5"));
+  ASSERT_EQ(ds->size(), 7u);
+  EXPECT_EQ(ds->describe(), plain->describe() + ", black frames 2-3,5");
+  for (std::size_t i = 0; i < ds->size(); ++i) {
+    const Frame f = ds->load(i), p = plain->load(i);
+    const bool black = i == 2 || i == 3 || i == 5;
+    EXPECT_EQ(ds->frameNumber(i), static_cast<std::int64_t>(i));
+    ASSERT_EQ(f.gray.size(), p.gray.size());
+    ASSERT_EQ(f.gray.type(), p.gray.type());
+    ASSERT_EQ(f.color.size(), p.color.size());
+    ASSERT_EQ(f.color.type(), p.color.type());
+    ASSERT_GT(cv::norm(p.gray, cv::NORM_INF), 0) << "the fixture's frame " << i << " is black already";
+    if (black) {
+      EXPECT_EQ(cv::norm(f.gray, cv::NORM_INF), 0) << "frame " << i;
+      EXPECT_EQ(cv::norm(f.color, cv::NORM_INF), 0) << "frame " << i;
+    } else {
+      EXPECT_EQ(cv::norm(f.gray, p.gray, cv::NORM_INF), 0) << "frame " << i;
+      EXPECT_EQ(cv::norm(f.color, p.color, cv::NORM_INF), 0) << "frame " << i;
+    }
+    EXPECT_EQ(f.index, p.index);
+    EXPECT_EQ(f.timestamp, p.timestamp);
+    EXPECT_EQ(f.lidar_xyzi, p.lidar_xyzi) << "frame " << i;  // only the camera goes dark
+  }
+  ASSERT_TRUE(ds->groundTruth());
+  EXPECT_EQ(ds->groundTruth()->size(), plain->groundTruth()->size());
+  EXPECT_EQ(ds->camera().width, plain->camera().width);
+  EXPECT_TRUE(ds->T_cam_lidar()->isApprox(*plain->T_cam_lidar()));
+}
+
+TEST(BlackFrames, ARangeOutsideTheSelectedFramesIsAnError) {
+  OdometryFixture fx(7);
+  DatasetOptions o = fx.options();
+  o.first = 2;
+  o.last = 4;
+  EXPECT_BESLAM_ERROR(blackOut(openDataset(o), parseFrameRanges("5-9")),
+                      "range 5-9 holds none of the 3 selected frames (numbers 2..4)");
+  EXPECT_BESLAM_ERROR(blackOut(openDataset(o), parseFrameRanges("0-1,3")), "range 0-1 holds none");
+  o.step = 2;  // frames 2 and 4
+  EXPECT_BESLAM_ERROR(blackOut(openDataset(o), parseFrameRanges("3")), "range 3 holds none");
+  EXPECT_EQ(blackOut(openDataset(o), parseFrameRanges("3-4"))->size(), 2u);
+}
+
 TEST(KittiOdometry, LayoutErrors) {
   OdometryFixture fx;
   DatasetOptions o = fx.options();

@@ -306,6 +306,13 @@ class Run {
     dopt.step = spec_.dataset.step;
     dopt.ego_poses = spec_.dataset.ego_poses;
     dataset_ = datasets::openDataset(dopt);
+    if (!spec_.dataset.black_frames.empty()) {
+      try {
+        dataset_ = datasets::blackOut(std::move(dataset_), spec_.dataset.black_frames);
+      } catch (const Error& e) {
+        throw Error(spec_.path + ": dataset.black_frames: " + e.what());
+      }
+    }
     if (dataset_->size() == 0) throw Error(dataset_->describe() + ": no frames in the selected range");
     dataset_record_.description = dataset_->describe();
     if (dopt.type == "kitti_odometry") {

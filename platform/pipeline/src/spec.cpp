@@ -295,6 +295,13 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
   spec.dataset.ego_poses = value(dataset, "ego_poses").text;
   spec.dataset.camera_height = value(dataset, "camera_height").number;
   spec.dataset.synth_set = value(dataset, "synth_set").text;
+  if (const std::string black = value(dataset, "black_frames").text; !black.empty()) {
+    try {
+      spec.dataset.black_frames = parseFrameRanges(black);
+    } catch (const Error& e) {
+      fail(path, doc["dataset"]["black_frames"], "dataset.black_frames", e.what());
+    }
+  }
   if (spec.dataset.last >= 0 && spec.dataset.last < spec.dataset.first)
     fail(path, doc["dataset"]["last"], "dataset.last", "is before dataset.first");
 

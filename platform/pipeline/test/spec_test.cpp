@@ -183,3 +183,19 @@ TEST_F(PipelineSpecTest, DatasetPlaceholdersFollowOverrides) {
   expectError(std::string(kGood) + "detector: {plugin: d, path: \"${dataset.root\"}\n",
               {"detector.path: unterminated placeholder"});
 }
+
+TEST_F(PipelineSpecTest, BlackFramesAreParsedAndBadOnesNameTheFileAndKey) {
+  const auto spec = loadPipeline(write(kGood), {"dataset.black_frames=520-539,600"});
+  ASSERT_EQ(spec.dataset.black_frames.size(), 2u);
+  EXPECT_EQ(spec.dataset.black_frames[0].first, 520);
+  EXPECT_EQ(spec.dataset.black_frames[0].last, 539);
+  EXPECT_EQ(spec.dataset.black_frames[1].first, 600);
+  EXPECT_TRUE(loadPipeline(write(kGood)).dataset.black_frames.empty());
+  const std::string path = (dir_ / "pipeline.yaml").string();
+  expectError(
+      "dataset:\n  type: kitti_odometry\n  root: data\n  sequence: \"06\"\n  black_frames: 539-520\n"
+      "backend: {plugin: backend_pose_replay, poses: poses.txt}\n",
+      {path + ":5: dataset.black_frames: range 539-520 ends before it starts"});
+  expectError(kGood, {path, "dataset.black_frames", "'x' is not a frame number"}, {"dataset.black_frames=x"});
+  expectError(kGood, {path, "dataset.black_frames", "does not come after"}, {"dataset.black_frames=10-20,15"});
+}

@@ -13,7 +13,9 @@
 #include "map/map_point.hpp"
 #include "matching/matcher.hpp"
 #include "optimize/bundle_adjustment.hpp"
+#include "optimize/pose_optimizer.hpp"
 #include "place/keyframe_database.hpp"
+#include "tracking/pnp_pose.hpp"
 
 namespace beslam::orb {
 namespace {
@@ -136,61 +138,122 @@ std::vector<KeyFrame*> LoopCloser::detect(KeyFrame* kf) {
   return consistent;
 }
 
+// The loop transform from 3D-3D matches: the loop keyframe's map points against the new keyframe's map
+// points, found by bag of words, in a seeded Sim3 RANSAC (SE3 once metric). Only the new keyframe's
+// keypoints with a map point are searched (ORB-SLAM2 matches map point to map point here): a keypoint
+// without one would take a loop point, or spoil its ratio test, without giving a measurement.
+std::optional<LoopCloser::Hypothesis> LoopCloser::fromPointMatches(KeyFrame* kf, KeyFrame* loop_kf, bool metric,
+                                                                   bool debug) {
+  Frame probe(kf->frame_index, kf->timestamp, kf->features);
+  for (const auto& [node, indices] : kf->feature_vector) {
+    std::vector<int> with_point;
+    for (int j : indices)
+      if (kf->points[static_cast<size_t>(j)] && !kf->points[static_cast<size_t>(j)]->bad) with_point.push_back(j);
+    if (!with_point.empty()) probe.feature_vector.emplace(node, std::move(with_point));
+  }
+  probe.has_bow = true;
+  const int bow_matches = matching::searchByBoW(loop_kf, probe, 0.75f, true);
+  if (debug)
+    std::fprintf(stderr, "  loop candidate frame %ld for frame %ld: %d BoW matches point to point\n",
+                 static_cast<long>(loop_kf->frame_index), static_cast<long>(kf->frame_index), bow_matches);
+  if (bow_matches < options_.min_bow_matches) return std::nullopt;
+  std::vector<loop::PointMatch> matches;
+  std::vector<std::pair<int, MapPoint*>> pairs;  // new keyframe keypoint -> loop map point
+  for (size_t j = 0; j < probe.points.size(); ++j) {
+    MapPoint* loop_mp = probe.points[j];
+    MapPoint* cur_mp = kf->points[j];
+    if (!loop_mp || !cur_mp || cur_mp->bad || loop_mp->bad) continue;
+    const int i = loop_mp->index(loop_kf);
+    if (i < 0) continue;
+    loop::PointMatch m;
+    m.p_c1 = loop_kf->T_cw * loop_mp->position;
+    m.p_c2 = kf->T_cw * cur_mp->position;
+    const cv::KeyPoint& k1 = loop_kf->keypoint(static_cast<size_t>(i));
+    const cv::KeyPoint& k2 = kf->keypoint(j);
+    m.uv1 = {k1.pt.x, k1.pt.y};
+    m.uv2 = {k2.pt.x, k2.pt.y};
+    m.sigma2_1 = pyramid_.sigma2[static_cast<size_t>(k1.octave)];
+    m.sigma2_2 = pyramid_.sigma2[static_cast<size_t>(k2.octave)];
+    matches.push_back(m);
+    pairs.emplace_back(static_cast<int>(j), loop_mp);
+  }
+  loop::Sim3RansacOptions ransac;
+  ransac.min_inliers = options_.min_sim3_inliers;
+  ransac.fix_scale = metric;
+  ransac.seed = options_.seed + ransac_calls_++;
+  const auto found = loop::ransacSim3(matches, intrinsics(kf->camera), ransac);
+  if (debug)
+    std::fprintf(stderr, "    %zu 3D-3D matches, RANSAC inliers %d\n", matches.size(), found ? found->inlier_count : 0);
+  if (!found) return std::nullopt;
+  Hypothesis h;
+  h.S_cur_loop = found->S_21;
+  for (size_t k = 0; k < pairs.size(); ++k)
+    if (found->inliers[k]) h.matches.push_back(pairs[k]);
+  return h;
+}
+
+// Metric map only: the new keyframe's pose in the loop keyframe's part of the map from 2D-3D matches (the
+// loop keyframe's map points against every keypoint of the new keyframe, by bag of words), EPnP in a
+// seeded RANSAC and pose-only optimisation, as relocalisation finds a lost frame's pose. With the scale
+// known the loop transform is a rigid pose, which the old points' images fix on their own: this needs no
+// triangulated point on the new side, which a keyframe just made on a revisit has few of where the old
+// points are (two-lap urban_loop, seed 2: 19-29 3D-3D matches, 167 to 2D).
+std::optional<LoopCloser::Hypothesis> LoopCloser::fromImageMatches(KeyFrame* kf, KeyFrame* loop_kf, bool debug) {
+  Frame probe(kf->frame_index, kf->timestamp, kf->features);
+  probe.feature_vector = kf->feature_vector;
+  probe.has_bow = true;
+  const int bow_matches = matching::searchByBoW(loop_kf, probe, 0.75f, true);
+  if (bow_matches < options_.min_bow_matches) return std::nullopt;
+  PnpOptions pnp;
+  pnp.seed = options_.seed + ransac_calls_++;
+  pnp.threshold_px = 2.45f;  // chi-square 5.991 (2 dof) at level 0
+  pnp.min_inliers = options_.min_sim3_inliers;
+  pnp.epnp = true;
+  const int pnp_inliers = poseFromMatches(probe, kf->camera, pnp);
+  int good = 0;
+  std::vector<std::pair<int, MapPoint*>> pairs;
+  if (pnp_inliers >= 0) {
+    std::vector<optimize::PoseObservation> obs;
+    for (size_t j = 0; j < probe.points.size(); ++j) {
+      if (!probe.points[j]) continue;
+      const cv::KeyPoint& kp = kf->keypoint(j);
+      obs.push_back({probe.points[j]->position, Eigen::Vector2d(kp.pt.x, kp.pt.y),
+                     pyramid_.inv_scale[static_cast<size_t>(kp.octave)]});
+      pairs.emplace_back(static_cast<int>(j), probe.points[j]);
+    }
+    std::vector<bool> outlier;
+    good = optimize::optimizePose(kf->camera, obs, probe.T_cw, outlier);
+    for (size_t k = pairs.size(); k-- > 0;)
+      if (outlier[k]) pairs.erase(pairs.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+  if (debug)
+    std::fprintf(stderr, "    %d BoW matches to keypoints, PnP inliers %d, after pose optimisation %d\n", bow_matches,
+                 pnp_inliers, good);
+  if (pnp_inliers < 0 || good < options_.min_sim3_inliers) return std::nullopt;
+  Hypothesis h;
+  h.S_cur_loop = Sim3::fromIsometry(probe.T_cw) * Sim3::fromIsometry(loop_kf->T_cw).inverse();
+  h.matches = std::move(pairs);
+  return h;
+}
+
 bool LoopCloser::process(KeyFrame* kf, bool metric) {
   poses_before_.clear();
   if (kf->bad) return false;
   const std::vector<KeyFrame*> candidates = detect(kf);
+  const bool debug = std::getenv("BESLAM_ORB_DEBUG") != nullptr;
   for (KeyFrame* loop_kf : candidates) {
     if (loop_kf->bad) continue;
     ++stats_.candidates_checked;
-
-    // BoW matches: the loop keyframe's map points against the new keyframe's keypoints.
-    Frame probe(kf->frame_index, kf->timestamp, kf->features);
-    probe.feature_vector = kf->feature_vector;
-    probe.has_bow = true;
-    const int bow_matches = matching::searchByBoW(loop_kf, probe, 0.75f, true);
-    const bool debug = std::getenv("BESLAM_ORB_DEBUG") != nullptr;
-    if (debug)
-      std::fprintf(stderr, "  loop candidate frame %ld for frame %ld: %d BoW matches\n",
-                   static_cast<long>(loop_kf->frame_index), static_cast<long>(kf->frame_index), bow_matches);
-    if (bow_matches < options_.min_bow_matches) continue;
-    std::vector<loop::PointMatch> matches;
-    std::vector<std::pair<int, MapPoint*>> pairs;  // new keyframe keypoint -> loop map point
-    for (size_t j = 0; j < probe.points.size(); ++j) {
-      MapPoint* loop_mp = probe.points[j];
-      MapPoint* cur_mp = kf->points[j];
-      if (!loop_mp || !cur_mp || cur_mp->bad || loop_mp->bad) continue;
-      const int i = loop_mp->index(loop_kf);
-      if (i < 0) continue;
-      loop::PointMatch m;
-      m.p_c1 = loop_kf->T_cw * loop_mp->position;
-      m.p_c2 = kf->T_cw * cur_mp->position;
-      const cv::KeyPoint& k1 = loop_kf->keypoint(static_cast<size_t>(i));
-      const cv::KeyPoint& k2 = kf->keypoint(j);
-      m.uv1 = {k1.pt.x, k1.pt.y};
-      m.uv2 = {k2.pt.x, k2.pt.y};
-      m.sigma2_1 = pyramid_.sigma2[static_cast<size_t>(k1.octave)];
-      m.sigma2_2 = pyramid_.sigma2[static_cast<size_t>(k2.octave)];
-      matches.push_back(m);
-      pairs.emplace_back(static_cast<int>(j), loop_mp);
-    }
-    loop::Sim3RansacOptions ransac;
-    ransac.min_inliers = options_.min_sim3_inliers;
-    ransac.fix_scale = metric;
-    ransac.seed = options_.seed + ransac_calls_++;
-    const auto found = loop::ransacSim3(matches, intrinsics(kf->camera), ransac);
-    if (debug)
-      std::fprintf(stderr, "    %zu 3D-3D matches, RANSAC inliers %d\n", matches.size(),
-                   found ? found->inlier_count : 0);
+    std::optional<Hypothesis> found = fromPointMatches(kf, loop_kf, metric, debug);
+    if (!found && metric) found = fromImageMatches(kf, loop_kf, debug);
     if (!found) continue;
 
     // The new keyframe's pose if the loop is right; the loop neighbourhood projected with it.
-    const Sim3 S_cur_loop = found->S_21;
+    const Sim3 S_cur_loop = found->S_cur_loop;
     const Sim3 S_cw_corrected = S_cur_loop * Sim3::fromIsometry(loop_kf->T_cw);
-    std::vector<std::pair<int, MapPoint*>> inliers;
+    std::vector<std::pair<int, MapPoint*>> inliers = std::move(found->matches);
     std::set<int> used;
-    for (size_t k = 0; k < pairs.size(); ++k)
-      if (found->inliers[k]) inliers.push_back(pairs[k]), used.insert(pairs[k].first);
+    for (const auto& [j, mp] : inliers) used.insert(j);
     std::vector<MapPoint*> loop_points;
     std::set<long> seen;
     std::vector<KeyFrame*> loop_neighbourhood = loop_kf->covisibles();

@@ -6,7 +6,9 @@
 //    neighbours (accumulated score >= 0.75 x the best group); a candidate must be consistent (its group
 //    overlaps a candidate group of the previous keyframe) for `consistency` keyframes in a row.
 // 2. Geometry: BoW matches between map points (>= 20), a seeded Sim3 RANSAC (SE3 once the map is
-//    metric), then the loop keyframe's neighbourhood projected into the new keyframe: >= 40 matches.
+//    metric); on a metric map, when that finds no transform, the new keyframe's pose from the loop
+//    keyframe's points in its image (BoW matches to every keypoint, EPnP RANSAC, pose optimisation: >= 20);
+//    then the loop keyframe's neighbourhood projected into the new keyframe: >= 40 matches.
 // 3. The BEV object check (BE-SLAM): parked cars (static-object map points, grouped by object) that the
 //    loop keyframe's neighbourhood sees must, after the loop transform, lie near the ones the new
 //    keyframe sees; a candidate whose parked cars mostly disagree is rejected and counted.
@@ -18,6 +20,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <set>
 #include <utility>
 #include <vector>
@@ -81,7 +84,13 @@ class LoopCloser {
     std::set<long> keyframe_ids;
     int consistency = 0;
   };
+  struct Hypothesis {
+    loop::Sim3 S_cur_loop;                           // maps the loop keyframe's camera frame into the new one's
+    std::vector<std::pair<int, MapPoint*>> matches;  // new keyframe keypoint -> loop map point (inliers)
+  };
   std::vector<KeyFrame*> detect(KeyFrame* kf);
+  std::optional<Hypothesis> fromPointMatches(KeyFrame* kf, KeyFrame* loop_kf, bool metric, bool debug);
+  std::optional<Hypothesis> fromImageMatches(KeyFrame* kf, KeyFrame* loop_kf, bool debug);
   bool close(KeyFrame* kf, KeyFrame* loop_kf, const loop::Sim3& S_cur_loop, bool metric,
              const std::vector<std::pair<int, MapPoint*>>& matches);
 

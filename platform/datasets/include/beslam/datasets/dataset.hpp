@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "beslam/common/frame_ranges.hpp"
 #include "beslam/trajectory/trajectory.hpp"
 
 namespace beslam::datasets {
@@ -77,7 +78,15 @@ class Dataset {
   // The rig: the chosen camera's height over the road in metres, where the layout knows it (KITTI's
   // cameras: 1.65 m; a `beslam synth` sequence: camera.mount_height from its manifest.yaml; TUM: none).
   virtual std::optional<double> cameraHeight() const { return std::nullopt; }
+  // The sequence frame number of frame i of the selected range (what load(i).index will be), without
+  // reading the frame.
+  virtual std::int64_t frameNumber(std::size_t i) const = 0;
 };
+
+// A camera blackout: the dataset with the images of the frames in `ranges` all black (grey and colour,
+// every pixel 0, same size and type); everything else (LiDAR scans, labels, timestamps, ground truth) as
+// it was. Throws beslam::Error when a range holds none of the dataset's selected frames.
+std::unique_ptr<Dataset> blackOut(std::unique_ptr<Dataset> dataset, const std::vector<FrameRange>& ranges);
 
 // Opens and validates a dataset; throws beslam::Error naming the missing file or folder, the malformed
 // file:line, or the bad option.

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "beslam/common/frame_ranges.hpp"
 #include "beslam/plugin.h"
 #include "beslam/registry/registry.hpp"
 
@@ -63,7 +64,8 @@ struct DatasetSpec {
   std::string type, root, sequence, camera, ego_poses, synth_set;
   int64_t first = 0, last = -1, step = 1;
   bool lidar = false, color = false;
-  double camera_height = 0;  // metres over the road; 0: the dataset's own value (Dataset::cameraHeight)
+  double camera_height = 0;              // metres over the road; 0: the dataset's own value (Dataset::cameraHeight)
+  std::vector<FrameRange> black_frames;  // frames whose images load black (datasets::blackOut)
 };
 
 struct OutputSpec {
