@@ -53,6 +53,28 @@ void applyLandmarkUpdates(ObjectMap& objects, const registry::Landmarks& updates
   }
 }
 
+void anchorLandmarkUpdates(ObjectAnchors& anchors, const registry::Landmarks& updates, const ObjectAnchor& keyframe) {
+  for (const registry::ObjectLandmark& l : updates) {
+    if (l.removed)
+      anchors.erase(l.track_id);
+    else
+      anchors[l.track_id] = keyframe;
+  }
+}
+
+void followFinalPoses(ObjectMap& objects, const ObjectAnchors& anchors,
+                      const std::vector<registry::PoseEntry>& final_poses) {
+  std::map<int64_t, const Eigen::Isometry3d*> final_by_frame;
+  for (const registry::PoseEntry& p : final_poses) final_by_frame[p.frame_index] = &p.T_world_cam;
+  for (auto& [id, o] : objects) {
+    const auto a = anchors.find(id);
+    if (a == anchors.end()) continue;
+    const auto f = final_by_frame.find(a->second.frame_index);
+    if (f == final_by_frame.end()) continue;
+    o.T_world_object = *f->second * a->second.T_world_cam_then.inverse() * o.T_world_object;
+  }
+}
+
 nlohmann::json writeObjectOutputs(const std::string& out_dir, const ObjectMap& objects,
                                   const std::vector<beslam_map_point>& points) {
   const fs::path dir(out_dir);

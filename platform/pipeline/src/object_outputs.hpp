@@ -5,6 +5,7 @@
 // index past its vertices, a non-finite pose) is one beslam::Error naming the file and the object.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -19,6 +20,24 @@ using ObjectMap = std::map<int32_t, registry::ObjectLandmark>;
 
 // Applies a reconstructor's updates: a landmark replaces the one with its track id, a removed one erases it.
 void applyLandmarkUpdates(ObjectMap& objects, const registry::Landmarks& updates);
+
+// The keyframe an object was last fitted from, and that keyframe's pose then. A later loop correction
+// moves the keyframe; the object, fitted in the world as it was then, moves with it (as a map point
+// follows its reference keyframe), so that objects.json is in the final trajectory's world.
+struct ObjectAnchor {
+  int64_t frame_index = -1;
+  Eigen::Isometry3d T_world_cam_then = Eigen::Isometry3d::Identity();
+};
+using ObjectAnchors = std::map<int32_t, ObjectAnchor>;
+
+// Records the keyframe behind each updated (not removed) landmark.
+void anchorLandmarkUpdates(ObjectAnchors& anchors, const registry::Landmarks& updates, const ObjectAnchor& keyframe);
+
+// Every object moved by how much the final trajectory moved the keyframe it hangs on:
+// T_world_obj <- T_final(kf) T_then(kf)^-1 T_world_obj. Objects whose keyframe is not in `final_poses`
+// (or that have no anchor) stay as they are.
+void followFinalPoses(ObjectMap& objects, const ObjectAnchors& anchors,
+                      const std::vector<registry::PoseEntry>& final_poses);
 
 // Writes objects.json, objects/ and map.ply into out_dir; returns the summary.json entry.
 nlohmann::json writeObjectOutputs(const std::string& out_dir, const ObjectMap& objects,

@@ -210,7 +210,9 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
   if (static_map) json["static_map"] = static_map_json;
   json["objects"] = nullptr;
   if (record.has_reconstructor) {
-    json["objects"] = writeObjectOutputs(out_dir, record.objects, points);
+    ObjectMap objects = record.objects;
+    followFinalPoses(objects, record.anchors, final_poses);  // loop corrections after an object was fitted
+    json["objects"] = writeObjectOutputs(out_dir, objects, points);
     summary.objects_reconstructed = json["objects"]["reconstructed"].get<int64_t>();
     summary.objects_with_mesh = json["objects"]["with_mesh"].get<int64_t>();
   }

@@ -30,7 +30,8 @@ struct RunRecord {
   std::vector<int64_t> frame_indices;    // frames that went through the backend, in order
   std::vector<std::string> object_rows;  // objects.txt
   std::map<std::string, double> counter_sums;
-  ObjectMap objects;  // the reconstructor's latest landmark per object
+  ObjectMap objects;      // the reconstructor's latest landmark per object
+  ObjectAnchors anchors;  // the keyframe each object was last fitted from
   bool has_reconstructor = false;
 };
 

@@ -21,6 +21,7 @@
 #include "beslam/common/file_io.hpp"
 #include "beslam/common/yaml_set.hpp"
 #include "beslam/datasets/dataset.hpp"
+#include "beslam/formats/geometry.hpp"
 #include "beslam/pipeline/objects.hpp"
 #include "beslam/registry/instance.hpp"
 #include "beslam/sdk/views.hpp"  // the host uses the SDK's zero-copy view helpers too
@@ -505,6 +506,8 @@ class Run {
     const registry::Landmarks landmarks =
         reconstructor_->reconstruct(kf, f.view, f.boxes, sdk::toView(f.mask, BESLAM_PIXEL_LABEL16));
     detail::applyLandmarkUpdates(record_.objects, landmarks);
+    detail::anchorLandmarkUpdates(record_.anchors, landmarks,
+                                  {f.frame.index, formats::toIsometry(f.tracked.result.T_world_cam)});
     if (!landmarks.empty()) backend_->addLandmarks(landmarks);
   }
 
