@@ -628,6 +628,9 @@ bool Tracker::trackLocalMap() {
     if (!options_.localisation_only) ++mp->found;  // the map's statistics are part of the map
     if (mp->numObservations() > 0) ++inliers_;
   }
+  if (std::getenv("BESLAM_ORB_DEBUG"))  // developers: how near a frame came to being lost
+    std::fprintf(stderr, "frame %ld: local map %zu kfs %zu points, inliers %d\n", static_cast<long>(current_.index),
+                 local_kfs_.size(), local_points_.size(), inliers_);
   if (current_.index < last_reloc_frame_ + static_cast<int64_t>(options_.fps) && inliers_ < 50) return false;
   return inliers_ >= options_.min_tracked_inliers;
 }
