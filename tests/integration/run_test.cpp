@@ -106,7 +106,11 @@ TEST_F(RunTest, WritesEveryOutput) {
     EXPECT_TRUE(fs::exists(dir_ / "out" / f)) << f;
   EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
   EXPECT_EQ(dataLines(slurp(dir_ / "out/keyframes.tum")), 3);
-  EXPECT_EQ(lines(slurp(dir_ / "out/timing.csv")), kFrames + 1);
+  const std::string timing = slurp(dir_ / "out/timing.csv");
+  EXPECT_EQ(lines(timing), kFrames + 1);
+  EXPECT_NE(timing.find(",rss_mb\n"), std::string::npos) << "resident memory per frame: " << timing;
+  EXPECT_NE(r.out.find(" frames/s, peak memory "), std::string::npos) << r.out;
+  EXPECT_NE(slurp(dir_ / "out/summary.json").find("\"peak_rss_mb\": "), std::string::npos);
   const std::string objects = slurp(dir_ / "out/objects.txt");
   EXPECT_EQ(lines(objects), 2 * kFrames);
   EXPECT_EQ(objects.rfind("0 7 Car ", 0), 0u) << objects;

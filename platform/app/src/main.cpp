@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
@@ -185,7 +186,8 @@ int runCommand(const std::vector<std::string>& args) {
   const beslam::pipeline::RunSummary s = beslam::pipeline::run(spec, options);
 
   std::cout << "frames " << s.frames << ", tracked " << s.tracked << ", keyframes " << s.keyframes << ", median "
-            << s.median_frame_ms << " ms/frame, " << s.fps << " frames/s\n";
+            << s.median_frame_ms << " ms/frame, " << s.fps << " frames/s, peak memory "
+            << static_cast<long>(std::lround(s.peak_rss_mb)) << " MiB\n";
   if (!s.untracked.empty()) {
     std::cout << "untracked frames:";
     for (size_t i = 0; i < s.untracked.size() && i < 20; ++i) std::cout << ' ' << s.untracked[i];

@@ -7,6 +7,7 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
+#include "beslam/common/memory.hpp"
 #include "beslam/eval/eval.hpp"
 #include "beslam/trajectory/trajectory.hpp"
 
@@ -43,15 +44,20 @@ void writePly(const std::string& path, const std::vector<beslam_map_point>& poin
   });
 }
 
-// timing.csv: one row a frame, one column a stage (ms); stages a frame skipped are empty.
+// timing.csv: one row a frame, one column a stage (ms); stages a frame skipped are empty. A last column,
+// rss_mb, holds the resident memory at each frame's end when the runner measured it.
 void writeTimingCsv(const std::string& path, const std::vector<TimingRow>& timings) {
   std::vector<std::string> columns;
-  for (const auto& row : timings)
+  bool rss = false;
+  for (const auto& row : timings) {
+    rss = rss || row.rss_mb > 0;
     for (const auto& stage : row.stages)
       if (std::find(columns.begin(), columns.end(), stage.first) == columns.end()) columns.push_back(stage.first);
+  }
   writeFileAtomic(path, [&](std::ostream& out) {
     out << "frame";
     for (const auto& c : columns) out << ',' << c << "_ms";
+    if (rss) out << ",rss_mb";
     out << '\n' << std::fixed << std::setprecision(3);
     for (const auto& row : timings) {
       out << row.index;
@@ -63,6 +69,7 @@ void writeTimingCsv(const std::string& path, const std::vector<TimingRow>& timin
           if (name == c) sum += ms, any = true;
         if (any) out << sum;
       }
+      if (rss) out << ',' << std::setprecision(1) << row.rss_mb << std::setprecision(3);
       out << '\n';
     }
   });
@@ -196,6 +203,8 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
   json["keyframes"] = summary.keyframes;
   json["median_frame_ms"] = summary.median_frame_ms;
   json["fps"] = summary.fps;
+  summary.peak_rss_mb = peakResidentMemoryMb();
+  json["peak_rss_mb"] = summary.peak_rss_mb;
   for (const auto& [name, s] : spec.slots)
     json["plugins"][name] = s.plugin ? nlohmann::json(s.plugin->id + " " + s.plugin->version) : nlohmann::json(nullptr);
   json["world"] = {{"metric", summary.metric_from_frame >= 0},

@@ -21,6 +21,7 @@ namespace beslam::pipeline::detail {
 struct TimingRow {
   int64_t index = 0;
   std::vector<std::pair<std::string, double>> stages;
+  double rss_mb = 0;  // the process's resident memory at the frame's end (0: not measured)
 };
 
 // What the frame loop gathered; the backend's final state is read from the backend itself.

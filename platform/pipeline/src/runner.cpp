@@ -19,6 +19,7 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
+#include "beslam/common/memory.hpp"
 #include "beslam/common/yaml_set.hpp"
 #include "beslam/datasets/dataset.hpp"
 #include "beslam/formats/geometry.hpp"
@@ -257,6 +258,7 @@ class Run {
       // mask overlapped the frame before and are not in it (their own columns still say what they cost).
       const double total = std::chrono::duration<double, std::milli>(Clock::now() - t_frame).count();
       f.timing.stages.emplace_back("total", total);
+      f.timing.rss_mb = residentMemoryMb();
       record_.frame_ms.push_back(total);
       record_.timings.push_back(std::move(f.timing));
       summary_.last_frame = f.frame.index;

@@ -186,7 +186,8 @@ json timingData(const fs::path& csv) {
   }
   json stages = json::array();
   for (size_t c = 1; c < cols.size(); ++c) {
-    if (cols[c] == "total_ms" || values[c].empty()) continue;
+    const bool stage = cols[c].size() > 3 && cols[c].compare(cols[c].size() - 3, 3, "_ms") == 0;
+    if (!stage || cols[c] == "total_ms" || values[c].empty()) continue;  // not rss_mb
     std::vector<double> v = values[c];
     std::sort(v.begin(), v.end());
     const double med = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);

@@ -71,8 +71,8 @@ fs::path makeRun(const fs::path& dir) {
                 {"translation", {-2, 0, 0}}}}}}};
   std::ofstream(run / "summary.json") << s.dump(1);
   std::ofstream(run / "timing.csv")
-      << "frame,load_ms,detector_ms,backend_ms,total_ms\n0,1.0,,10.0,11.0\n1,3.0,2.0,20.0,25.0\n"
-         "2,2.0,4.0,30.0,36.0\n";
+      << "frame,load_ms,detector_ms,backend_ms,total_ms,rss_mb\n0,1.0,,10.0,11.0,80.5\n1,3.0,2.0,20.0,25.0,81.0\n"
+         "2,2.0,4.0,30.0,36.0,81.5\n";
   std::ofstream(run / "objects.txt") << "10 7 Car 0 0 0 1 2 3 4 1.5 1.8 4.0 0 1.5 10 0 0.9 static\n"
                                         "12 8 Car 0 0 0 1 2 3 4 1.5 1.8 4.0 3 1.5 20 0 0.9 dynamic\n";
   std::ofstream(run / "map_points.ply")
@@ -133,6 +133,7 @@ TEST(Report, HandMadeRunFigures) {
   EXPECT_EQ(med["detector"], 3.0);
   EXPECT_EQ(med["backend"], 20.0);
   EXPECT_EQ(med.count("total"), 0u);
+  EXPECT_EQ(med.size(), 3u) << "rss_mb is memory, not a stage";
   EXPECT_EQ(d["counts"]["static"], json({1, 0}));
   EXPECT_EQ(d["counts"]["dynamic"], json({0, 1}));
   // The static box of track 7 (frame 10, estimate at (1, 0, 5)): 4 m long along x, 1.8 m wide, 1.5 m tall.

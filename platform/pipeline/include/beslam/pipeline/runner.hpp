@@ -61,7 +61,8 @@ struct RunSummary {
   std::string evaluation_error;                // why APE could not be computed, when it could not
   double ape_sim3_rmse = 0, ape_se3_rmse = 0;  // both alignments, whatever spec.evaluation.alignment says
   double median_frame_ms = 0;
-  double fps = 0;  // frames processed per second of the frame loop's wall time (not the setup, not the writing)
+  double fps = 0;          // frames processed per second of the frame loop's wall time (not the setup, not the writing)
+  double peak_rss_mb = 0;  // the process's peak resident memory when the outputs were written (MiB)
   // The world unit: the first frame the backend said its world was in metres (-1: never).
   int64_t metric_from_frame = -1;
   int64_t motion_replayed_frames = 0;  // frames the motion checker was run on again when the world turned metric
