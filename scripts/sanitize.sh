@@ -22,7 +22,11 @@ unit_tests=(abi_layout_test common_test formats_test datasets_test eval_test pip
   static_map_test motion_score_test object_score_test mask_common_test motion_bev_tracker_test detector_replay_test
   registry_test)
 fuzzers=(pipeline_yaml label_rows detection_rows nuscenes calibration image ply_mesh)
-cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+selected=("${unit_tests[@]}" "${fuzzers[@]}")
+[ "$only" = fuzz ] && selected=("${fuzzers[@]}")
+[ "$set_name" = full ] && selected=()
+selected_list=$(IFS=';'; echo "${selected[*]}")
+cmake -S . -B build-sanitize -DBESLAM_SELECTED_TARGETS="$selected_list" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_CXX_FLAGS="-O1 -gline-tables-only" -DCMAKE_C_FLAGS="-O1 -gline-tables-only" -DBESLAM_SANITIZE=ON \
   -DBESLAM_FUZZ=ON -DBESLAM_FUZZ_RUNS="$runs" -DBESLAM_BUILD_BENCHMARKS=OFF > /dev/null
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
@@ -30,8 +34,8 @@ export BESLAM_PLUGIN_PATH=$PWD/build-sanitize/lib/beslam/plugins
 if [ "$set_name" = full ]; then
   cmake --build build-sanitize -j"$jobs"
   cd build-sanitize
-  end_to_end='^(RunTest|Demo|ShippedConfigs|TemplateBuild)\.'
-  slow='Kitti|KITTI|Demo|SlamSynthetic|^Synth\.|SyntheticStreets|BenchCommand|ReportBrowser|TemplateBuild'
+  end_to_end='^(RunTest|Demo|ShippedConfigs|TemplateBuild)\.|^sdk_template_test$'
+  slow='Kitti|KITTI|Demo|SlamSynthetic|^Synth\.|SyntheticStreets|BenchCommand|ReportBrowser|TemplateBuild|sdk_template_test'
   if [ "$only" != fuzz ]; then
     ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs" --timeout 900 -E "^fuzz\.|$end_to_end|$slow"
     ASAN_OPTIONS=detect_leaks=0 ctest --output-on-failure -j"$jobs" --timeout 900 -R "$end_to_end" -E "$slow"
@@ -39,13 +43,13 @@ if [ "$set_name" = full ]; then
   ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs" --timeout 3600 -R '^fuzz\.'
   exit 0
 fi
-if [ "$only" = fuzz ]; then
-  cmake --build build-sanitize -j"$jobs" --target "${fuzzers[@]}"
-else
-  cmake --build build-sanitize -j"$jobs" --target "${unit_tests[@]}" "${fuzzers[@]}"
+cmake --build build-sanitize -j"$jobs" --target beslam_selected  # all at once (see CMakeLists.txt)
+if [ "$only" != fuzz ]; then
   failed=()
   for t in "${unit_tests[@]}"; do  # from the source folder, as ctest runs them
-    if ASAN_OPTIONS=detect_leaks=1 build-sanitize/tests/"$t" > "build-sanitize/$t.log" 2>&1; then
+    # IouFloors: mask accuracy floors on rendered scenes, a minute under ASan and nothing memory-specific
+    # (the full set runs them).
+    if ASAN_OPTIONS=detect_leaks=1 build-sanitize/tests/"$t" --gtest_filter=-IouFloors.* > "build-sanitize/$t.log" 2>&1; then
       echo "sanitize: $t $(grep -E '^\[  PASSED  \]' "build-sanitize/$t.log" | head -1)"
     else
       echo "sanitize: $t FAILED:"; tail -n 60 "build-sanitize/$t.log"; failed+=("$t")
