@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 #include <vector>
@@ -120,6 +121,16 @@ TEST(LoopClosure, ASmallRenderedLoopIsClosedWhereItIsRevisited) {
   }
   ASSERT_FALSE(closures.empty()) << "no loop closed; revisit from frame " << revisit;
   EXPECT_EQ(jsonValue(summary, "loop_closures"), " " + std::to_string(closures.size()) + ".0") << summary;
+  // summary.json and the closing lines name each closure's frame (at or after its keyframe's) and correction.
+  const nlohmann::json frames = nlohmann::json::parse(summary)["loop_closure_frames"];
+  ASSERT_EQ(frames.size(), closures.size()) << summary;
+  for (size_t k = 0; k < closures.size(); ++k) {
+    EXPECT_GE(frames[k]["frame"].get<int>(), closures[k].first) << summary;
+    EXPECT_GT(frames[k]["correction"].get<double>(), 0.0) << summary;
+  }
+  const std::string printed = "loop closures: " + std::to_string(closures.size()) + " (frame " +
+                              std::to_string(frames[0]["frame"].get<int>()) + " corrected by ";
+  EXPECT_NE(slurp(dir / "stdout.txt").find(printed), std::string::npos) << slurp(dir / "stdout.txt");
   const auto [at, with] = closures.front();
   EXPECT_GE(at, revisit - 10) << "closed before the revisit";
   EXPECT_LE(at, revisit + 20) << "closed more than 20 frames after the revisit started at frame " << revisit;

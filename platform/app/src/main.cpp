@@ -124,6 +124,14 @@ std::string backendPathOverride(const char* key, const std::string& file) {
   return std::string("backend.") + key + "='" + quoted + "'";
 }
 
+// " 3 17 42": at most 20 frame numbers, then " ... (N in all)".
+std::string frameList(const std::vector<int64_t>& frames) {
+  std::string s;
+  for (size_t i = 0; i < frames.size() && i < 20; ++i) s += " " + std::to_string(frames[i]);
+  if (frames.size() > 20) s += " ... (" + std::to_string(frames.size()) + " in all)";
+  return s;
+}
+
 bool wantsHelp(const std::vector<std::string>& args) {
   for (const auto& a : args)
     if (a == "--help" || a == "-h") return true;
@@ -189,10 +197,7 @@ int runCommand(const std::vector<std::string>& args) {
             << s.median_frame_ms << " ms/frame, " << s.fps << " frames/s, peak memory "
             << static_cast<long>(std::lround(s.peak_rss_mb)) << " MiB\n";
   if (!s.untracked.empty()) {
-    std::cout << "untracked frames:";
-    for (size_t i = 0; i < s.untracked.size() && i < 20; ++i) std::cout << ' ' << s.untracked[i];
-    if (s.untracked.size() > 20) std::cout << " ... (" << s.untracked.size() << " in all)";
-    std::cout << "\n";
+    std::cout << "untracked frames:" << frameList(s.untracked) << "\n";
   }
   if (s.has_ape)
     std::cout << "APE translation RMSE " << s.ape_trans_rmse << " m (" << spec.evaluation.alignment << ", scale "
@@ -217,8 +222,15 @@ int runCommand(const std::vector<std::string>& args) {
     for (const auto& [name, value] : s.backend_counters) {
       if (name == "features_static") features_static = value;
       if (name == "tracked_static") tracked_static = value;
-      if (name == "relocalisations" && value > 0) std::cout << "relocalisations: " << value << "\n";
-      if (name == "loop_closures" && value > 0) std::cout << "loop closures: " << value << "\n";
+      if (name == "relocalisations" && value > 0)
+        std::cout << "relocalisations: " << value << " (frames" << frameList(s.relocalisation_frames) << ")\n";
+      if (name == "loop_closures" && value > 0) {
+        std::cout << "loop closures: " << value << " (";
+        for (size_t k = 0; k < s.loop_closures.size() && k < 20; ++k)
+          std::cout << (k ? ", " : "") << "frame " << s.loop_closures[k].frame << " corrected by "
+                    << s.loop_closures[k].correction << (s.metric_from_frame >= 0 ? " m" : " map units");
+        std::cout << (s.loop_closures.size() > 20 ? ", ..." : "") << ")\n";
+      }
       if (name == "loop_object_rejections" && value > 0)
         std::cout << "loop candidates rejected by the parked-car check: " << value << "\n";
     }

@@ -172,6 +172,8 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
                        {"leaf_nodes", tree->getNumLeafNodes()}};
   }
   summary.backend_counters.assign(record.counter_sums.begin(), record.counter_sums.end());
+  summary.loop_closures = record.loop_closures;
+  summary.relocalisation_frames = record.relocalisation_frames;
   if (spec.slots.at("detector").plugin)
     writeFileAtomic((dir / "objects.txt").string(), [&](std::ostream& out) {
       for (const auto& row : record.object_rows) out << row << '\n';
@@ -227,6 +229,10 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
   }
   json["backend_counters"] = nlohmann::json::object();
   for (const auto& [name, value] : summary.backend_counters) json["backend_counters"][name] = value;
+  json["loop_closure_frames"] = nlohmann::json::array();
+  for (const auto& l : summary.loop_closures)
+    json["loop_closure_frames"].push_back({{"frame", l.frame}, {"correction", l.correction}});
+  json["relocalisation_frames"] = summary.relocalisation_frames;
   evaluate(spec, dataset, final_poses, summary, json);
   writeFileAtomic((dir / "summary.json").string(), json.dump(2) + "\n");
 }

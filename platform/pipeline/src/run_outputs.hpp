@@ -31,6 +31,8 @@ struct RunRecord {
   std::vector<int64_t> frame_indices;    // frames that went through the backend, in order
   std::vector<std::string> object_rows;  // objects.txt
   std::map<std::string, double> counter_sums;
+  std::vector<RunSummary::LoopClosure> loop_closures;  // frames of the backend's events (RunSummary)
+  std::vector<int64_t> relocalisation_frames;
   ObjectMap objects;      // the reconstructor's latest landmark per object
   ObjectAnchors anchors;  // the keyframe each object was last fitted from
   bool has_reconstructor = false;

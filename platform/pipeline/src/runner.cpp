@@ -452,7 +452,14 @@ class Run {
     for (const auto& [name, ms] : f.tracked.stage_ms) f.timing.stages.emplace_back("backend." + name, ms);
     if (f.tracked.result.state == BESLAM_TRACKING_OK) ++summary_.tracked_online;
     record_.frame_indices.push_back(f.frame.index);
-    for (const auto& [name, value] : f.tracked.counters) record_.counter_sums[name] += value;
+    double loop_closed = 0, loop_correction = 0;
+    for (const auto& [name, value] : f.tracked.counters) {
+      record_.counter_sums[name] += value;
+      if (name == "loop_closures") loop_closed = value;
+      if (name == "loop_correction_m") loop_correction = value;
+      if (name == "relocalisations" && value > 0) record_.relocalisation_frames.push_back(f.frame.index);
+    }
+    if (loop_closed > 0) record_.loop_closures.push_back({f.frame.index, loop_correction});
     if (f.tracked.worldIsMetric() != world_metric_) {
       world_metric_ = f.tracked.worldIsMetric();
       summary_.metric_from_frame = world_metric_ ? f.frame.index : -1;

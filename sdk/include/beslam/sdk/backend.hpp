@@ -23,6 +23,8 @@ struct TrackResult {
   // The world is in metres from this frame on (the backend never goes back to unknown scale).
   bool world_is_metric = false;
   // Named per-frame counts the host sums into summary.json ("features", "features_static", "tracked_static").
+  // Events by name: the host also lists the frames where "loop_closures" (with "loop_correction_m", the
+  // correction applied, m) or "relocalisations" is above 0.
   std::vector<std::pair<std::string, double>> counters;
   // The frame's features (ABI 1.2), for drawing: pixel, mask label, BESLAM_KEYPOINT_* flags, octave.
   std::vector<beslam_keypoint> keypoints;

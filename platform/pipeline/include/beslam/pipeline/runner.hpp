@@ -72,6 +72,14 @@ struct RunSummary {
   int64_t frames_with_masks = 0;
   // Sums of the backend's per-frame counters ("features_static", "tracked_static", ...).
   std::vector<std::pair<std::string, double>> backend_counters;
+  // The frames of the backend's events (its "loop_closures" and "relocalisations" counters above 0), with
+  // the correction a loop closure applied (its "loop_correction_m", metres or map units).
+  struct LoopClosure {
+    int64_t frame = 0;
+    double correction = 0;
+  };
+  std::vector<LoopClosure> loop_closures;
+  std::vector<int64_t> relocalisation_frames;
   int64_t map_points = 0, map_points_static = 0;  // final map; on static objects (trusted)
   // Objects the reconstructor left at the end (objects.json) and how many have a mesh; -1: no reconstructor.
   int64_t objects_reconstructed = -1, objects_with_mesh = 0;
