@@ -131,6 +131,10 @@ TEST(LoopClosure, ASmallRenderedLoopIsClosedWhereItIsRevisited) {
   const std::string printed = "loop closures: " + std::to_string(closures.size()) + " (frame " +
                               std::to_string(frames[0]["frame"].get<int>()) + " corrected by ";
   EXPECT_NE(slurp(dir / "stdout.txt").find(printed), std::string::npos) << slurp(dir / "stdout.txt");
+  // Loop closing's cost per keyframe is in timing.csv: the query, the candidates' checks, the correction.
+  const std::string timing = slurp(dir / "out/timing.csv");
+  for (const char* column : {"backend.loop_query_ms", "backend.loop_check_ms", "backend.loop_correct_ms"})
+    EXPECT_NE(timing.substr(0, timing.find('\n')).find(column), std::string::npos) << column;
   const auto [at, with] = closures.front();
   EXPECT_GE(at, revisit - 10) << "closed before the revisit";
   EXPECT_LE(at, revisit + 20) << "closed more than 20 frames after the revisit started at frame " << revisit;

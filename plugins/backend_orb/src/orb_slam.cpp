@@ -24,13 +24,11 @@
 #include "place/vocabulary.hpp"
 #include "scale/object_range.hpp"
 #include "scale/parked_car_scale.hpp"
+#include "stage_clock.hpp"
 #include "tracking/tracker.hpp"
 
 namespace beslam::orb {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 LocalMapperOptions mapperOptions(const Options& o) {
   LocalMapperOptions m;
@@ -131,6 +129,7 @@ struct OrbSlam::Impl {
   Tracker tracker;
   std::unique_ptr<LoopCloser> loop_closer;  // with a vocabulary and Options::loop_closure
   bool loop_pending = false;                // closed on the mapping side, not yet followed by the tracker
+  std::vector<std::pair<std::string, double>> process_timings;  // the last process() call's stage times
   int reported_object_rejections = 0;
   Statistics stats;
   ParkedCarScale parked_scale;
@@ -204,10 +203,16 @@ struct OrbSlam::Impl {
     if (worker.joinable()) worker.join();
   }
 
+  // Local mapping, then loop closing, of one keyframe; their stage times go to process_timings.
   void process(KeyFrame* kf, bool initial) {
+    process_timings.clear();
     if (kf->bad) return;
     mapper.processKeyFrame(kf, !initial);
-    if (loop_closer && !initial && !kf->bad && loop_closer->process(kf, mapper.metric())) loop_pending = true;
+    process_timings = mapper.lastTimings();
+    if (!loop_closer || initial || kf->bad) return;
+    if (loop_closer->process(kf, mapper.metric())) loop_pending = true;
+    const auto& loop_timings = loop_closer->lastTimings();
+    process_timings.insert(process_timings.end(), loop_timings.begin(), loop_timings.end());
   }
 
   void run() {
@@ -301,9 +306,10 @@ struct OrbSlam::Impl {
       if (std::getenv("BESLAM_ORB_DEBUG"))
         std::fprintf(
             stderr,
-            "frame %ld: loop closed, keyframe of frame %ld with frame %ld (%d matches), moved %.3f / %.2f deg\n",
+            "frame %ld: loop closed, keyframe of frame %ld with frame %ld (%d matches), moved %.3f / %.2f deg; "
+            "corrected %d keyframes in %.0f ms\n",
             static_cast<long>(index), static_cast<long>(e.frame_index), static_cast<long>(e.loop_frame_index),
-            e.matches, e.correction_m, e.correction_deg);
+            e.matches, e.correction_m, e.correction_deg, e.keyframes, e.correct_ms);
     }
     double background_mapping_ms = 0;
     if (options.threaded_mapping) {
@@ -376,7 +382,7 @@ struct OrbSlam::Impl {
       t0 = Clock::now();
       for (auto& [kf, initial] : jobs) {
         process(kf, initial);
-        for (auto& s : mapper.lastTimings()) mapping_stages.push_back(s);
+        mapping_stages.insert(mapping_stages.end(), process_timings.begin(), process_timings.end());
       }
       if (!jobs.empty()) {
         result.stage_ms.insert(result.stage_ms.end(), mapping_stages.begin(), mapping_stages.end());

@@ -15,6 +15,7 @@
 #include "optimize/bundle_adjustment.hpp"
 #include "optimize/pose_optimizer.hpp"
 #include "place/keyframe_database.hpp"
+#include "stage_clock.hpp"
 #include "tracking/pnp_pose.hpp"
 
 namespace beslam::orb {
@@ -238,8 +239,12 @@ std::optional<LoopCloser::Hypothesis> LoopCloser::fromImageMatches(KeyFrame* kf,
 
 bool LoopCloser::process(KeyFrame* kf, bool metric) {
   poses_before_.clear();
+  timings_.clear();
   if (kf->bad) return false;
+  Clock::time_point t0 = Clock::now();
   const std::vector<KeyFrame*> candidates = detect(kf);
+  timings_.emplace_back("loop_query", msSince(t0));
+  t0 = Clock::now();
   const bool debug = std::getenv("BESLAM_ORB_DEBUG") != nullptr;
   for (KeyFrame* loop_kf : candidates) {
     if (loop_kf->bad) continue;
@@ -295,8 +300,14 @@ bool LoopCloser::process(KeyFrame* kf, bool metric) {
         }
       }
     }
-    return close(kf, loop_kf, S_cur_loop, metric, inliers);
+    timings_.emplace_back("loop_check", msSince(t0));
+    t0 = Clock::now();
+    const bool closed = close(kf, loop_kf, S_cur_loop, metric, inliers);
+    timings_.emplace_back("loop_correct", msSince(t0));
+    if (closed) stats_.closures.back().correct_ms = timings_.back().second;
+    return closed;
   }
+  timings_.emplace_back("loop_check", msSince(t0));
   return false;
 }
 
@@ -425,6 +436,7 @@ bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, 
   event.correction_m = (kf->centre() - before.inverse().translation()).norm();
   event.correction_deg = Eigen::AngleAxisd(kf->T_cw.linear() * before.linear().transpose()).angle() * 180.0 / M_PI;
   event.scale = S_cur_loop.s;
+  event.keyframes = static_cast<int>(map_.keyframes().size());
   stats_.closures.push_back(event);
   last_loop_kf_id_ = kf->id;
   groups_.clear();

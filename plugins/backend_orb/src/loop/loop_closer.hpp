@@ -22,6 +22,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -56,6 +57,8 @@ struct LoopClosureEvent {
   int64_t frame_index = 0, loop_frame_index = 0;
   int matches = 0;
   double correction_m = 0, correction_deg = 0, scale = 1;  // the new keyframe's pose change
+  int keyframes = 0;                                       // in the map when the loop was closed
+  double correct_ms = 0;                                   // the correction: fusion, essential graph, global BA
 };
 
 struct LoopStats {
@@ -73,6 +76,9 @@ class LoopCloser {
   bool process(KeyFrame* kf, bool metric);
 
   const LoopStats& stats() const { return stats_; }
+  // The last process()'s stage times (ms): "loop_query" (database query and consistency), "loop_check"
+  // (the candidates' geometry and object checks) and, when a loop was closed, "loop_correct".
+  const std::vector<std::pair<std::string, double>>& lastTimings() const { return timings_; }
   // The keyframes' poses (by id) before the last process() closed a loop (empty otherwise), so the
   // tracker's frames can follow their reference keyframe.
   const std::map<long, Eigen::Isometry3d>& posesBefore() const { return poses_before_; }
@@ -98,6 +104,7 @@ class LoopCloser {
   KeyFrameDatabase& database_;
   const ScalePyramid& pyramid_;
   LoopOptions options_;
+  std::vector<std::pair<std::string, double>> timings_;
   LoopStats stats_;
   std::vector<Group> groups_;
   std::map<long, Eigen::Isometry3d> poses_before_;

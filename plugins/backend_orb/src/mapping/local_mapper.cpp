@@ -12,12 +12,10 @@
 #include "map/map.hpp"
 #include "map/map_point.hpp"
 #include "matching/matcher.hpp"
+#include "stage_clock.hpp"
 
 namespace beslam::orb {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d S;

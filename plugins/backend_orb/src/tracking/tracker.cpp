@@ -18,13 +18,11 @@
 #include "optimize/bundle_adjustment.hpp"
 #include "optimize/pose_optimizer.hpp"
 #include "place/keyframe_database.hpp"
+#include "stage_clock.hpp"
 #include "tracking/pnp_pose.hpp"
 
 namespace beslam::orb {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 constexpr int kBowDirectLevelsUp = 4;  // direct index: features grouped 4 levels above the words (ORB-SLAM2)
 
