@@ -24,6 +24,8 @@ json loadJson(const std::string& path, const char* what) {
     int line = 1;
     for (size_t i = 0; i < text.size() && i + 1 < e.byte; ++i) line += text[i] == '\n';
     throw std::runtime_error(path + ":" + std::to_string(line) + ": JSON syntax error: " + e.what());
+  } catch (const json::exception& e) {  // e.g. a number past double's range (out_of_range 406)
+    throw std::runtime_error(path + ": JSON error: " + e.what());
   }
 }
 

@@ -105,6 +105,7 @@ TEST(NuScenesFramesFile, TextAndJsonForms) {
            {"two.txt", "tok_a\ntok_b tok_c\n", "two.txt:2: expected one sample token"},
            {"empty.txt", "# none\n", "no sample tokens"},
            {"syntax.json", "[\"a\",\n \"b\"\n", "syntax.json:3: JSON syntax error"},
+           {"overflow.json", "[1e400]", "overflow.json: JSON error"},  // found by the nuscenes fuzz target
            {"object.json", R"({"x": 1})", "expected an array"},
            {"number.json", R"([1])", "frame 0: expected a token string"},
            {"half.json", R"([{"token": "a", "ego_translation": [1, 2, 0]}])", "go together"},
@@ -218,6 +219,7 @@ TEST(NuScenesResults, EveryMalformedBoxIsReported) {
   // Whole-file problems.
   for (const auto& [text, cause] : std::vector<std::pair<std::string, std::string>>{
            {"{\"results\": {\n\"t0\": [\n}", "bad2.json:3: JSON syntax error"},
+           {"{\"results\": {\"t0\": [{\"size\": [3.3E3333]}]}}", "bad2.json: JSON error"},
            {"[]", "expected a nuScenes results object"},
            {"{\"results\": {\"t0\": 5}}", "sample t0: expected a list of boxes"}}) {
     o.results = d.write("bad2.json", text);
