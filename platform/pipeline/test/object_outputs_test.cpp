@@ -33,7 +33,7 @@ TEST(ObjectAnchors, AnObjectMovesWithTheKeyFrameItWasFittedFrom) {
   registry::Landmarks second = {car(4, {-2, 0, 25}), car(5, {0, 0, 40})};
   applyLandmarkUpdates(objects, second);
   anchorLandmarkUpdates(anchors, second, {20, then20});
-  registry::ObjectLandmark gone = car(6, {});
+  registry::ObjectLandmark gone = car(6, Eigen::Vector3d::Zero());
   gone.removed = true;
   applyLandmarkUpdates(objects, {gone});
   anchorLandmarkUpdates(anchors, {gone}, {20, then20});
