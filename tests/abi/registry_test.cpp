@@ -286,3 +286,32 @@ TEST(Registry, FindsBuiltInPluginsThroughEnvironment) {
   EXPECT_TRUE(registry.problems().empty()) << registry.problems().front();
   EXPECT_NO_THROW(registry.find("backend_pose_replay", BESLAM_KIND_BACKEND));
 }
+
+TEST(Registry, LoadForLoadsOnlyTheLibrariesNamedAfterThePlugins) {
+  Registry registry;
+  registry.addSearchPath(FIXTURE_DIR);  // broken fixtures first: none of them is opened
+  registry.addSearchPath(PLUGIN_DIR);
+  registry.loadFor({"backend_pose_replay"});
+  EXPECT_TRUE(registry.problems().empty()) << registry.problems().front();
+  ASSERT_EQ(registry.plugins().size(), 1u);
+  EXPECT_NE(registry.find("backend_pose_replay", BESLAM_KIND_BACKEND).library_path.find("backend_pose_replay.so"),
+            std::string::npos);
+}
+
+TEST(Registry, LoadForFallsBackToAFullScanForAPluginNamedOtherwise) {
+  Registry registry;
+  registry.addSearchPath(FIXTURE_DIR);
+  registry.loadFor({"fixture_boxes"});  // provided by sdk_fixtures.so
+  EXPECT_NO_THROW(registry.find("fixture_boxes", BESLAM_KIND_DETECTOR));
+  EXPECT_EQ(registry.problems().size(), 5u);  // as scan() alone
+}
+
+TEST(Registry, LoadForReportsABrokenLibraryNamedAfterThePluginOnce) {
+  Registry registry;
+  registry.addSearchPath(FIXTURE_DIR);
+  registry.loadFor({"wrong_major"});  // wrong_major.so is refused, then the full scan meets it again
+  EXPECT_EQ(registry.problems().size(), 5u);
+  const std::string message = errorOf([&] { registry.find("wrong_major", BESLAM_KIND_DETECTOR); });
+  EXPECT_NE(message.find("wrong_major.so"), std::string::npos) << message;
+  EXPECT_NE(message.find("major versions must match"), std::string::npos) << message;
+}

@@ -180,7 +180,10 @@ int runCommand(const std::vector<std::string>& args) {
   beslam::registry::Registry registry;
   for (const auto& p : plugin_paths) registry.addSearchPath(p);
   for (const auto& p : spec.plugin_paths) registry.addSearchPath(p);
-  registry.scan();
+  std::vector<std::string> plugin_ids;  // only the libraries the pipeline names (a full scan if one is not <id>.so)
+  for (const auto& [slot_name, slot] : spec.slots)
+    if (!slot.plugin_id.empty()) plugin_ids.push_back(slot.plugin_id);
+  registry.loadFor(plugin_ids);
   // Refused libraries matter only if the pipeline names one of their plugins, and then the error
   // says why they were refused; list them all with --verbose.
   if (options.log_level <= BESLAM_LOG_INFO)

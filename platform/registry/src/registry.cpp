@@ -134,6 +134,9 @@ struct Registry::Impl {
   std::map<std::string, std::string> loaded_files;  // canonical path -> path
 
   void load(const std::string& path);
+  void addProblem(const std::string& problem) {  // once: loadFor() and a scan() after it may meet the same file
+    if (std::find(problems.begin(), problems.end(), problem) == problems.end()) problems.push_back(problem);
+  }
 };
 
 Registry::Registry() : impl_(std::make_unique<Impl>()) {}
@@ -178,10 +181,33 @@ void Registry::scan() {
       try {
         impl_->load(file.string());
       } catch (const Error& e) {
-        impl_->problems.push_back(e.what());
+        impl_->addProblem(e.what());
       }
     }
   }
+}
+
+void Registry::loadFor(const std::vector<std::string>& ids) {
+  const auto provided = [this](const std::string& id) {
+    return std::any_of(impl_->plugins.begin(), impl_->plugins.end(), [&](const Plugin& p) { return p.id == id; });
+  };
+  const std::vector<std::string> folders = searchPaths();
+  bool all_found = true;
+  for (const std::string& id : ids) {
+    for (const std::string& folder : folders) {
+      if (provided(id)) break;
+      std::error_code ec;
+      const fs::path file = fs::path(folder) / (id + ".so");
+      if (!fs::is_regular_file(file, ec)) continue;
+      try {
+        impl_->load(file.string());
+      } catch (const Error& e) {
+        impl_->addProblem(e.what());
+      }
+    }
+    all_found = all_found && provided(id);
+  }
+  if (!all_found) scan();
 }
 
 void Registry::loadLibrary(const std::string& path) { impl_->load(path); }
