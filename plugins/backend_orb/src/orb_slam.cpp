@@ -41,6 +41,7 @@ LocalMapperOptions mapperOptions(const Options& o) {
   m.ba.robust_iterations = o.local_ba_iterations_robust;
   m.ba.refine_iterations = o.local_ba_iterations_refine;
   m.ba.max_local_keyframes = o.local_ba_max_keyframes;
+  m.ba.solver = o.local_ba_solver == LocalBaSolver::Schur ? optimize::BaSolver::SchurLm : optimize::BaSolver::Ceres;
   m.ba.trusted_weight = o.static_object_weight;
   m.ba.objects.enabled = o.object_landmarks != ObjectLandmarkMode::Off;
   m.ba.objects.pose_weight = o.object_pose_weight;

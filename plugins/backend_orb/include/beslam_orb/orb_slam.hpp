@@ -41,6 +41,8 @@ enum class ObjectLandmarkMode { Off, BA };
 // per car measured by its box centres (unbiased), or a range prior per keypoint where its ray enters the
 // box (biased short by how a car fills its box; kept for ablations).
 enum class ObjectScaleHold { Anchors, Ranges };
+// Local BA's solver (src/optimize/schur_lm.hpp): our Schur-complement LM on both cores, or Ceres.
+enum class LocalBaSolver { Schur, Ceres };
 
 // ORB extraction (features/orb_extractor.hpp): the pyramid, the FAST thresholds and the share of the
 // budget that static objects (mask label >= 1000) may take.
@@ -97,6 +99,9 @@ struct Options {
   int local_ba_iterations_robust = 5;   // Huber round
   int local_ba_iterations_refine = 10;  // round without robust loss, outliers removed
   int local_ba_max_keyframes = 0;       // 0 = all covisible keyframes move
+  // schur: SchurLevenbergMarquardt (deterministic on any thread count; object landmarks and windows of
+  // more than 60 keyframes still go to Ceres); ceres: Ceres' DENSE_SCHUR LM, as before issue 19.
+  LocalBaSolver local_ba_solver = LocalBaSolver::Schur;
   bool keyframe_culling = true;
   // Ground-height prior (beyond ORB-SLAM2; for a camera on a vehicle over a road): local BA holds the
   // camera's height above the plane fitted to each keyframe's low points at the height seen over the

@@ -14,6 +14,7 @@
 #include "map/map.hpp"
 #include "map/map_point.hpp"
 #include "optimize/cost_functions.hpp"
+#include "optimize/schur_lm.hpp"
 #include "optimize/se3.hpp"
 
 namespace beslam::orb::optimize {
@@ -81,8 +82,48 @@ double chi2(const Edge& e, bool* behind) {
   return r[0] * r[0] + r[1] * r[1];
 }
 
+// Local BA without object nodes on at most this many poses goes to SchurLevenbergMarquardt (unless the
+// options ask for Ceres); global BA and object landmarks always to Ceres.
+constexpr int kMaxSchurLmPoses = 60;
+
+double solveSchurLm(Problem& P, bool robust, int iterations, double chi2_threshold, KeyFrame* origin,
+                    double* initial_cost) {
+  const ceres::HuberLoss huber(std::sqrt(chi2_threshold)), ground_huber(2.0), anchor_huber(std::sqrt(7.815));
+  // Blocks by their place in P's arrays (id order); a pose without a residual, fixed ones and the origin stay.
+  const auto poseIndex = [&](const double* pose) { return static_cast<int>((pose - P.pose_storage.data()) / 7); };
+  const auto pointIndex = [&](const double* x) { return static_cast<int>((x - P.point_storage.data()) / 3); };
+  std::vector<char> pose_used(P.pose_storage.size() / 7, 0), point_used(P.point_storage.size() / 3, 0);
+  for (const Edge& e : P.edges)
+    if (!e.outlier) pose_used[poseIndex(e.pose)] = point_used[pointIndex(e.point)] = 1;
+  if (std::find(pose_used.begin(), pose_used.end(), 1) == pose_used.end()) return 0;
+  std::vector<char> fixed(pose_used.size(), 0);
+  for (KeyFrame* kf : P.fixed) fixed[poseIndex(P.poses[kf])] = 1;
+  if (auto it = P.poses.find(origin); it != P.poses.end()) fixed[poseIndex(it->second)] = 1;
+  SchurLevenbergMarquardt lm;
+  for (size_t k = 0; k < pose_used.size(); ++k) lm.addPose(&P.pose_storage[7 * k], fixed[k] || !pose_used[k]);
+  for (size_t i = 0; i < point_used.size(); ++i) lm.addVector(&P.point_storage[3 * i]);
+  const int first_anchor = static_cast<int>(point_used.size());
+  for (size_t i = 0; i < P.anchor_ids.size(); ++i) lm.addVector(&P.anchor_storage[3 * i]);
+  for (const Edge& e : P.edges)
+    if (!e.outlier) lm.addResidual(e.cost.get(), robust ? &huber : nullptr, poseIndex(e.pose), pointIndex(e.point));
+  for (auto* edges : {&P.ground_edges, &P.range_edges})
+    for (auto& g : *edges)
+      if (pose_used[poseIndex(g.pose)] && point_used[pointIndex(g.point)])
+        lm.addResidual(g.cost.get(), &ground_huber, poseIndex(g.pose), pointIndex(g.point));
+  for (auto& a : P.anchor_edges)
+    if (pose_used[poseIndex(a.pose)])
+      lm.addResidual(a.cost.get(), &anchor_huber, poseIndex(a.pose),
+                     first_anchor + static_cast<int>((a.point - P.anchor_storage.data()) / 3));
+  const SchurLevenbergMarquardt::Summary summary = lm.solve(iterations);
+  if (initial_cost) *initial_cost = summary.initial_cost;
+  return summary.final_cost;
+}
+
 double solve(Problem& P, bool robust, int iterations, double chi2_threshold, bool fix_origin_only, KeyFrame* origin,
-             double* initial_cost) {
+             double* initial_cost, BaSolver solver = BaSolver::Ceres) {
+  if (solver == BaSolver::SchurLm && !fix_origin_only && !P.objects &&
+      static_cast<int>(P.moving.size()) <= kMaxSchurLmPoses)
+    return solveSchurLm(P, robust, iterations, chi2_threshold, origin, initial_cost);
   ceres::Problem::Options popts;
   popts.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   popts.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -308,12 +349,14 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   report.observations = static_cast<int>(P.edges.size());
   if (P.edges.empty()) return report;
 
-  solve(P, true, options.robust_iterations, options.chi2_threshold, false, map.origin(), &report.initial_cost);
+  solve(P, true, options.robust_iterations, options.chi2_threshold, false, map.origin(), &report.initial_cost,
+        options.solver);
   for (Edge& e : P.edges) {
     bool behind = false;
     e.outlier = chi2(e, &behind) > options.chi2_threshold || behind;
   }
-  report.final_cost = solve(P, false, options.refine_iterations, options.chi2_threshold, false, map.origin(), nullptr);
+  report.final_cost =
+      solve(P, false, options.refine_iterations, options.chi2_threshold, false, map.origin(), nullptr, options.solver);
   for (Edge& e : P.edges) {
     bool behind = false;
     if (chi2(e, &behind) > options.chi2_threshold || behind) {

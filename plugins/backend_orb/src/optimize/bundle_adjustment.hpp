@@ -16,7 +16,12 @@ class Map;
 
 namespace beslam::orb::optimize {
 
+// Local BA's solver: SchurLevenbergMarquardt (schur_lm.hpp: the same problem, both cores, about half the
+// time; not for object landmarks or more than 60 moving keyframes, which go to Ceres) or Ceres.
+enum class BaSolver { SchurLm, Ceres };
+
 struct BundleAdjustmentOptions {
+  BaSolver solver = BaSolver::SchurLm;
   int robust_iterations = 5;
   int refine_iterations = 10;
   double chi2_threshold = 5.991;
