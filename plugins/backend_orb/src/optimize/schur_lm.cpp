@@ -117,6 +117,8 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
     double cost = 0, predicted = 0;
   };
   std::array<RangeSums, kRanges> sums;
+  std::vector<Matrix6d> U_total(n);
+  std::vector<Vector6d> gp_total(n);
   for (RangeSums& s : sums) {
     s.U.assign(n, Matrix6d::Zero());
     s.gp.assign(n, Vector6d::Zero());
@@ -187,6 +189,14 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
     });
     double cost = 0;
     for (const RangeSums& s : sums) cost += s.cost;
+    for (int k = 0; k < n; ++k) {  // the moving poses' blocks, summed over the ranges in order
+      U_total[k].setZero();
+      gp_total[k].setZero();
+      for (const RangeSums& s : sums) {
+        U_total[k] += s.U[k];
+        gp_total[k] += s.gp[k];
+      }
+    }
     return cost;
   };
 
@@ -224,15 +234,10 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
     S.setZero();
     b.setZero();
     for (int k = 0; k < n; ++k) {
-      Matrix6d U = Matrix6d::Zero();
-      Vector6d gp = Vector6d::Zero();
-      for (const RangeSums& s : sums) {
-        U += s.U[k];
-        gp += s.gp[k];
-      }
+      Matrix6d U = U_total[k];
       for (int d = 0; d < 6; ++d) U(d, d) += mu * clampDiagonal(U(d, d));
       S.block<6, 6>(6 * k, 6 * k) = U;
-      b.segment<6>(6 * k) = -gp;
+      b.segment<6>(6 * k) = -gp_total[k];
     }
     for (const RangeSums& s : sums) {
       S -= s.S;
@@ -250,14 +255,9 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
     if (solved) {
       // Gradient g = [gp; gx]; predicted decrease of the linear model 0.5 (-g.d + mu d.D.d) (Ceres' LM).
       for (int k = 0; k < n; ++k) {
-        Matrix6d U = Matrix6d::Zero();
-        Vector6d gp = Vector6d::Zero();
-        for (const RangeSums& s : sums) {
-          U += s.U[k];
-          gp += s.gp[k];
-        }
         const Vector6d d = dp.segment<6>(6 * k);
-        for (int i = 0; i < 6; ++i) predicted += 0.5 * (-gp(i) * d(i) + mu * clampDiagonal(U(i, i)) * d(i) * d(i));
+        for (int i = 0; i < 6; ++i)
+          predicted += 0.5 * (-gp_total[k](i) * d(i) + mu * clampDiagonal(U_total[k](i, i)) * d(i) * d(i));
       }
       runRanges([&](int c) {
         double part = 0;
