@@ -23,7 +23,7 @@ using Matrix63 = Eigen::Matrix<double, 6, 3>;
 constexpr int kRanges = 2;
 constexpr int kMaxRows = 3;
 constexpr double kMinDiagonal = 1e-6, kMaxDiagonal = 1e32;  // Ceres' LM defaults
-constexpr double kFunctionTolerance = 1e-6, kMinRelativeDecrease = 1e-3;
+constexpr double kFunctionTolerance = 1e-6, kParameterTolerance = 1e-8, kMinRelativeDecrease = 1e-3;  // Ceres'
 
 double clampDiagonal(double d) { return std::min(std::max(d, kMinDiagonal), kMaxDiagonal); }
 
@@ -206,7 +206,7 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
   double mu = 1e-4, nu = 2;  // Ceres' initial trust region radius 1e4
   Eigen::MatrixXd S(dim, dim);
   Eigen::VectorXd b(dim), dp(dim);
-  for (int step = 0; step < max_iterations; ++step) {
+  for (int step = 0; step < max_iterations; ++step) {  // steps tried, successful or not (Ceres' iterations)
     // The damped reduced system.
     runRanges([&](int c) {
       RangeSums& s = sums[c];
@@ -289,14 +289,24 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
       }
       new_cost = costAt(pose_try, vec_try);
     }
+    // Ceres' convergence tests, on the candidate before it is accepted: a step this small, or a cost change
+    // this small, ends the solve where it is (the candidate is dropped).
+    if (solved && predicted > 0) {
+      double step_sq = dp.squaredNorm(), x_sq = 0;
+      for (int v = 0; v < n_vectors; ++v)
+        if (res_begin[v] < res_begin[v + 1]) step_sq += dx[v].squaredNorm();
+      for (double x : pose_now) x_sq += x * x;
+      for (double x : vec_now) x_sq += x * x;
+      if (std::sqrt(step_sq) <= kParameterTolerance * (std::sqrt(x_sq) + kParameterTolerance)) break;
+      if (std::isfinite(new_cost) && std::abs(cost - new_cost) <= kFunctionTolerance * std::abs(cost)) break;
+    }
     const double rho = solved && predicted > 0 ? (cost - new_cost) / predicted : -1;
     if (std::isfinite(new_cost) && rho > kMinRelativeDecrease) {
-      const double decrease = (cost - new_cost) / std::max(cost, 1e-300);
       pose_now.swap(pose_try);
       vec_now.swap(vec_try);
       mu *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
       nu = 2;
-      if (decrease < kFunctionTolerance || step + 1 == max_iterations) {
+      if (step + 1 == max_iterations) {
         cost = new_cost;
         break;
       }

@@ -33,6 +33,8 @@ class SchurLevenbergMarquardt {
   void addResidual(const ceres::CostFunction* cost, const ceres::LossFunction* loss, int pose, int vector);
   bool empty() const { return residuals_.empty(); }
 
+  // At most max_iterations steps, successful or not (as Ceres counts them); it ends earlier on Ceres'
+  // function and parameter tolerances (1e-6 relative cost change, 1e-8 relative step).
   Summary solve(int max_iterations);
 
  private:
