@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
@@ -31,6 +32,11 @@ std::vector<ObjectMask> MaskBuilder::objects(const cv::Mat& gray, const beslam_p
     points = lidarToCamera(lidar.data, lidar.count, lidar.stride_bytes >= 16 ? lidar.stride_bytes / 4 : 4,
                            *T_cam_lidar_, K_, 0.5, options_.max_range);
   const cv::Rect image(0, 0, K_.width, K_.height);
+  struct ContourWork {
+    size_t object;          // in out
+    cv::Mat region, prior;  // refineContour's inputs
+  };
+  std::vector<ContourWork> refine;  // objects whose mask the edge contour refines
   for (const beslam_box3d& input : boxes) {
     for (double v : input.center_cam)
       if (!std::isfinite(v)) throw std::invalid_argument("box with a non-finite centre");
@@ -78,15 +84,19 @@ std::vector<ObjectMask> MaskBuilder::objects(const cv::Mat& gray, const beslam_p
       obj.from_points = !prior.empty();
       if (obj.lidar_points == 0) obj.lidar_points = static_cast<int>(idx.size());
     }
-    if (options_.contour && !gray.empty()) {
-      const ContourResult c = refineContour(gray(roi), region, prior, options_.contour_params);
-      obj.mask = c.mask;
-      obj.from_contour = c.refined;
-    } else {
-      obj.mask = prior.empty() ? region : prior;
-    }
+    obj.mask = prior.empty() ? region : prior;
+    if (options_.contour && !gray.empty()) refine.push_back({out.size(), region, prior});
     out.push_back(std::move(obj));
   }
+  // Edge contours, one box each, in parallel (OpenCV's pool): each writes its own object only.
+  cv::parallel_for_(cv::Range(0, static_cast<int>(refine.size())), [&](const cv::Range& r) {
+    for (int i = r.start; i < r.end; ++i) {
+      ObjectMask& obj = out[refine[i].object];
+      const ContourResult c = refineContour(gray(obj.roi), refine[i].region, refine[i].prior, options_.contour_params);
+      obj.mask = c.mask;
+      obj.from_contour = c.refined;
+    }
+  });
   return out;
 }
 
