@@ -25,8 +25,9 @@ OrbExtractor::OrbExtractor(const ExtractorOptions& options)
   umax_.resize(kHalfPatch + 1);
   for (int v = 0; v <= kHalfPatch; ++v)
     umax_[v] = static_cast<int>(std::floor(std::sqrt(kHalfPatch * kHalfPatch - v * v + 0.5)));
-  describer_ = cv::ORB::create(options.features, static_cast<float>(options.scale_factor), options.levels,
-                               options.border, 0, 2, cv::ORB::FAST_SCORE, 31, 20);
+  for (int level = 0; level < options.levels; ++level)
+    describers_.push_back(cv::ORB::create(options.features, static_cast<float>(options.scale_factor), 1, options.border,
+                                          0, 2, cv::ORB::FAST_SCORE, 31, 20));
 }
 
 std::vector<int> OrbExtractor::levelBudgets(int n) const {
@@ -266,17 +267,44 @@ std::shared_ptr<FeatureSet> OrbExtractor::extract(const cv::Mat& image, const cv
     if (level_image.cols <= 2 * border + 8 || level_image.rows <= 2 * border + 8) break;
     level_images.push_back(level_image);
   }
-  // Each level's keypoints depend on that level alone: the levels are searched in parallel (OpenCV's
-  // thread pool), each into its own slot, and gathered in level order, so the result is the same as one
-  // level after the other, whatever the threads.
+  // rBRIEF is read where OpenCV's ORB always read it: on its own pyramid, each level resized from the one
+  // before with INTER_LINEAR_EXACT (ours uses INTER_LINEAR; 2-3.5 of 256 bits would differ on levels 1-7).
+  std::vector<cv::Mat> describe_images(level_images.size());
+  for (size_t level = 0; level < level_images.size(); ++level) {
+    if (level == 0)
+      describe_images[0] = grey;
+    else
+      cv::resize(describe_images[level - 1], describe_images[level], level_images[level].size(), 0, 0,
+                 cv::INTER_LINEAR_EXACT);
+  }
+  // Each level's keypoints and descriptors depend on that level alone: the levels are worked in parallel
+  // (OpenCV's thread pool), each into its own slot, and gathered in level order, so the result is the same
+  // as one level after the other, whatever the threads. rBRIEF: the level's own cv::ORB (one level) blurs
+  // the level's describe image (7 x 7, sigma 2) and describes the level's keypoints there: the same bits
+  // as one cv::ORB::compute over all levels, which builds that pyramid itself.
   const int n_levels = static_cast<int>(level_images.size());
   std::vector<std::vector<cv::KeyPoint>> found(n_levels);
   std::vector<std::vector<uint16_t>> found_labels(n_levels);
+  std::vector<cv::Mat> found_descriptors(n_levels);
+  std::vector<char> described_in_order(n_levels, 1);
   cv::parallel_for_(cv::Range(0, n_levels), [&](const cv::Range& range) {
-    for (int level = range.start; level < range.end; ++level)
+    for (int level = range.start; level < range.end; ++level) {
       detectLevel(level_images[level], level, labels, static_box, budgets[level], found[level], found_labels[level]);
+      if (found[level].empty()) continue;
+      std::vector<cv::KeyPoint> described = found[level];
+      describers_[level]->compute(describe_images[level], described, found_descriptors[level]);
+      bool same = described.size() == found[level].size();
+      for (size_t i = 0; same && i < described.size(); ++i)  // OpenCV keeps the order and drops none inside the border
+        same = std::fabs(described[i].pt.x - found[level][i].pt.x) <= 0.01f &&
+               std::fabs(described[i].angle - found[level][i].angle) <= 0.01f;
+      described_in_order[level] = same;
+    }
   });
+  std::vector<cv::Mat> descriptor_rows;
   for (int level = 0; level < n_levels; ++level) {
+    if (!described_in_order[level])
+      throw std::logic_error("OrbExtractor: cv::ORB::compute dropped or reordered keypoints");
+    if (!found_descriptors[level].empty()) descriptor_rows.push_back(found_descriptors[level]);
     const double s = pyramid_.scale[level];
     const std::vector<cv::KeyPoint>& level_kps = found[level];
     const std::vector<uint16_t>& level_labels = found_labels[level];
@@ -299,21 +327,10 @@ std::shared_ptr<FeatureSet> OrbExtractor::extract(const cv::Mat& image, const cv
       }
     }
   }
-  // rBRIEF for all levels in one call: OpenCV rebuilds the same pyramid (same sizes, linear
-  // interpolation), blurs each level (7 x 7, sigma 2) and reads each keypoint's octave.
-  if (features->keypoints.empty()) {
+  if (descriptor_rows.empty())
     features->descriptors = cv::Mat(0, 32, CV_8U);
-  } else {
-    std::vector<cv::KeyPoint> described = features->keypoints;
-    describer_->compute(grey, described, features->descriptors);
-    if (described.size() != features->keypoints.size())
-      throw std::logic_error("OrbExtractor: cv::ORB::compute dropped keypoints");
-    for (size_t i = 0; i < described.size(); ++i)  // OpenCV keeps the order (grouped by level, ascending)
-      if (described[i].octave != features->keypoints[i].octave ||
-          std::fabs(described[i].pt.x - features->keypoints[i].pt.x) > 0.01f ||
-          std::fabs(described[i].angle - features->keypoints[i].angle) > 0.01f)
-        throw std::logic_error("OrbExtractor: cv::ORB::compute reordered keypoints");
-  }
+  else
+    cv::vconcat(descriptor_rows, features->descriptors);
   features->buildGrid();
   return features;
 }

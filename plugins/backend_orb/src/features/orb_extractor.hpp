@@ -46,8 +46,8 @@ class OrbExtractor {
 
   ExtractorOptions options_;
   ScalePyramid pyramid_;
-  std::vector<int> umax_;  // half-widths of the circular orientation patch
-  cv::Ptr<cv::ORB> describer_;
+  std::vector<int> umax_;                     // half-widths of the circular orientation patch
+  std::vector<cv::Ptr<cv::ORB>> describers_;  // rBRIEF, one single-level cv::ORB per pyramid level
 };
 
 }  // namespace beslam::orb
