@@ -86,34 +86,64 @@ double chi2(const Edge& e, bool* behind) {
 // options ask for Ceres); global BA and object landmarks always to Ceres.
 constexpr int kMaxSchurLmPoses = 60;
 
-double solveSchurLm(Problem& P, bool robust, int iterations, double chi2_threshold, KeyFrame* origin,
-                    double* initial_cost) {
-  const ceres::HuberLoss huber(std::sqrt(chi2_threshold)), ground_huber(2.0), anchor_huber(std::sqrt(7.815));
-  // Blocks by their place in P's arrays (id order); a pose without a residual, fixed ones and the origin stay.
-  const auto poseIndex = [&](const double* pose) { return static_cast<int>((pose - P.pose_storage.data()) / 7); };
-  const auto pointIndex = [&](const double* x) { return static_cast<int>((x - P.point_storage.data()) / 3); };
+// The robust losses of a solve.
+struct Losses {
+  explicit Losses(double chi2_threshold) : reprojection(std::sqrt(chi2_threshold)) {}
+  ceres::HuberLoss reprojection;
+  ceres::HuberLoss prior{2.0};                // ground and range priors: residuals in sigmas
+  ceres::HuberLoss anchor{std::sqrt(7.815)};  // box centres, in sigmas: chi-square 95 % of 3 dof
+};
+
+struct Block {
+  ceres::CostFunction* cost;
+  ceres::LossFunction* loss;
+  double* pose;
+  double* point;  // a map point's or an anchor's
+};
+
+// The residual blocks of one solve, in the order either solver adds them: the reprojection edges that are
+// not outliers, then the ground and range priors whose pose and point such an edge uses, then the anchors'
+// boxes whose pose one uses. Empty when every edge is an outlier.
+std::vector<Block> activeBlocks(const Problem& P, bool robust, Losses& losses) {
+  std::vector<Block> blocks;
+  const auto poseIndex = [&](const double* pose) { return (pose - P.pose_storage.data()) / 7; };
+  const auto pointIndex = [&](const double* x) { return (x - P.point_storage.data()) / 3; };
   std::vector<char> pose_used(P.pose_storage.size() / 7, 0), point_used(P.point_storage.size() / 3, 0);
-  for (const Edge& e : P.edges)
-    if (!e.outlier) pose_used[poseIndex(e.pose)] = point_used[pointIndex(e.point)] = 1;
-  if (std::find(pose_used.begin(), pose_used.end(), 1) == pose_used.end()) return 0;
-  std::vector<char> fixed(pose_used.size(), 0);
+  for (const Edge& e : P.edges) {
+    if (e.outlier) continue;
+    blocks.push_back({e.cost.get(), robust ? &losses.reprojection : nullptr, e.pose, e.point});
+    pose_used[poseIndex(e.pose)] = point_used[pointIndex(e.point)] = 1;
+  }
+  if (blocks.empty()) return blocks;
+  for (auto* edges : {&P.ground_edges, &P.range_edges})
+    for (const auto& g : *edges)
+      if (pose_used[poseIndex(g.pose)] && point_used[pointIndex(g.point)])
+        blocks.push_back({g.cost.get(), &losses.prior, g.pose, g.point});
+  for (const auto& a : P.anchor_edges)
+    if (pose_used[poseIndex(a.pose)]) blocks.push_back({a.cost.get(), &losses.anchor, a.pose, a.point});
+  return blocks;
+}
+
+double solveSchurLm(Problem& P, const std::vector<Block>& blocks, int iterations, KeyFrame* origin,
+                    double* initial_cost) {
+  // Blocks by their place in P's arrays (id order), anchors after the points; a pose without a residual,
+  // fixed ones and the origin stay.
+  const auto poseIndex = [&](const double* pose) { return static_cast<int>((pose - P.pose_storage.data()) / 7); };
+  const int n_points = static_cast<int>(P.point_storage.size() / 3);
+  const auto vectorIndex = [&](const double* x) {
+    const bool point = x >= P.point_storage.data() && x < P.point_storage.data() + P.point_storage.size();
+    return point ? static_cast<int>((x - P.point_storage.data()) / 3)
+                 : n_points + static_cast<int>((x - P.anchor_storage.data()) / 3);
+  };
+  std::vector<char> pose_used(P.pose_storage.size() / 7, 0), fixed(P.pose_storage.size() / 7, 0);
+  for (const Block& b : blocks) pose_used[poseIndex(b.pose)] = 1;
   for (KeyFrame* kf : P.fixed) fixed[poseIndex(P.poses[kf])] = 1;
   if (auto it = P.poses.find(origin); it != P.poses.end()) fixed[poseIndex(it->second)] = 1;
   SchurLevenbergMarquardt lm;
   for (size_t k = 0; k < pose_used.size(); ++k) lm.addPose(&P.pose_storage[7 * k], fixed[k] || !pose_used[k]);
-  for (size_t i = 0; i < point_used.size(); ++i) lm.addVector(&P.point_storage[3 * i]);
-  const int first_anchor = static_cast<int>(point_used.size());
+  for (int i = 0; i < n_points; ++i) lm.addVector(&P.point_storage[3 * i]);
   for (size_t i = 0; i < P.anchor_ids.size(); ++i) lm.addVector(&P.anchor_storage[3 * i]);
-  for (const Edge& e : P.edges)
-    if (!e.outlier) lm.addResidual(e.cost.get(), robust ? &huber : nullptr, poseIndex(e.pose), pointIndex(e.point));
-  for (auto* edges : {&P.ground_edges, &P.range_edges})
-    for (auto& g : *edges)
-      if (pose_used[poseIndex(g.pose)] && point_used[pointIndex(g.point)])
-        lm.addResidual(g.cost.get(), &ground_huber, poseIndex(g.pose), pointIndex(g.point));
-  for (auto& a : P.anchor_edges)
-    if (pose_used[poseIndex(a.pose)])
-      lm.addResidual(a.cost.get(), &anchor_huber, poseIndex(a.pose),
-                     first_anchor + static_cast<int>((a.point - P.anchor_storage.data()) / 3));
+  for (const Block& b : blocks) lm.addResidual(b.cost, b.loss, poseIndex(b.pose), vectorIndex(b.point));
   const SchurLevenbergMarquardt::Summary summary = lm.solve(iterations);
   if (initial_cost) *initial_cost = summary.initial_cost;
   return summary.final_cost;
@@ -121,31 +151,19 @@ double solveSchurLm(Problem& P, bool robust, int iterations, double chi2_thresho
 
 double solve(Problem& P, bool robust, int iterations, double chi2_threshold, bool fix_origin_only, KeyFrame* origin,
              double* initial_cost, BaSolver solver = BaSolver::Ceres) {
+  Losses losses(chi2_threshold);
+  const std::vector<Block> blocks = activeBlocks(P, robust, losses);
+  if (blocks.empty()) return 0;
   if (solver == BaSolver::SchurLm && !fix_origin_only && !P.objects &&
       static_cast<int>(P.moving.size()) <= kMaxSchurLmPoses)
-    return solveSchurLm(P, robust, iterations, chi2_threshold, origin, initial_cost);
+    return solveSchurLm(P, blocks, iterations, origin, initial_cost);
   ceres::Problem::Options popts;
   popts.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   popts.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(popts);
-  ceres::HuberLoss huber(std::sqrt(chi2_threshold));
   SE3LeftManifold manifold;
-  int used = 0;
-  for (Edge& e : P.edges) {
-    if (e.outlier) continue;
-    problem.AddResidualBlock(e.cost.get(), robust ? &huber : nullptr, e.pose, e.point);
-    ++used;
-  }
-  if (used == 0) return 0;
-  ceres::HuberLoss ground_huber(2.0);  // residuals are in sigmas
-  for (auto* edges : {&P.ground_edges, &P.range_edges})
-    for (auto& g : *edges)
-      if (problem.HasParameterBlock(g.pose) && problem.HasParameterBlock(g.point))
-        problem.AddResidualBlock(g.cost.get(), &ground_huber, g.pose, g.point);
-  ceres::HuberLoss anchor_huber(std::sqrt(7.815));  // residuals in sigmas: chi-square 95 % of 3 dof
-  for (auto& a : P.anchor_edges)
-    if (problem.HasParameterBlock(a.pose)) problem.AddResidualBlock(a.cost.get(), &anchor_huber, a.pose, a.point);
+  for (const Block& b : blocks) problem.AddResidualBlock(b.cost, b.loss, b.pose, b.point);
   std::vector<std::unique_ptr<ceres::HuberLoss>> object_losses;
   if (P.objects)
     for (auto& f : P.objects->factors) {
