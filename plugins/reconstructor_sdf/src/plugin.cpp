@@ -8,6 +8,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <opencv2/core/utility.hpp>
+#include <optional>
+#include <string>
+#include <utility>
 
 #include "beslam/sdk/sdk.hpp"
 #include "fit/object_fit.hpp"
@@ -74,29 +78,50 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
       l.removed = true;
       out.push_back(std::move(l));
     }
-    const bool debug = std::getenv("BESLAM_RECON_DEBUG") != nullptr;
+    std::vector<const recon::ObjectRecord*> records;
     for (int32_t id : updated) {
-      const recon::ObjectRecord& record = *store_.find(id);
-      if (debug)
+      records.push_back(store_.find(id));
+      if (std::getenv("BESLAM_RECON_DEBUG"))
         std::fprintf(stderr, "kf %ld frame %ld: object %d boxes %zu points %zu lidar %zu (kf points %zu)\n",
-                     static_cast<long>(keyframe.id), static_cast<long>(keyframe.frame_index), id, record.boxes.size(),
-                     record.map_points.size(), record.lidar_points.size(), keyframe.points.size());
-      if (auto l = refit(record)) out.push_back(std::move(*l));
+                     static_cast<long>(keyframe.id), static_cast<long>(keyframe.frame_index), id,
+                     records.back()->boxes.size(), records.back()->map_points.size(),
+                     records.back()->lidar_points.size(), keyframe.points.size());
     }
+    refitAll(records, out);
     return out;
   }
 
   std::vector<beslam::sdk::Landmark> finish() override {
     std::vector<beslam::sdk::Landmark> out;
-    for (const auto& [id, record] : store_.objects())
-      if (auto l = refit(record)) out.push_back(std::move(*l));
+    std::vector<const recon::ObjectRecord*> records;
+    for (const auto& [id, record] : store_.objects()) records.push_back(&record);
+    refitAll(records, out);
     return out;
   }
 
  private:
+  // Refits the objects on OpenCV's thread pool (each fit reads only its own record and last fit), then
+  // keeps the results in the objects' order: the same landmarks whatever the threads.
+  void refitAll(const std::vector<const recon::ObjectRecord*>& records, std::vector<beslam::sdk::Landmark>& out) {
+    std::vector<std::optional<std::pair<recon::fit::FitResult, beslam::sdk::Landmark>>> fitted(records.size());
+    std::vector<std::string> why(records.size());
+    cv::parallel_for_(cv::Range(0, static_cast<int>(records.size())), [&](const cv::Range& range) {
+      for (int i = range.start; i < range.end; ++i) fitted[i] = refit(*records[i], why[i]);
+    });
+    for (size_t i = 0; i < records.size(); ++i)
+      if (!why[i].empty()) {
+        context_.log(BESLAM_LOG_DEBUG, "object " + std::to_string(records[i]->track_id) + " not fitted: " + why[i]);
+      } else if (fitted[i]) {
+        fits_[records[i]->track_id] = std::move(fitted[i]->first);
+        out.push_back(std::move(fitted[i]->second));
+      }
+  }
+
   // Fits one object from its observations (starting from its last fit, else from its boxes); nothing
-  // when it has too few observations or the fit fails (the object waits for more keyframes).
-  std::optional<beslam::sdk::Landmark> refit(const recon::ObjectRecord& record) {
+  // when it has too few observations or the fit fails (why: the fit's reason; the object waits for more
+  // keyframes).
+  std::optional<std::pair<recon::fit::FitResult, beslam::sdk::Landmark>> refit(const recon::ObjectRecord& record,
+                                                                               std::string& why) const {
     recon::fit::FitObservations obs;
     obs.p_world = record.surfaceObservations(options_.store.map_point_margin);
     obs.T_world_obj_boxes = record.boxPose();
@@ -112,10 +137,9 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
     const Eigen::VectorXd code = last != fits_.end() ? last->second.code : Eigen::VectorXd::Zero(prior_.dimensions());
     recon::fit::FitResult r = recon::fit::fitObject(prior_, T_init, size, code, obs, fit);
     if (!r.ok) {
-      context_.log(BESLAM_LOG_DEBUG, "object " + std::to_string(record.track_id) + " not fitted: " + r.why);
+      why = r.why.empty() ? "fit failed" : r.why;
       return std::nullopt;
     }
-    fits_[record.track_id] = r;
     beslam::sdk::Landmark l;
     l.track_id = record.track_id;
     l.class_id = record.class_id;
@@ -135,7 +159,7 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
       for (const auto& f : mesh.faces)
         l.mesh_faces.insert(l.mesh_faces.end(), {uint32_t(f[0]), uint32_t(f[1]), uint32_t(f[2])});
     }
-    return l;
+    return std::make_pair(std::move(r), std::move(l));
   }
 
   const beslam::sdk::Context& context_;
