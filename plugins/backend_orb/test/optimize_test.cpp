@@ -2,6 +2,7 @@
 // reprojection error of perturbed keyframes and points.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <opencv2/core/utility.hpp>
 #include <random>
 
@@ -153,6 +154,36 @@ TEST(BundleAdjustment, SchurLmGivesTheSameBitsOnOneThreadAndTwo) {
   }
   cv::setNumThreads(threads_before);
   for (size_t k = 0; k < results[0].size(); ++k) EXPECT_EQ(results[0][k].matrix(), results[1][k].matrix()) << k;
+}
+
+// Concurrent mapping's hooks: the callback runs after each pass, and a stop request skips the refining
+// pass (ORB-SLAM2's interrupted BA) but still removes the outliers and writes the result back.
+TEST(BundleAdjustment, StopEarlySkipsTheRefiningPassAndKeepsTheResult) {
+  const ScalePyramid pyr(8, 1.2);
+  Map map_full, map_cut;
+  const auto kfs_full = perturbedScene(map_full, pyr, true);
+  const auto kfs_cut = perturbedScene(map_cut, pyr, true);
+  int passes = 0;
+  optimize::BundleAdjustmentOptions options;
+  options.between_passes = [&passes] { ++passes; };
+  const auto full = optimize::localBundleAdjustment(kfs_full.back(), map_full, options);
+  EXPECT_EQ(passes, 2);
+  EXPECT_FALSE(full.stopped_early);
+  const std::atomic<bool> stop{true};
+  options.stop_early = &stop;
+  passes = 0;
+  const auto cut = optimize::localBundleAdjustment(kfs_cut.back(), map_cut, options);
+  EXPECT_EQ(passes, 1);
+  EXPECT_TRUE(cut.stopped_early);
+  EXPECT_GE(cut.outliers_removed, 20);
+  EXPECT_LT(cut.final_cost, cut.initial_cost);
+  double moved = 0;  // the robust pass's result is written back: the poses left their start
+  for (size_t k = 1; k < kfs_cut.size(); ++k)
+    moved += (kfs_cut[k]->T_cw.translation() - kfs_full[k]->T_cw.translation()).norm();
+  EXPECT_GT(moved, 0.0) << "a cut BA is not the full one";
+  Map map_start;
+  const auto kfs_start = perturbedScene(map_start, pyr, true);
+  for (size_t k = 1; k < kfs_cut.size(); ++k) EXPECT_NE(kfs_cut[k]->T_cw.matrix(), kfs_start[k]->T_cw.matrix()) << k;
 }
 
 // Residuals of 3 rows on a fixed pose: a box centre seen from two fixed cameras puts the anchor where the

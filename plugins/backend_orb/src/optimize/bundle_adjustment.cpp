@@ -367,14 +367,20 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   report.observations = static_cast<int>(P.edges.size());
   if (P.edges.empty()) return report;
 
-  solve(P, true, options.robust_iterations, options.chi2_threshold, false, map.origin(), &report.initial_cost,
-        options.solver);
+  report.final_cost = solve(P, true, options.robust_iterations, options.chi2_threshold, false, map.origin(),
+                            &report.initial_cost, options.solver);
+  if (options.between_passes) options.between_passes();
   for (Edge& e : P.edges) {
     bool behind = false;
     e.outlier = chi2(e, &behind) > options.chi2_threshold || behind;
   }
-  report.final_cost =
-      solve(P, false, options.refine_iterations, options.chi2_threshold, false, map.origin(), nullptr, options.solver);
+  if (!(options.stop_early && options.stop_early->load())) {
+    report.final_cost = solve(P, false, options.refine_iterations, options.chi2_threshold, false, map.origin(), nullptr,
+                              options.solver);
+    if (options.between_passes) options.between_passes();
+  } else {
+    report.stopped_early = true;
+  }
   for (Edge& e : P.edges) {
     bool behind = false;
     if (chi2(e, &behind) > options.chi2_threshold || behind) {

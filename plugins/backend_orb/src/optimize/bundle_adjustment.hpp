@@ -5,6 +5,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 
 #include "ground/ground_plane.hpp"
 #include "objects/object_ba.hpp"
@@ -41,6 +42,12 @@ struct BundleAdjustmentOptions {
   bool object_range_priors = false;
   // Object landmarks of the map (Map::objects()) as 4-DoF nodes with box and surface factors (off by default).
   objects::ObjectFactorOptions objects;
+  // Concurrent mapping (local BA only): called after each pass (the robust one, the refining one), where
+  // the solve reads and writes only its own copies of the map; and when *stop_early is set after the
+  // robust pass, the refining pass is skipped (ORB-SLAM2's interrupted local BA). The outliers are still
+  // removed and the result written back.
+  std::function<void()> between_passes;
+  const std::atomic<bool>* stop_early = nullptr;
 };
 
 struct BundleAdjustmentReport {
@@ -48,6 +55,7 @@ struct BundleAdjustmentReport {
   int ground_keyframes = 0, ground_residuals = 0, object_range_residuals = 0, object_anchor_residuals = 0;
   int object_nodes = 0, object_box_factors = 0, object_surface_factors = 0;
   double initial_cost = 0, final_cost = 0;
+  bool stopped_early = false;  // the refining pass was skipped (BundleAdjustmentOptions::stop_early)
 };
 
 // Optional ground prior for local BA: every moving keyframe whose ground plane (fitGroundPlane, near the
