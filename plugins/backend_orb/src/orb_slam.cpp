@@ -1,6 +1,7 @@
 // OrbSlam facade: feature extraction, tracking and local mapping (inline or on a worker thread).
 #include "beslam_orb/orb_slam.hpp"
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -19,6 +20,7 @@
 #include "map/map_point.hpp"
 #include "map_io/map_file.hpp"
 #include "mapping/local_mapper.hpp"
+#include "mapping/map_gate.hpp"
 #include "optimize/bundle_adjustment.hpp"
 #include "place/keyframe_database.hpp"
 #include "place/vocabulary.hpp"
@@ -137,7 +139,10 @@ struct OrbSlam::Impl {
   bool object_scale_done = false;
   std::optional<double> pending_object_scale;
 
-  // Mapping thread.
+  // Mapping thread. With concurrent mapping the map is shared through `gate` (mapping/map_gate.hpp), and
+  // `stop_ba` asks the mapper to cut its local BA short (tracking wanted a keyframe while it was busy).
+  MapGate gate;
+  std::atomic<bool> stop_ba{false};
   std::thread worker;
   std::mutex mutex;
   std::condition_variable cv;
@@ -155,6 +160,11 @@ struct OrbSlam::Impl {
         tracker(
             c, o, extractor.pyramid(), map, [this](KeyFrame* kf, bool initial) { pending.emplace_back(kf, initial); },
             [this] {
+              if (options.concurrent_mapping) {  // the tracker holds the gate: let the mapper finish first
+                gate.leaveTracker();
+                waitIdle();
+                gate.enterTracker();
+              }
               mapper.reset();
               if (loop_closer) loop_closer->reset();
             },
@@ -166,6 +176,15 @@ struct OrbSlam::Impl {
       lo.global_ba_iterations = options.loop_global_ba_iterations;
       lo.seed = options.seed;
       loop_closer = std::make_unique<LoopCloser>(map, database, extractor.pyramid(), lo);
+    }
+    if (options.concurrent_mapping) {
+      options.threaded_mapping = true;
+      mapper.setConcurrency(&gate, &stop_ba);
+      tracker.setKeyFrameAcceptance([this] {
+        if (mappingIdle()) return true;
+        stop_ba = true;  // ORB-SLAM2: the mapper cuts its local BA short to take the next keyframe sooner
+        return false;
+      });
     }
     if (options.threaded_mapping) worker = std::thread([this] { run(); });
   }
@@ -228,7 +247,14 @@ struct OrbSlam::Impl {
         busy = true;
       }
       const auto t0 = Clock::now();
-      process(job.first, job.second);
+      if (options.concurrent_mapping) {
+        gate.enterMapper();
+        stop_ba = false;
+        process(job.first, job.second);
+        gate.leaveMapper();  // before busy is cleared: an idle mapper holds no gate
+      } else {
+        process(job.first, job.second);
+      }
       {
         std::lock_guard<std::mutex> lock(mutex);
         last_mapping_ms += msSince(t0);
@@ -243,6 +269,25 @@ struct OrbSlam::Impl {
     std::unique_lock<std::mutex> lock(mutex);
     cv.wait(lock, [this] { return queue.empty() && !busy; });
   }
+
+  bool mappingIdle() {
+    if (!options.threaded_mapping) return true;
+    std::lock_guard<std::mutex> lock(mutex);
+    return queue.empty() && !busy;
+  }
+
+  // Concurrent mapping: the tracker's turn at the map, left on every way out of track().
+  struct TrackerTurn {
+    MapGate* gate;
+    explicit TrackerTurn(MapGate* g) : gate(g) {
+      if (gate) gate->enterTracker();
+    }
+    ~TrackerTurn() {
+      if (gate) gate->leaveTracker();
+    }
+    TrackerTurn(const TrackerTurn&) = delete;
+    TrackerTurn& operator=(const TrackerTurn&) = delete;
+  };
 
   TrackResult track(const cv::Mat& image, const cv::Mat& labels, double timestamp, int64_t index,
                     const std::vector<ObjectBox>& boxes) {
@@ -259,7 +304,17 @@ struct OrbSlam::Impl {
         if (b.parked && b.object_id >= 0) features->object_boxes.push_back(b);
     const double extract_ms = msSince(t0);
     t0 = Clock::now();
-    waitIdle();
+    // Inline and threaded: the mapping of the last keyframe is finished before this frame is tracked.
+    // Concurrent: the tracker takes its turn at the map; a rescale, scale correction or loop correction
+    // waits for an idle mapper (they move the whole map).
+    TrackerTurn turn(options.concurrent_mapping ? &gate : nullptr);
+    if (!options.concurrent_mapping) {
+      waitIdle();
+    } else if ((mapper.hasPendingScaleEvent() || pending_object_scale || loop_pending) && !mappingIdle()) {
+      gate.leaveTracker();
+      waitIdle();
+      gate.enterTracker();
+    }
     const double wait_ms = msSince(t0);
     const int object_factors =
         mapper.lastBundleAdjustment().object_box_factors + mapper.lastBundleAdjustment().object_surface_factors;
@@ -421,9 +476,9 @@ struct OrbSlam::Impl {
   }
 
   // Frees the keyframes and map points culled since the last call, once the tracker and the mapper have let
-  // go of them. Mapping must be idle (both modes: after waitIdle()).
+  // go of them. Only with mapping idle (inline and threaded: after waitIdle(); concurrent: skipped until then).
   void releaseCulled() {
-    if (!map.hasCulled()) return;
+    if (!map.hasCulled() || !mappingIdle()) return;  // concurrent mapping: later, when the mapper is idle
     tracker.forgetCulled();
     mapper.forgetCulled();
     for (KeyFrame* kf : map.culledNotReleased()) database.erase(kf);

@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <random>
+#include <thread>
 #include <unordered_set>
 
 #include "features/scale_pyramid.hpp"
@@ -14,6 +16,7 @@
 #include "map/map_point.hpp"
 #include "map_builder.hpp"
 #include "mapping/local_mapper.hpp"
+#include "mapping/map_gate.hpp"
 
 namespace beslam::orb {
 namespace {
@@ -159,6 +162,39 @@ TEST(Map, CulledObjectsAreFreed) {
   }
   EXPECT_EQ(KeyFrame::instances(), kfs_before);
   EXPECT_EQ(MapPoint::instances(), points_before);
+}
+
+// Concurrent mapping's gate: never two holders, and a tracker that waits gets in at the mapper's next safe
+// point (it would wait forever otherwise: the mapper never leaves until the tracker is done).
+TEST(MapGate, OneHolderAtATimeAndTheTrackerGetsInAtSafePoints) {
+  MapGate gate;
+  std::atomic<int> inside{0};
+  std::atomic<bool> tracker_done{false};
+  std::atomic<bool> mapper_in{false};
+  int tracker_turns = 0;
+  std::thread mapper([&] {
+    gate.enterMapper();
+    mapper_in = true;
+    while (!tracker_done) {  // a step, then a safe point
+      EXPECT_EQ(inside.fetch_add(1), 0);
+      inside.fetch_sub(1);
+      gate.yieldToTracker();
+    }
+    gate.leaveMapper();
+  });
+  while (!mapper_in) std::this_thread::yield();  // the mapper holds the gate before the tracker asks
+  for (int i = 0; i < 200; ++i) {
+    gate.enterTracker();
+    EXPECT_EQ(inside.fetch_add(1), 0);
+    ++tracker_turns;
+    inside.fetch_sub(1);
+    gate.leaveTracker();
+  }
+  tracker_done = true;
+  mapper.join();
+  EXPECT_EQ(tracker_turns, 200);
+  gate.enterTracker();  // and the gate is free again
+  gate.leaveTracker();
 }
 
 }  // namespace

@@ -49,7 +49,8 @@ double ape(const std::vector<FramePose>& traj, const std::vector<Eigen::Isometry
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::cerr << "usage: orb_run_kitti <sequence_dir> <poses.txt|-> <out.txt> [--threaded] [--frames N] [--seed S]"
+    std::cerr << "usage: orb_run_kitti <sequence_dir> <poses.txt|-> <out.txt> [--threaded] [--concurrent] [--frames N] "
+                 "[--seed S]"
                  " [--quiet] [--kf-gap N] [--tri-ratio R] [--ba-max-kfs N] [--features N] [--no-kf-culling]"
                  " [--tri-cos C] [--ba-iters ROBUST REFINE] [--init-parallax DEG] [--init-levels L]"
                  " [--cv-threads N] [--tri-orientation] [--fast INITIAL FALLBACK] [--kf-ratio R] [--ground SIGMA "
@@ -63,6 +64,8 @@ int main(int argc, char** argv) {
   for (int i = 4; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--threaded"))
       options.threaded_mapping = true;
+    else if (!std::strcmp(argv[i], "--concurrent"))
+      options.concurrent_mapping = true;
     else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc)
       max_frames = std::stoul(argv[++i]);
     else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc)

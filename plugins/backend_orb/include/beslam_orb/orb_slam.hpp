@@ -14,7 +14,9 @@
 //
 // Threading: with Options::threaded_mapping the local mapping of a new keyframe runs on its own thread
 // while the caller goes on (and while the next frame's features are extracted); tracking of the next
-// frame waits for it. Results are the same as in the default single-threaded mode.
+// frame waits for it. Results are the same as in the default single-threaded mode. With
+// Options::concurrent_mapping tracking does not wait for a keyframe's mapping (ORB-SLAM2's model): faster,
+// but results depend on thread timing.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -136,6 +138,11 @@ struct Options {
   double object_surface_sigma = 0.1;     // map point to nearest surface sample std-dev (m)
   double object_surface_gate = 0.5;      // points farther than this (m) from every sample get no factor
   bool threaded_mapping = false;
+  // Local mapping on its own thread while tracking goes on (ORB-SLAM2's model, src/mapping/map_gate.hpp):
+  // tracking waits only for the mapper's current step, no keyframe is made while mapping is busy, a local
+  // BA is cut short when tracking wants one. Faster on two cores, not reproducible (results depend on
+  // thread timing; docs/performance.md). Implies threaded_mapping.
+  bool concurrent_mapping = false;
   // Initialisation.
   int ransac_iterations = 200;
   double init_min_parallax_deg = 1.0;  // two-view reconstruction needs this much parallax

@@ -11,6 +11,7 @@
 #include "map/keyframe.hpp"
 #include "map/map.hpp"
 #include "map/map_point.hpp"
+#include "mapping/map_gate.hpp"
 #include "matching/matcher.hpp"
 #include "stage_clock.hpp"
 
@@ -33,21 +34,28 @@ LocalMapper::LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyr
       ground_reference_(makeGroundReference()),
       object_reference_(options.ground.reference_keyframes, options.metric_max_spread) {}
 
+void LocalMapper::yieldPoint() {
+  if (gate_) gate_->yieldToTracker();
+}
+
 void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   timings_.clear();
   auto t0 = Clock::now();
   registerKeyFrame(kf);
   timings_.emplace_back("map_register", msSince(t0));
   if (!run_ba) return;
+  yieldPoint();
   t0 = Clock::now();
   cullRecentPoints(kf);
   timings_.emplace_back("map_point_culling", msSince(t0));
   t0 = Clock::now();
   last_new_points_ = createNewPoints(kf);
   timings_.emplace_back("map_triangulate", msSince(t0));
+  yieldPoint();
   t0 = Clock::now();
   fuseWithNeighbours(kf);
   timings_.emplace_back("map_fuse", msSince(t0));
+  yieldPoint();
   t0 = Clock::now();
   if (map_.numKeyFrames() > 2) {
     optimize::GroundPrior ground{options_.ground, &ground_reference_};
@@ -61,6 +69,8 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
     // Once the parked cars' boxes gave the scale, their range priors hold it; the ground prior would pull it
     // towards the road fits, whose biases (bare roads, kerbs) fight the direct measurement.
     const bool ground_prior = options_.ground.enabled && !object_scaled_;
+    if (gate_) ba.between_passes = [this] { yieldPoint(); };
+    if (stop_ba_) ba.stop_early = stop_ba_;
     last_ba_ = optimize::localBundleAdjustment(kf, map_, ba, ground_prior ? &ground : nullptr);
     if (options_.object_range_sigma > 0 && options_.metric_camera_height > 0 && !metric_ && !pending_scale_) {
       if (const auto s = objectScale(*kf)) object_reference_.add(*s);
@@ -77,6 +87,7 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
     if (metric_ && !object_scaled_ && options_.metric_correction_min > 0) keepScale(kf);
   }
   timings_.emplace_back("map_local_ba", msSince(t0));
+  yieldPoint();
   t0 = Clock::now();
   int culled = 0;
   if (options_.keyframe_culling) culled = cullKeyFrames(kf);
@@ -217,6 +228,7 @@ int LocalMapper::createNewPoints(KeyFrame* kf) {
   int created = 0;
   std::vector<std::pair<int, int>> matches;
   for (KeyFrame* kf2 : neighbours) {
+    yieldPoint();  // each neighbour's search and triangulation is a step of its own
     if (kf2->bad) continue;
     const Eigen::Vector3d O2 = kf2->centre();
     const double baseline = (O2 - O1).norm();

@@ -3,6 +3,7 @@
 // duplicates with first- and second-order neighbours, local bundle adjustment, keyframe culling.
 #pragma once
 
+#include <atomic>
 #include <list>
 #include <optional>
 #include <string>
@@ -17,6 +18,7 @@ namespace beslam::orb {
 
 class KeyFrame;
 class Map;
+class MapGate;
 class MapPoint;
 
 struct LocalMapperOptions {
@@ -58,6 +60,15 @@ class LocalMapper {
 
   // The whole pipeline for one keyframe. `run_ba` = false skips BA and culling (used for the initial map).
   void processKeyFrame(KeyFrame* kf, bool run_ba = true);
+  // Concurrent mapping (mapping/map_gate.hpp): the mapper lets a waiting tracker through `gate` at its safe
+  // points, and when `stop_ba` is set it ends a local BA after its robust pass (ORB-SLAM2's interruption
+  // when tracking wants a keyframe). Both null (default): no safe points, every BA runs to its end.
+  void setConcurrency(MapGate* gate, const std::atomic<bool>* stop_ba) {
+    gate_ = gate;
+    stop_ba_ = stop_ba;
+  }
+  // A scale event is waiting for the caller (takePendingScale / takePendingCorrection).
+  bool hasPendingScaleEvent() const { return pending_scale_.has_value() || pending_correction_.has_value(); }
   void reset() {
     recent_.clear();
     ground_reference_ = makeGroundReference();
@@ -123,6 +134,9 @@ class LocalMapper {
   LocalMapperOptions options_;
   std::list<MapPoint*> recent_;
   std::vector<std::pair<std::string, double>> timings_;
+  MapGate* gate_ = nullptr;
+  const std::atomic<bool>* stop_ba_ = nullptr;
+  void yieldPoint();  // a safe point (see setConcurrency)
   int last_new_points_ = 0;
   double currentGroundHeight(KeyFrame* kf) const;
   std::optional<double> objectScale(const KeyFrame& kf) const;

@@ -389,9 +389,9 @@ void Tracker::followCorrection(const std::map<long, Eigen::Isometry3d>& T_cw_bef
 
 void Tracker::reset() {
   if (map_.numKeyFrames() > 0) ++resets_;
+  if (on_reset_) on_reset_();  // first: with concurrent mapping it waits for the mapper to let go of the map
   map_.clear();
   if (database_) database_->clear();
-  if (on_reset_) on_reset_();
   state_ = TrackingState::NotInitialized;
   init_active_ = false;
   init_between_.clear();
@@ -756,7 +756,7 @@ bool Tracker::needNewKeyFrame() const {
   const int64_t since = current_.index - last_kf_frame_;
   const bool c1 = since >= max_frames || since >= options_.keyframe_min_gap;
   const bool c2 = inliers_ < ref_matches * options_.keyframe_ref_ratio && inliers_ > 15;
-  return c1 && c2;
+  return c1 && c2 && (!accepts_keyframe_ || accepts_keyframe_());
 }
 
 void Tracker::createKeyFrame() {

@@ -45,6 +45,9 @@ class Tracker {
           KeyFrameDatabase* database = nullptr);
 
   TrackResult track(std::shared_ptr<const FeatureSet> features, double timestamp, int64_t index);
+  // Concurrent mapping: a keyframe that the rules ask for is made only if `accepts()` says local mapping
+  // can take it now (ORB-SLAM2's monocular rule: none while mapping is busy). Unset: always.
+  void setKeyFrameAcceptance(std::function<bool()> accepts) { accepts_keyframe_ = std::move(accepts); }
   bool initialising() const { return state_ == TrackingState::NotInitialized; }
   TrackingState state() const { return state_; }
   std::optional<Eigen::Isometry3d> predictPose() const;  // T_world_cam
@@ -107,6 +110,7 @@ class Tracker {
   Map& map_;
   KeyFrameSink sink_;
   std::function<void()> on_reset_;
+  std::function<bool()> accepts_keyframe_;
   const place::Vocabulary* vocabulary_;
   KeyFrameDatabase* database_;
 
