@@ -150,6 +150,15 @@ struct OrbSlam::Impl {
   std::vector<std::pair<KeyFrame*, bool>> pending;  // made during the current track() call
   bool busy = false, stop = false;
   double last_mapping_ms = 0;
+  // Object landmarks added and objects dropped by the caller while mapping may run (threaded modes): kept in
+  // call order and applied once mapping is idle, before the next frame is tracked. Inline mapping applies
+  // them at once; the order against mapping is the same (a keyframe's mapping, then the caller's objects,
+  // then the next frame), so every mode gives the same map, and the caller's reconstruction overlaps mapping.
+  struct ObjectOp {
+    std::vector<ObjectLandmark> add;
+    int32_t drop = -1;
+  };
+  std::vector<ObjectOp> object_ops;
 
   Impl(const Camera& c, const Options& o)
       : camera(c),
@@ -270,6 +279,28 @@ struct OrbSlam::Impl {
     cv.wait(lock, [this] { return queue.empty() && !busy; });
   }
 
+  void applyObjectOps() {
+    for (const ObjectOp& op : object_ops) {
+      if (op.drop >= 0) {
+        stats.object_points_dropped += map.dropObjectPoints(op.drop);
+        map.objects().erase(op.drop, map.lastKeyFrameId());  // and with it its factors
+      }
+      for (const ObjectLandmark& l : op.add) map.objects().add(l, map.lastKeyFrameId());
+    }
+    object_ops.clear();
+  }
+
+  void queueObjectOp(ObjectOp op) {
+    object_ops.push_back(std::move(op));
+    if (!options.threaded_mapping) applyObjectOps();
+  }
+
+  // Mapping idle and the caller's object changes applied: what every accessor of the map needs.
+  void syncIdle() {
+    waitIdle();
+    applyObjectOps();
+  }
+
   bool mappingIdle() {
     if (!options.threaded_mapping) return true;
     std::lock_guard<std::mutex> lock(mutex);
@@ -310,11 +341,13 @@ struct OrbSlam::Impl {
     TrackerTurn turn(options.concurrent_mapping ? &gate : nullptr);
     if (!options.concurrent_mapping) {
       waitIdle();
-    } else if ((mapper.hasPendingScaleEvent() || pending_object_scale || loop_pending) && !mappingIdle()) {
+    } else if ((mapper.hasPendingScaleEvent() || pending_object_scale || loop_pending || !object_ops.empty()) &&
+               !mappingIdle()) {
       gate.leaveTracker();
       waitIdle();
       gate.enterTracker();
     }
+    applyObjectOps();
     const double wait_ms = msSince(t0);
     const int object_factors =
         mapper.lastBundleAdjustment().object_box_factors + mapper.lastBundleAdjustment().object_surface_factors;
@@ -542,7 +575,7 @@ TrackResult OrbSlam::track(const cv::Mat& gray, const cv::Mat& label_mask, doubl
 }
 
 void OrbSlam::finish() {
-  impl_->waitIdle();
+  impl_->syncIdle();
   KeyFrame* last = impl_->tracker.lastKeyFrame();
   if (!impl_->options.localisation_only && last && !last->bad && impl_->map.numKeyFrames() > 2) {
     optimize::BundleAdjustmentOptions ba = mapperOptions(impl_->options).ba;
@@ -554,35 +587,35 @@ void OrbSlam::finish() {
 }
 
 void OrbSlam::saveMap(const std::string& path) const {
-  impl_->waitIdle();
+  impl_->syncIdle();
   saveMapFile(path, impl_->map, impl_->mapFileInfo(), impl_->map.objects().landmarks());
 }
 
 void OrbSlam::loadMap(const std::string& path) { impl_->loadMap(path); }
 
 std::vector<FramePose> OrbSlam::trajectory() const {
-  impl_->waitIdle();
+  impl_->syncIdle();
   std::vector<FramePose> out;
   for (const FrameRecord& r : impl_->tracker.records()) out.push_back({r.index, r.timestamp, impl_->composedPose(r)});
   return out;
 }
 
 std::vector<FramePose> OrbSlam::onlineTrajectory() const {
-  impl_->waitIdle();
+  impl_->syncIdle();
   std::vector<FramePose> out;
   for (const FrameRecord& r : impl_->tracker.records()) out.push_back({r.index, r.timestamp, r.T_cw_online.inverse()});
   return out;
 }
 
 std::vector<FramePose> OrbSlam::keyframes() const {
-  impl_->waitIdle();
+  impl_->syncIdle();
   std::vector<FramePose> out;
   for (KeyFrame* kf : impl_->map.keyframes()) out.push_back({kf->frame_index, kf->timestamp, kf->T_cw.inverse()});
   return out;
 }
 
 std::vector<CloudPoint> OrbSlam::mapPoints() const {
-  impl_->waitIdle();
+  impl_->syncIdle();
   std::vector<CloudPoint> out;
   for (MapPoint* mp : impl_->map.points()) {
     if (mp->bad) continue;
@@ -601,24 +634,21 @@ std::vector<CloudPoint> OrbSlam::mapPoints() const {
 
 void OrbSlam::addObjectLandmarks(const std::vector<ObjectLandmark>& landmarks) {
   if (impl_->options.localisation_only) return;  // the loaded map's landmarks stay as they are
-  impl_->waitIdle();                             // local BA reads and moves them
-  for (const ObjectLandmark& l : landmarks) impl_->map.objects().add(l, impl_->map.lastKeyFrameId());
+  impl_->queueObjectOp({landmarks, -1});         // local BA reads and moves them: once mapping is idle
 }
 
 std::vector<ObjectLandmark> OrbSlam::objectLandmarks() const {
-  impl_->waitIdle();
+  impl_->syncIdle();
   return impl_->map.objects().landmarks();
 }
 
 void OrbSlam::dropObject(int32_t object_id) {
-  impl_->waitIdle();
   if (impl_->options.localisation_only) return;  // the map does not change
-  impl_->stats.object_points_dropped += impl_->map.dropObjectPoints(object_id);
-  impl_->map.objects().erase(object_id, impl_->map.lastKeyFrameId());  // and with it its factors
+  impl_->queueObjectOp({{}, object_id});         // once mapping is idle
 }
 
 Statistics OrbSlam::statistics() const {
-  impl_->waitIdle();
+  impl_->syncIdle();
   Statistics s = impl_->stats;
   s.keyframes = static_cast<int>(impl_->map.numKeyFrames());
   s.keyframes_culled = impl_->map.culledKeyFrames();

@@ -370,14 +370,27 @@ ObjectLandmark carLandmark(int64_t id) {
   return l;
 }
 
-TEST(ObjectLandmarks, DropObjectRemovesTheLandmark) {
-  OrbSlam slam(kCam, Options{});
-  slam.addObjectLandmarks({carLandmark(7), carLandmark(8)});
-  ASSERT_EQ(slam.objectLandmarks().size(), 2u);
-  slam.dropObject(7);
-  const auto left = slam.objectLandmarks();
-  ASSERT_EQ(left.size(), 1u);
-  EXPECT_EQ(left[0].id, 8);
+// In every mapping mode: with a mapping thread the changes wait for an idle mapper and are applied in
+// call order (a drop then a re-add of the same id leaves it there; an add then a drop does not).
+TEST(ObjectLandmarks, DropObjectRemovesTheLandmarkInEveryMappingMode) {
+  for (int mode = 0; mode < 3; ++mode) {
+    Options o;
+    o.threaded_mapping = mode == 1;
+    o.concurrent_mapping = mode == 2;
+    OrbSlam slam(kCam, o);
+    slam.addObjectLandmarks({carLandmark(7), carLandmark(8)});
+    ASSERT_EQ(slam.objectLandmarks().size(), 2u) << mode;
+    slam.dropObject(7);
+    const auto left = slam.objectLandmarks();
+    ASSERT_EQ(left.size(), 1u) << mode;
+    EXPECT_EQ(left[0].id, 8) << mode;
+    slam.dropObject(8);
+    slam.addObjectLandmarks({carLandmark(8), carLandmark(9)});
+    slam.dropObject(9);
+    const auto last = slam.objectLandmarks();
+    ASSERT_EQ(last.size(), 1u) << mode;
+    EXPECT_EQ(last[0].id, 8) << mode;
+  }
 }
 
 TEST(ObjectLandmarks, NonFiniteInputIsLeftOut) {
