@@ -28,6 +28,17 @@ RunResult runCorridor(const Options& options, int frames = kFrames) {
   return {slam.trajectory(), slam.statistics()};
 }
 
+// Sim(3)-aligned position APE of a run against the corridor's truth.
+double apeOf(const RunResult& run) {
+  static const test::CorridorWorld world;
+  std::vector<Eigen::Vector3d> est, truth;
+  for (const FramePose& p : run.trajectory) {
+    est.push_back(p.T_world_cam.translation());
+    truth.push_back(world.pose(static_cast<int>(p.frame_index)).translation());
+  }
+  return formats::positionError(est, truth).rmse;
+}
+
 Options smallOptions() {
   Options o;
   o.extractor.features = 1000;
@@ -35,20 +46,13 @@ Options smallOptions() {
 }
 
 TEST(SlamSynthetic, TracksTheCorridorAccurately) {
-  const test::CorridorWorld world;
   const RunResult run = runCorridor(smallOptions());
   EXPECT_GE(run.stats.initialised_at_frame, 0);
   EXPECT_LE(run.stats.initialised_at_frame, 10);
   EXPECT_EQ(run.stats.resets, 0);
   EXPECT_GE(static_cast<int>(run.trajectory.size()), kFrames - run.stats.initialised_at_frame);
-  std::vector<Eigen::Vector3d> est, truth;
-  for (const FramePose& p : run.trajectory) {
-    est.push_back(p.T_world_cam.translation());
-    truth.push_back(world.pose(static_cast<int>(p.frame_index)).translation());
-  }
-  const auto ape = formats::positionError(est, truth);
   // 15.6 m driven: a few centimetres of error.
-  EXPECT_LT(ape.rmse, 0.10) << "APE " << ape.rmse;
+  EXPECT_LT(apeOf(run), 0.10);
 }
 
 TEST(SlamSynthetic, SameSeedSameTrajectory) {
@@ -73,7 +77,6 @@ TEST(SlamSynthetic, ThreadedMappingGivesTheSameTrajectory) {
 // Concurrent mapping (tracking does not wait for mapping, ORB-SLAM2's model) gives no reproducible
 // trajectory, so it is held to the accuracy of the inline run, not to its bits, whatever the threads do.
 TEST(SlamSynthetic, ConcurrentMappingTracksTheCorridorAccurately) {
-  const test::CorridorWorld world;
   Options concurrent = smallOptions();
   concurrent.concurrent_mapping = true;
   for (int run_index = 0; run_index < 3; ++run_index) {
@@ -81,12 +84,7 @@ TEST(SlamSynthetic, ConcurrentMappingTracksTheCorridorAccurately) {
     EXPECT_EQ(run.stats.resets, 0);
     EXPECT_GE(run.stats.keyframes, 3);
     ASSERT_GE(static_cast<int>(run.trajectory.size()), kFrames - run.stats.initialised_at_frame);
-    std::vector<Eigen::Vector3d> est, truth;
-    for (const FramePose& p : run.trajectory) {
-      est.push_back(p.T_world_cam.translation());
-      truth.push_back(world.pose(static_cast<int>(p.frame_index)).translation());
-    }
-    EXPECT_LT(formats::positionError(est, truth).rmse, 0.10) << "run " << run_index;
+    EXPECT_LT(apeOf(run), 0.10) << "run " << run_index;
   }
 }
 
