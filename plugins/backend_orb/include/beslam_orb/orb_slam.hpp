@@ -17,6 +17,9 @@
 // frame waits for it. Results are the same as in the default single-threaded mode. With
 // Options::concurrent_mapping tracking does not wait for a keyframe's mapping (ORB-SLAM2's model): faster,
 // but results depend on thread timing.
+// With a mapping thread, addObjectLandmarks() and dropObject() return at once: their changes are applied in
+// call order once mapping is idle (before the next frame is tracked, or by any accessor), the same order
+// against mapping as inline, so they change no result.
 #pragma once
 
 #include <Eigen/Geometry>
