@@ -169,11 +169,7 @@ struct OrbSlam::Impl {
         tracker(
             c, o, extractor.pyramid(), map, [this](KeyFrame* kf, bool initial) { pending.emplace_back(kf, initial); },
             [this] {
-              if (options.concurrent_mapping) {  // the tracker holds the gate: let the mapper finish first
-                gate.leaveTracker();
-                waitIdle();
-                gate.enterTracker();
-              }
+              if (options.concurrent_mapping) waitIdleHoldingGate();  // the mapper finishes before the map goes
               mapper.reset();
               if (loop_closer) loop_closer->reset();
             },
@@ -307,6 +303,14 @@ struct OrbSlam::Impl {
     return queue.empty() && !busy;
   }
 
+  // Concurrent mapping, the tracker holding the gate: waits for an idle mapper (which needs the gate to
+  // finish), then takes the gate back.
+  void waitIdleHoldingGate() {
+    gate.leaveTracker();
+    waitIdle();
+    gate.enterTracker();
+  }
+
   // Concurrent mapping: the tracker's turn at the map, left on every way out of track().
   struct TrackerTurn {
     MapGate* gate;
@@ -343,9 +347,7 @@ struct OrbSlam::Impl {
       waitIdle();
     } else if ((mapper.hasPendingScaleEvent() || pending_object_scale || loop_pending || !object_ops.empty()) &&
                !mappingIdle()) {
-      gate.leaveTracker();
-      waitIdle();
-      gate.enterTracker();
+      waitIdleHoldingGate();
     }
     applyObjectOps();
     const double wait_ms = msSince(t0);

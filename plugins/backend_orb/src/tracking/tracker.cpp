@@ -751,8 +751,9 @@ bool Tracker::needNewKeyFrame() const {
   if (!ref) return true;
   const int min_obs = n_kfs <= 2 ? 2 : 3;
   const int ref_matches = ref->trackedPoints(min_obs);
-  // ORB-SLAM inserts when local mapping is idle, which on KITTI is about every other frame; local
-  // mapping here always finishes before the next frame, so a minimum gap stands in for "busy".
+  // ORB-SLAM inserts when local mapping is idle, which on KITTI is about every other frame. Inline and
+  // threaded mapping finish before the next frame, so a minimum gap stands in for "busy"; with concurrent
+  // mapping accepts_keyframe_ asks the mapper itself.
   const int64_t since = current_.index - last_kf_frame_;
   const bool c1 = since >= max_frames || since >= options_.keyframe_min_gap;
   const bool c2 = inliers_ < ref_matches * options_.keyframe_ref_ratio && inliers_ > 15;
