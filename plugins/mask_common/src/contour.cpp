@@ -1,7 +1,6 @@
 #include "beslam/mask_common/contour.hpp"
 
-#include <ceres/ceres.h>
-
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -10,61 +9,112 @@ namespace beslam::mask {
 
 namespace {
 
-template <class T>
-T cubicAt(const T* c, double t) {
-  return c[0] + T(t) * (c[1] + T(t) * (c[2] + T(t) * c[3]));
-}
-template <class T>
-T cubicSlope(const T* c, double t, double half_width) {
-  return (c[1] + T(t) * (T(2) * c[2] + T(3 * t) * c[3])) / T(half_width);
-}
-
-// Distance (px, vertical) of an edge point to its rectangle's curve; linear in the coefficients.
-class PointCost : public ceres::SizedCostFunction<1, 4> {
- public:
-  PointCost(double t, double y) : t_(t), y_(y) {}
-  bool Evaluate(double const* const* p, double* r, double** J) const override {
-    const double* c = p[0];
-    r[0] = c[0] + t_ * (c[1] + t_ * (c[2] + t_ * c[3])) - y_;
-    if (J && J[0]) J[0][0] = 1, J[0][1] = t_, J[0][2] = t_ * t_, J[0][3] = t_ * t_ * t_;
-    return true;
-  }
-
- private:
-  double t_, y_;
+// The joint fit (step 4) over the six cubics' 24 coefficients: cost = 1/2 sum rho(r^2) over three kinds of
+// term, minimised by Levenberg-Marquardt on the robustly reweighted normal equations (24 x 24, dense). A
+// hand-written solver: Ceres' per-problem set-up cost ten times the solve itself at this size.
+struct PointTerm {  // weight * Cauchy(2 px) of the vertical distance of an outline point to its piece's curve
+  int piece;
+  double t, y, weight;
 };
-
-// C0 join of two neighbouring curves at a shared x.
-struct JoinCost {
-  double ta, tb, w;
-  template <class T>
-  bool operator()(const T* a, const T* b, T* r) const {
-    r[0] = T(w) * (cubicAt(a, ta) - cubicAt(b, tb));
-    return true;
-  }
+struct JoinTerm {  // C0 join of two neighbouring curves at a shared x, squared, weighted inside r
+  int a, b;
+  double ta, tb, weight;
 };
-
-// Equation (3): the angle between the image gradient at an edge point (unit normal ne) and the normal of
-// the fitted curve at that x, as sin(angle) (edge polarity does not matter). With d = f'(x) the curve
+// Equation (3): the angle between the image gradient at an edge point (unit normal nx, ny) and the normal
+// of the fitted curve at that x, as sin(angle) (edge polarity does not matter). With d = f'(x) the curve
 // normal is (-d, 1) / n, n = sqrt(1 + d^2), and r = w (nx / n + ny d / n), dr/dd = w (ny - nx d) / n^3.
-class SmoothCost : public ceres::SizedCostFunction<1, 4> {
+struct SmoothTerm {
+  int piece;
+  double t, half_width, nx, ny;
+};
+using Coefficients = std::array<std::array<double, 4>, 6>;
+using Normal = Eigen::Matrix<double, 24, 24>;
+using Vector24 = Eigen::Matrix<double, 24, 1>;
+
+class CurveFit {
  public:
-  SmoothCost(double t, double half_width, double nx, double ny, double w)
-      : t_(t), hw_(half_width), nx_(nx), ny_(ny), w_(w) {}
-  bool Evaluate(double const* const* p, double* r, double** J) const override {
-    const double* c = p[0];
-    const double d = (c[1] + t_ * (2 * c[2] + 3 * t_ * c[3])) / hw_;
-    const double n2 = 1 + d * d, n = std::sqrt(n2);
-    r[0] = w_ * (nx_ + ny_ * d) / n;
-    if (J && J[0]) {
-      const double drdd = w_ * (ny_ - nx_ * d) / (n2 * n);
-      J[0][0] = 0, J[0][1] = drdd / hw_, J[0][2] = drdd * 2 * t_ / hw_, J[0][3] = drdd * 3 * t_ * t_ / hw_;
+  CurveFit(double smooth_weight) : smooth_weight_(smooth_weight), smooth_b2_(sq(0.1 * smooth_weight)) {}
+  std::vector<PointTerm> points;
+  std::vector<JoinTerm> joins;
+  std::vector<SmoothTerm> smooth;
+
+  // 1/2 sum rho(r^2); with H and g also the reweighted Gauss-Newton system (sum rho' J^T J, sum rho' J^T r).
+  double evaluate(const Coefficients& c, Normal* H, Vector24* g) const {
+    if (H) H->setZero(), g->setZero();
+    double cost = 0;
+    auto add = [&](int piece, const double(&J)[4], double r, double w) {
+      const int o = 4 * piece;
+      for (int i = 0; i < 4; ++i) {
+        (*g)(o + i) += w * J[i] * r;
+        for (int k = 0; k < 4; ++k) (*H)(o + i, o + k) += w * J[i] * J[k];
+      }
+    };
+    for (const PointTerm& p : points) {
+      const auto& a = c[p.piece];
+      const double r = a[0] + p.t * (a[1] + p.t * (a[2] + p.t * a[3])) - p.y, s = r * r;
+      cost += 0.5 * p.weight * kCauchy2 * std::log1p(s / kCauchy2);
+      if (H) add(p.piece, {1, p.t, p.t * p.t, p.t * p.t * p.t}, r, p.weight / (1 + s / kCauchy2));
     }
-    return true;
+    for (const JoinTerm& j : joins) {
+      const double r = j.weight * (cubic(c[j.a], j.ta) - cubic(c[j.b], j.tb));
+      cost += 0.5 * r * r;
+      if (!H) continue;
+      const double Ja[4] = {j.weight, j.weight * j.ta, j.weight * j.ta * j.ta, j.weight * j.ta * j.ta * j.ta};
+      const double Jb[4] = {-j.weight, -j.weight * j.tb, -j.weight * j.tb * j.tb, -j.weight * j.tb * j.tb * j.tb};
+      add(j.a, Ja, r, 1.0);
+      add(j.b, Jb, r, 1.0);
+      for (int i = 0; i < 4; ++i)
+        for (int k = 0; k < 4; ++k) {
+          (*H)(4 * j.a + i, 4 * j.b + k) += Ja[i] * Jb[k];
+          (*H)(4 * j.b + k, 4 * j.a + i) += Ja[i] * Jb[k];
+        }
+    }
+    for (const SmoothTerm& e : smooth) {
+      const auto& a = c[e.piece];
+      const double d = (a[1] + e.t * (2 * a[2] + 3 * e.t * a[3])) / e.half_width;
+      const double n2 = 1 + d * d, n = std::sqrt(n2);
+      const double r = smooth_weight_ * (e.nx + e.ny * d) / n, s = r * r;
+      const double root = std::sqrt(1 + s / smooth_b2_);
+      cost += smooth_b2_ * (root - 1);  // 1/2 of SoftLOne: 2 b^2 (sqrt(1 + s / b^2) - 1)
+      if (!H) continue;
+      const double drdd = smooth_weight_ * (e.ny - e.nx * d) / (n2 * n) / e.half_width;
+      add(e.piece, {0, drdd, drdd * 2 * e.t, drdd * 3 * e.t * e.t}, r, 1 / root);
+    }
+    return cost;
+  }
+
+  // At most max_iterations trial steps; stops when a step lowers the cost by less than 1e-6 of it.
+  void solve(Coefficients& c, int max_iterations) const {
+    Normal H;
+    Vector24 g;
+    double cost = evaluate(c, &H, &g);
+    double mu = 1e-4;  // damping, relative to the diagonal of H
+    for (int it = 0; it < max_iterations; ++it) {
+      Normal A = H;
+      A.diagonal() += mu * H.diagonal().cwiseMax(1e-6);
+      const Vector24 step = A.ldlt().solve(-g);
+      if (!step.allFinite()) break;
+      Coefficients trial = c;
+      for (int p = 0; p < 6; ++p)
+        for (int i = 0; i < 4; ++i) trial[p][i] += step(4 * p + i);
+      const double trial_cost = evaluate(trial, nullptr, nullptr);
+      if (!(trial_cost < cost)) {
+        mu *= 4;
+        continue;
+      }
+      const bool converged = cost - trial_cost < 1e-6 * cost;
+      c = trial;
+      cost = evaluate(c, &H, &g);
+      mu = std::max(mu / 3, 1e-12);
+      if (converged) break;
+    }
   }
 
  private:
-  double t_, hw_, nx_, ny_, w_;
+  static constexpr double kCauchy2 = 4.0;  // Cauchy scale 2 px, squared
+  static double sq(double v) { return v * v; }
+  static double cubic(const std::array<double, 4>& a, double t) { return a[0] + t * (a[1] + t * (a[2] + t * a[3])); }
+  double smooth_weight_, smooth_b2_;
 };
 
 struct EdgePoint {
@@ -231,38 +281,25 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
     for (int j = 0; j <= deg; ++j) c.c[j] = sol.at<double>(j);
   }
 
-  // Joint refinement with Ceres.
-  ceres::Problem::Options popt;
-  popt.cost_function_ownership = ceres::TAKE_OWNERSHIP;
-  popt.loss_function_ownership = ceres::TAKE_OWNERSHIP;
-  ceres::Problem problem(popt);
-  std::array<std::array<double, 4>, 6> coef;
-  for (int i = 0; i < 6; ++i) coef[i] = result.curves[i].c;
+  // Joint refinement (CurveFit above).
+  CurveFit fit(params.smooth_weight);
   for (int i = 0; i < 6; ++i) {
-    problem.AddParameterBlock(coef[i].data(), 4);
     const Cubic& c = result.curves[i];
     // Evenly thinned to at most max_points_per_piece (the fit is over-determined long before that).
     const size_t stride =
         std::max<size_t>(1, (data[i].size() + params.max_points_per_piece - 1) / params.max_points_per_piece);
     const double weight = (result.from_edges[i] ? 1.0 : 0.5) * static_cast<double>(stride);
-    for (size_t k = 0; k < data[i].size(); k += stride) {
-      const cv::Point2d& p = data[i][k];
-      problem.AddResidualBlock(new PointCost((p.x - c.x_mid) / c.half_width, p.y),
-                               new ceres::ScaledLoss(new ceres::CauchyLoss(2.0), weight, ceres::TAKE_OWNERSHIP),
-                               coef[i].data());
-    }
+    for (size_t k = 0; k < data[i].size(); k += stride)
+      fit.points.push_back({i, (data[i][k].x - c.x_mid) / c.half_width, data[i][k].y, weight});
   }
   // Neighbours sharing an end: R1-R2, R2-R3 (top row) and R4-R5, R5-R6 (bottom row) at the column
   // boundaries. (R3-R4 and R6-R1 meet through the region's vertical sides.)
   const int joins[4][2] = {{0, 1}, {1, 2}, {3, 4}, {4, 5}};
-  int smooth_terms = 0;
   for (const auto& j : joins) {
     const Cubic& a = result.curves[j[0]];
     const Cubic& b = result.curves[j[1]];
     const double x = (j[0] < 3) ? pieces[j[0]].xb : pieces[j[0]].xa;  // shared boundary
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<JoinCost, 1, 4, 4>(new JoinCost{
-                                 (x - a.x_mid) / a.half_width, (x - b.x_mid) / b.half_width, params.join_weight}),
-                             nullptr, coef[j[0]].data(), coef[j[1]].data());
+    fit.joins.push_back({j[0], j[1], (x - a.x_mid) / a.half_width, (x - b.x_mid) / b.half_width, params.join_weight});
     // Equation (3): the M edge points of both rectangles near the shared boundary, against both curves.
     const double band = std::max(2.0, 0.25 * (pieces[j[0]].xb - pieces[j[0]].xa));
     for (int side = 0; side < 2; ++side) {
@@ -272,22 +309,14 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
         if (std::abs(e.x - x) > band) continue;
         for (int k = 0; k < 2; ++k) {
           const Cubic& c = result.curves[j[k]];
-          problem.AddResidualBlock(
-              new SmoothCost((e.x - c.x_mid) / c.half_width, c.half_width, e.nx, e.ny, params.smooth_weight),
-              new ceres::SoftLOneLoss(0.1 * params.smooth_weight), coef[j[k]].data());
-          ++smooth_terms;
+          fit.smooth.push_back({j[k], (e.x - c.x_mid) / c.half_width, c.half_width, e.nx, e.ny});
         }
       }
     }
   }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 24 unknowns: J^T J is tiny
-  options.max_num_iterations = params.max_iterations;
-  options.logging_type = ceres::SILENT;
-  options.minimizer_progress_to_stdout = false;
-  options.num_threads = 1;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  Coefficients coef;
+  for (int i = 0; i < 6; ++i) coef[i] = result.curves[i].c;
+  fit.solve(coef, params.max_iterations);
   for (int i = 0; i < 6; ++i) result.curves[i].c = coef[i];
 
   // Equation (3) at the solution, for reporting.
@@ -328,7 +357,6 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
   cv::fillPoly(filled, std::vector<std::vector<cv::Point>>{contour}, cv::Scalar(255));
   cv::bitwise_and(filled, region, result.mask);
   result.refined = true;
-  (void)smooth_terms;
   return result;
 }
 

@@ -6,7 +6,7 @@
 //  3. In each rectangle the outline's edge points: per column, the outermost edge pixel (topmost in the
 //     top row, lowest in the bottom row); with a prior mask (LiDAR points) the edge pixel nearest the
 //     prior's outline. A cubic y = f_i(x) is fitted to each rectangle's points.
-//  4. Ceres minimises, jointly over the six cubics: robust point distances, C0 joins of neighbouring
+//  4. Levenberg-Marquardt minimises, jointly over the six cubics: robust point distances, C0 joins of neighbouring
 //     curves at their shared ends, and equation (3), xi = sum_j |d_e - d_j| over the M edge points near
 //     each shared boundary: the angle between the image gradient at the edge point (d_e) and the normal
 //     of the fitted curve there (d_j), as |sin| so edge polarity does not matter.
