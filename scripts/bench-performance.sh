@@ -43,6 +43,11 @@ builds=(build)
 for b in "${builds[@]}"; do
   [ -x "$b/bin/beslam" ] || { echo "bench-performance: $b/bin/beslam not found (build first)" >&2; exit 1; }
 done
+if [ -n "$base" ] && [ "$(basename "$base")" = build ]; then
+  echo "bench-performance: --base $base: its runs would go where build/'s go (out/bench-performance/build);" \
+    "name the base build's folder otherwise, e.g. a symbolic link build-base -> $base" >&2
+  exit 2
+fi
 
 case_args() {  # the `beslam run` arguments of a case
   case "$1" in
