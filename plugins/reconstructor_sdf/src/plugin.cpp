@@ -17,6 +17,7 @@
 #include "fit/object_fit.hpp"
 #include "objects/object_store.hpp"
 #include "reconstructor_sdf_settings.hpp"  // Options and kSettings, from settings.json
+#include "shape/mesh.hpp"
 #include "shape/shape_prior.hpp"
 
 namespace {
@@ -150,10 +151,11 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
     l.cost = r.cost;
     // Confidence: the share of observations on the fitted surface.
     l.confidence = obs.p_world.empty() ? 0.0f : static_cast<float>(double(r.inliers) / double(obs.p_world.size()));
-    for (const Eigen::Vector3d& p : prior_.surfaceSamples(r.code, r.size, options_.surface_samples))
+    // One mesh for both: the surface samples are drawn from it (as ShapePrior::surfaceSamples does).
+    const recon::shape::Mesh mesh = prior_.mesh(r.code, r.size);
+    for (const Eigen::Vector3d& p : recon::shape::surfaceSamples(mesh, options_.surface_samples, 1))
       l.surface_points.insert(l.surface_points.end(), {float(p.x()), float(p.y()), float(p.z())});
     if (options_.meshes) {
-      const recon::shape::Mesh mesh = prior_.mesh(r.code, r.size);
       for (const auto& v : mesh.vertices)
         l.mesh_vertices.insert(l.mesh_vertices.end(), {float(v.x()), float(v.y()), float(v.z())});
       for (const auto& f : mesh.faces)
