@@ -1,6 +1,7 @@
 #include "features/orb_extractor.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <list>
 #include <opencv2/core/utility.hpp>
@@ -66,16 +67,20 @@ std::vector<int> OrbExtractor::distributeQuadtree(const std::vector<cv::KeyPoint
   }
   for (auto it = nodes.begin(); it != nodes.end();) it = it->idx.empty() ? nodes.erase(it) : std::next(it);
 
-  auto split = [&](const QuadNode& node, std::vector<QuadNode>& children) {
+  auto split = [&](const QuadNode& node, std::array<QuadNode, 4>& children) {
     const float mx = 0.5f * (node.x0 + node.x1), my = 0.5f * (node.y0 + node.y1);
-    children = {{node.x0, node.y0, mx, my, {}},
-                {mx, node.y0, node.x1, my, {}},
-                {node.x0, my, mx, node.y1, {}},
-                {mx, my, node.x1, node.y1, {}}};
-    for (int i : node.idx) {
+    children = {{{node.x0, node.y0, mx, my, {}},
+                 {mx, node.y0, node.x1, my, {}},
+                 {node.x0, my, mx, node.y1, {}},
+                 {mx, my, node.x1, node.y1, {}}}};
+    const auto quadrant = [&](int i) {
       const cv::Point2f& p = candidates[i].pt;
-      children[(p.x < mx ? 0 : 1) + (p.y < my ? 0 : 2)].idx.push_back(i);
-    }
+      return (p.x < mx ? 0 : 1) + (p.y < my ? 0 : 2);
+    };
+    std::array<size_t, 4> count{};  // one allocation per child, not one per doubling
+    for (int i : node.idx) ++count[quadrant(i)];
+    for (int k = 0; k < 4; ++k) children[k].idx.reserve(count[k]);
+    for (int i : node.idx) children[quadrant(i)].idx.push_back(i);
   };
   auto splittable = [](const QuadNode& node) { return node.idx.size() > 1 && node.x1 - node.x0 > 1.0f; };
 
@@ -87,7 +92,7 @@ std::vector<int> OrbExtractor::distributeQuadtree(const std::vector<cv::KeyPoint
     if (order.empty()) break;
     std::stable_sort(order.begin(), order.end(),
                      [](const auto& a, const auto& b) { return a->idx.size() > b->idx.size(); });
-    std::vector<QuadNode> children;
+    std::array<QuadNode, 4> children;
     for (auto it : order) {
       split(*it, children);
       for (auto& child : children)
