@@ -27,7 +27,8 @@ _Static_assert(offsetof(beslam_track_result, keypoints) == 152, "ABI 1.2 appends
 _Static_assert(sizeof(beslam_keypoint) == 12, "beslam_keypoint");
 _Static_assert(offsetof(beslam_track_result, world_scale) == 136, "ABI 1.1 appends world_scale to 1.0's 136 bytes");
 _Static_assert(offsetof(beslam_keyframe, world_scale) == 128, "ABI 1.1 appends world_scale to 1.0's 128 bytes");
-_Static_assert(sizeof(beslam_backend_v1) == 56, "beslam_backend_v1");
+_Static_assert(sizeof(beslam_backend_v1) == 64, "beslam_backend_v1");
+_Static_assert(offsetof(beslam_backend_v1, prepare) == 56, "ABI 1.4 appends prepare to 1.3's 56 bytes");
 _Static_assert(sizeof(beslam_object_landmark) == 208, "beslam_object_landmark");
 _Static_assert(offsetof(beslam_object_landmark, flags) == 168, "ABI 1.3 appends flags and mesh to 1.2's 168 bytes");
 _Static_assert(offsetof(beslam_keyframe, points) == 136, "ABI 1.3 appends points to 1.2's 136 bytes");

@@ -248,6 +248,22 @@ TEST(Registry, AnAbi12ReconstructorStillLoadsAndItsLandmarksRead) {
   EXPECT_TRUE(reconstructor.finish().empty()) << "no finish() in a 1.2 table: nothing, no call";
 }
 
+// ABI 1.4 appends an optional prepare() to the backend's table: a 1.3 backend (56-byte table) still
+// loads and the host skips the call; an SDK backend has it.
+TEST(Registry, AnAbi13BackendStillLoadsWithoutPrepare) {
+  Registry registry;
+  registry.loadLibrary(fixture("backend_1_3"));
+  registry.loadLibrary(std::string(PLUGIN_DIR) + "/backend_pose_replay.so");
+  beslam::registry::HostLog log;
+  beslam::registry::BackendInstance old_backend(registry.find("backend_1_3"), createInfo(log, {}), log);
+  EXPECT_FALSE(old_backend.hasPrepare());
+  beslam_frame frame{};
+  frame.struct_size = sizeof(frame);
+  EXPECT_NO_THROW(old_backend.prepare(frame));  // no call
+  EXPECT_EQ(old_backend.track(frame, beslam_image_view{}, {}).result.state, BESLAM_TRACKING_NOT_INITIALIZED);
+  EXPECT_EQ(registry.find("backend_pose_replay").functions_size, sizeof(beslam_backend_v1));
+}
+
 // The one checked copy the host and the backends read landmarks through (sdk::fromC): counts that
 // promise data the plugin did not give, and mesh faces past the vertices, are refused by name.
 TEST(Registry, LandmarkCopiesRefuseCountsWithoutDataAndFacesPastTheVertices) {

@@ -231,6 +231,7 @@ class Run {
     // predicted pose once the world is metric). Everything from classify on runs here, in frame order.
     const bool prefetch = spec_.run.prefetch > 0 && n > 1;
     mask_ahead_ = prefetch && !motion_;
+    backend_ahead_ = prefetch && backend_->hasPrepare();
     std::unique_ptr<Prefetcher> prefetcher;
     if (prefetch)
       prefetcher = std::make_unique<Prefetcher>(n, static_cast<size_t>(spec_.run.prefetch),
@@ -372,13 +373,18 @@ class Run {
     return std::make_unique<Instance>(*slot.plugin, info, log_);
   }
 
-  // The stages that may run ahead on the producer thread: load, detect and (see execute) mask. They
-  // touch only the frame, the dataset, the detector and the mask generator, never the summary or the
-  // backend.
+  // The stages that may run ahead on the producer thread: load, detect, (see execute) mask, and the
+  // backend's prepare (ABI 1.4: its mask-independent work on the frame, which a backend makes safe against
+  // its other calls). They touch only the frame, the dataset, the detector and the mask generator, never
+  // the summary.
   void prepare(size_t i, FrameState& f) {
     load(i, f);
     detect(f);
     if (mask_ahead_) mask(f);
+    if (backend_ahead_) {
+      StageTimer timer(f.timing, "backend_prepare");
+      backend_->prepare(f.view);
+    }
   }
 
   // load: the frame from the dataset, and its ABI view.
@@ -568,6 +574,7 @@ class Run {
   int32_t track_id_offset_ = 0;       // added to the track ids the current motion checker makes up
   int32_t max_track_id_ = -1;         // the largest track id given out
   bool mask_ahead_ = false;           // the mask is made on the producer thread (no motion checker)
+  bool backend_ahead_ = false;        // the backend prepares each frame on the producer thread (ABI 1.4)
   std::set<size_t> sample_positions_;
   std::unique_ptr<static_map::StaticMapBuilder> static_map_;  // with output.octomap
   detail::RunRecord record_;

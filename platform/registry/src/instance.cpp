@@ -139,6 +139,13 @@ std::optional<Eigen::Isometry3d> BackendInstance::predictPose(const beslam_frame
   return toIsometry(pose);
 }
 
+bool BackendInstance::hasPrepare() const { return table<beslam_backend_v1>().prepare != nullptr; }
+
+void BackendInstance::prepare(const beslam_frame& frame) {
+  const auto prepare = table<beslam_backend_v1>().prepare;
+  if (prepare != nullptr) check(prepare(handle_, &frame), "prepare");
+}
+
 TrackOutput BackendInstance::track(const beslam_frame& frame, const beslam_image_view& mask,
                                    const std::vector<beslam_box3d>& boxes) {
   beslam_box_list list{boxes.data(), static_cast<uint32_t>(boxes.size()), sizeof(beslam_box3d)};

@@ -81,8 +81,8 @@ uint32_t minTableSize(int32_t kind) {
       return sizeof(beslam_mask_generator_v1);
     case BESLAM_KIND_RECONSTRUCTOR:  // ABI 1.3's finish is optional
       return offsetof(beslam_reconstructor_v1, finish);
-    case BESLAM_KIND_BACKEND:
-      return sizeof(beslam_backend_v1);
+    case BESLAM_KIND_BACKEND:  // ABI 1.4's prepare is optional
+      return offsetof(beslam_backend_v1, prepare);
     default:
       return 0;
   }

@@ -6,7 +6,8 @@
  * reconstructor's landmarks come back through add_landmarks. finish() ends the run (final optimisation); then the host
  * reads the trajectories and map points. Frames a backend did not track are absent from its trajectories. With the
  * pipeline's motion_replay_frames the host also reads trajectory(FINAL) once between two frames, right after the
- * track() that first says metric; a backend that cannot answer then returns an error and the run goes on. */
+ * track() that first says metric; a backend that cannot answer then returns an error and the run goes on.
+ * Since ABI 1.4 a backend may do a frame's mask-independent work ahead of its track() (prepare). */
 #ifndef BESLAM_KINDS_BACKEND_H
 #define BESLAM_KINDS_BACKEND_H
 
@@ -106,6 +107,12 @@ typedef struct beslam_backend_v1 {
   /* which: BESLAM_TRAJECTORY_*; the instance's memory until its next call. */
   beslam_status (*trajectory)(void* instance, int32_t which, beslam_trajectory_list* out);
   beslam_status (*map_points)(void* instance, beslam_map_point_list* out);
+  /* ABI 1.4, optional (NULL, or absent from an older table: the host skips it). The frame's work that needs
+   * neither its mask nor the map (an image pyramid, corners), done ahead: with prefetching the host calls it
+   * on its producer thread, in frame order, up to `prefetch` frames before the frame's track(), while the
+   * instance's other calls run on the main thread, so it must be safe against them. The frame's buffers are
+   * borrowed for this call only. Whether prepare ran must not change what track() returns. */
+  beslam_status (*prepare)(void* instance, const beslam_frame* frame);
 } beslam_backend_v1;
 
 #ifdef __cplusplus

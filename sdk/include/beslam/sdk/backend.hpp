@@ -1,8 +1,9 @@
 // Backend: the SLAM or odometry behind the pipeline. Per frame: predictPose(frame) (the pose the motion
 // checker uses, empty when unknown), then track(frame, mask, boxes) -> TrackResult (state, T_world_cam,
 // keyframe, world_is_metric once the map is in metres). At the end: finish(), then trajectory(which) and
-// mapPoints(). addLandmarks() receives a reconstructor's objects. Override predictPose, track and
-// trajectory; the rest is optional. Call order: beslam/kinds/backend.h; C glue: detail/backend.hpp.
+// mapPoints(). addLandmarks() receives a reconstructor's objects; prepare(frame) may do a frame's
+// mask-independent work ahead, on another thread. Override predictPose, track and trajectory; the rest is
+// optional. Call order: beslam/kinds/backend.h; C glue: detail/backend.hpp.
 #pragma once
 
 #include <utility>
@@ -49,6 +50,11 @@ class Backend : public detail::Kind<Backend, BESLAM_KIND_BACKEND> {
   // which: BESLAM_TRAJECTORY_FINAL / _ONLINE / _KEYFRAMES.
   virtual std::vector<TrajectoryEntry> trajectory(int32_t which) = 0;
   virtual std::vector<beslam_map_point> mapPoints() { return {}; }
+  // ABI 1.4, optional: the frame's work that needs neither mask nor map, done ahead of its track() on the
+  // host's producer thread while the other calls run on the main thread (so it must be safe against
+  // them); the frame's images are borrowed for this call only. track() must return the same with or
+  // without it.
+  virtual void prepare(const Frame& /*frame*/) {}
 
  private:
   friend struct detail::Access;  // the C glue (detail/backend.hpp) keeps here what the host reads

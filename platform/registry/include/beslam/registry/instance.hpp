@@ -112,6 +112,10 @@ class BackendInstance : public Instance {
   void finish();
   std::vector<PoseEntry> trajectory(int32_t which);
   std::vector<beslam_map_point> mapPoints();
+  // ABI 1.4: the frame's mask-independent work ahead of its track(), from the producer thread; nothing
+  // for a backend without it (an older table, or NULL).
+  void prepare(const beslam_frame& frame);
+  bool hasPrepare() const;
 };
 
 }  // namespace beslam::registry

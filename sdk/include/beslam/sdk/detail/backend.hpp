@@ -79,6 +79,10 @@ const void* table(Tag<Impl>, const Backend*) {
           out->count = abi.points.size();
           out->element_size = sizeof(beslam_map_point);
         });
+      },
+      // prepare (ABI 1.4)
+      [](void* instance, const beslam_frame* frame) -> beslam_status {
+        return call<Impl, Backend>(instance, "prepare", [&](Backend& b) { b.prepare(toFrame(frame)); });
       });
 }
 
