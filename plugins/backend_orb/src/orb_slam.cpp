@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <deque>
+#include <map>
 #include <mutex>
 #include <set>
 #include <stdexcept>
@@ -138,6 +139,29 @@ struct OrbSlam::Impl {
   ParkedCarScale parked_scale;
   bool object_scale_done = false;
   std::optional<double> pending_object_scale;
+
+  // Frames prepared ahead (OrbSlam::prepare, on the host's producer thread), by frame index; taken by
+  // their track(). At most kMaxPrepared are kept (the oldest go first), so frames never tracked (an
+  // interrupted run) cost nothing for long.
+  static constexpr size_t kMaxPrepared = 16;
+  std::mutex prepared_mutex;
+  std::map<int64_t, std::shared_ptr<const PreparedImage>> prepared;
+
+  void prepare(const cv::Mat& image, int64_t index) {
+    std::shared_ptr<const PreparedImage> p = extractor.prepare(image);
+    std::lock_guard<std::mutex> lock(prepared_mutex);
+    prepared[index] = std::move(p);
+    while (prepared.size() > kMaxPrepared) prepared.erase(prepared.begin());
+  }
+
+  // The frame's prepared image if it was prepared for an image of this size; older entries are dropped.
+  std::shared_ptr<const PreparedImage> takePrepared(int64_t index, const cv::Size& size) {
+    std::lock_guard<std::mutex> lock(prepared_mutex);
+    std::shared_ptr<const PreparedImage> p;
+    if (auto it = prepared.find(index); it != prepared.end() && it->second->grey.size() == size) p = it->second;
+    prepared.erase(prepared.begin(), prepared.upper_bound(index));
+    return p;
+  }
 
   // Mapping thread. With concurrent mapping the map is shared through `gate` (mapping/map_gate.hpp), and
   // `stop_ba` asks the mapper to cut its local BA short (tracking wanted a keyframe while it was busy).
@@ -330,7 +354,8 @@ struct OrbSlam::Impl {
     auto t0 = Clock::now();
     const int budget =
         tracker.initialising() ? options.extractor.features * options.init_features_factor : options.extractor.features;
-    auto features = extractor.extract(image, labels, budget);
+    const std::shared_ptr<const PreparedImage> prepared_image = takePrepared(index, image.size());
+    auto features = extractor.extract(image, labels, budget, prepared_image.get());
     if (options.object_scale && options.metric_scale && !boxes.empty()) setObjectRanges(*features, boxes);
     // Kept with a keyframe for the parked cars' anchors and the object landmarks' camera-object factors.
     if (options.object_landmarks != ObjectLandmarkMode::Off ||
@@ -570,6 +595,8 @@ OrbSlam::OrbSlam(const Camera& camera, const Options& options) {
 OrbSlam::~OrbSlam() = default;
 
 std::optional<Eigen::Isometry3d> OrbSlam::predictPose(double) const { return impl_->tracker.predictPose(); }
+
+void OrbSlam::prepare(const cv::Mat& gray, int64_t frame_index) { impl_->prepare(gray, frame_index); }
 
 TrackResult OrbSlam::track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index,
                            const std::vector<ObjectBox>& car_boxes) {

@@ -92,8 +92,19 @@ class OrbBackend : public beslam::sdk::Backend {
     }
   }
 
+  // Colour (when given) only colours the map points; features come from the grey image.
+  static const cv::Mat& trackingImage(const beslam::sdk::Frame& frame) {
+    return frame.color.empty() ? frame.gray : frame.color;
+  }
+
   std::optional<Eigen::Isometry3d> predictPose(const beslam::sdk::Frame& frame) override {
     return slam_.predictPose(frame.timestamp);
+  }
+
+  // Pyramids and FAST corners of the frame ahead of its track() (host producer thread, ABI 1.4).
+  void prepare(const beslam::sdk::Frame& frame) override {
+    const cv::Mat& image = trackingImage(frame);
+    if (!image.empty()) slam_.prepare(image, frame.index);
   }
 
   beslam::sdk::TrackResult track(const beslam::sdk::Frame& frame, const cv::Mat& mask,
@@ -107,8 +118,7 @@ class OrbBackend : public beslam::sdk::Backend {
         slam_.dropObject(b.track_id);
       }
     }
-    // Colour (when given) only colours the map points; features come from the grey image.
-    const cv::Mat& image = frame.color.empty() ? frame.gray : frame.color;
+    const cv::Mat& image = trackingImage(frame);
     // Tracked cars' metric boxes: the scale source before the map is metric (parked cars agree on it), and
     // for parked ones range priors in local BA after.
     std::vector<beslam::orb::ObjectBox> car_boxes;

@@ -1,4 +1,5 @@
-// ORB extraction: budgets, spreading, borders, label masks, repeatability under rotation and scale.
+// ORB extraction: budgets, spreading, borders, label masks, prepared images, repeatability under rotation
+// and scale.
 #include <gtest/gtest.h>
 
 #include <numeric>
@@ -72,6 +73,36 @@ TEST(OrbExtractor, LabelMaskRemovesDynamicAndFavoursStaticObjects) {
   EXPECT_EQ(dynamic, 0);
   EXPECT_GT(on_object, plain_on_object * 2) << "static objects get a larger share of the budget";
   EXPECT_LE(on_object, 0.3 * 2000 + 10);
+}
+
+// prepare() (pyramids and corners ahead, from borrowed pixels) changes nothing extract() finds, with or
+// without a label mask, on grey and colour images.
+TEST(OrbExtractor, PreparedImagesGiveTheSameFeatures) {
+  const cv::Mat grey = test::texturedImage(1226, 370, 11);
+  cv::Mat colour;
+  cv::cvtColor(grey, colour, cv::COLOR_GRAY2BGR);
+  cv::Mat labels(grey.size(), CV_16UC1, cv::Scalar(0));
+  labels(cv::Rect(100, 50, 300, 250)).setTo(1);
+  labels(cv::Rect(700, 100, 150, 150)).setTo(1003);
+  OrbExtractor ex(ExtractorOptions{});
+  for (const cv::Mat& image : {grey, colour})
+    for (const cv::Mat& mask : {cv::Mat(), labels}) {
+      cv::Mat borrowed = image.clone();
+      const auto prepared = ex.prepare(borrowed);
+      borrowed.setTo(0);  // the prepared image owns its pixels
+      const auto a = ex.extract(image, mask), b = ex.extract(image, mask, 0, prepared.get());
+      ASSERT_EQ(a->size(), b->size());
+      ASSERT_GT(a->size(), 1000u);
+      for (size_t i = 0; i < a->size(); ++i) {
+        EXPECT_EQ(a->keypoints[i].pt, b->keypoints[i].pt);
+        EXPECT_EQ(a->keypoints[i].angle, b->keypoints[i].angle);
+        EXPECT_EQ(a->labels[i], b->labels[i]);
+      }
+      EXPECT_EQ(cv::norm(a->descriptors, b->descriptors, cv::NORM_HAMMING), 0);
+    }
+  // A prepared image of another size is refused, not used.
+  EXPECT_THROW(ex.extract(grey(cv::Rect(0, 0, 600, 300)).clone(), cv::Mat(), 0, ex.prepare(grey).get()),
+               std::invalid_argument);
 }
 
 // Fraction of keypoints of A whose nearest descriptor in B lies where the known warp puts them.

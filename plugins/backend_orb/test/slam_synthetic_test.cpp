@@ -1,7 +1,12 @@
 // The whole system on a rendered corridor with exact ground truth: it initialises, tracks every frame,
 // its trajectory aligns (Sim(3)) to the truth, and runs are deterministic (same seed, same trajectory;
-// threaded mapping gives the same result as inline mapping; concurrent mapping is as accurate).
+// threaded mapping gives the same result as inline mapping, and so do frames prepared ahead on another
+// thread; concurrent mapping is as accurate).
 #include <gtest/gtest.h>
+
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 
 #include "beslam/formats/align.hpp"
 #include "beslam_orb/orb_slam.hpp"
@@ -17,13 +22,45 @@ struct RunResult {
   Statistics stats;
 };
 
-RunResult runCorridor(const Options& options, int frames = kFrames) {
+// prepare_ahead: each frame is first prepared (OrbSlam::prepare) on a producer thread running up to that
+// many frames ahead of track(), as the host's prefetcher does, from a copy of the image that is wiped
+// right after (the host's buffers are borrowed for the call only).
+RunResult runCorridor(const Options& options, int frames = kFrames, int prepare_ahead = 0) {
   static const test::CorridorWorld world;
   static std::vector<cv::Mat> images;
   if (images.empty())
     for (int i = 0; i < kFrames; ++i) images.push_back(world.render(i));
   OrbSlam slam(world.camera(), options);
-  for (int i = 0; i < frames; ++i) slam.track(images[i], cv::Mat(), 0.1 * i, i);
+  std::mutex m;
+  std::condition_variable cv;
+  int prepared = 0, tracked = 0;
+  std::thread producer;
+  if (prepare_ahead > 0)
+    producer = std::thread([&] {
+      for (int i = 0; i < frames; ++i) {
+        {
+          std::unique_lock<std::mutex> lock(m);
+          cv.wait(lock, [&] { return i - tracked < prepare_ahead; });
+        }
+        cv::Mat borrowed = images[i].clone();
+        slam.prepare(borrowed, i);
+        borrowed.setTo(0);
+        std::lock_guard<std::mutex> lock(m);
+        prepared = i + 1;
+        cv.notify_all();
+      }
+    });
+  for (int i = 0; i < frames; ++i) {
+    if (prepare_ahead > 0) {
+      std::unique_lock<std::mutex> lock(m);
+      cv.wait(lock, [&] { return prepared > i; });
+    }
+    slam.track(images[i], cv::Mat(), 0.1 * i, i);
+    std::lock_guard<std::mutex> lock(m);
+    tracked = i + 1;
+    cv.notify_all();
+  }
+  if (producer.joinable()) producer.join();
   slam.finish();
   return {slam.trajectory(), slam.statistics()};
 }
@@ -72,6 +109,15 @@ TEST(SlamSynthetic, ThreadedMappingGivesTheSameTrajectory) {
   ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
   for (size_t i = 0; i < a.trajectory.size(); ++i)
     EXPECT_EQ(a.trajectory[i].T_world_cam.matrix(), b.trajectory[i].T_world_cam.matrix());
+}
+
+// Frames prepared ahead on another thread (ABI 1.4's prepare, the host's producer thread) change no bit.
+TEST(SlamSynthetic, FramesPreparedAheadGiveTheSameTrajectory) {
+  const RunResult a = runCorridor(smallOptions(), 20), b = runCorridor(smallOptions(), 20, 3);
+  ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
+  ASSERT_GT(a.trajectory.size(), 5u);
+  for (size_t i = 0; i < a.trajectory.size(); ++i)
+    EXPECT_EQ(a.trajectory[i].T_world_cam.matrix(), b.trajectory[i].T_world_cam.matrix()) << "frame " << i;
 }
 
 // Concurrent mapping (tracking does not wait for mapping, ORB-SLAM2's model) gives no reproducible

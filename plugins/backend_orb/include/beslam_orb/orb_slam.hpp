@@ -262,6 +262,11 @@ class OrbSlam {
   // velocity is per frame (frames assumed evenly spaced); the timestamp is not used.
   std::optional<Eigen::Isometry3d> predictPose(double timestamp) const;
 
+  // A frame's mask-independent extraction work (grey image, pyramids, FAST corners), done ahead of its
+  // track() with the same image: safe to call from another thread while the other calls run. track()
+  // returns the same with or without it.
+  void prepare(const cv::Mat& gray, int64_t frame_index);
+
   // gray: CV_8UC1 (or CV_8UC3 BGR, converted; colour kept for map points); label_mask: CV_16UC1 or empty;
   // car_boxes: the frame's tracked cars (ObjectBox), used with metric_scale.
   TrackResult track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index,

@@ -137,8 +137,52 @@ float OrbExtractor::icAngle(const cv::Mat& image, const cv::Point2f& pt) const {
   return angle;
 }
 
+namespace {
+
+// The FAST cells of one pyramid level: about cell_size px squares tiling the level inside its border.
+struct LevelCells {
+  LevelCells(int w_, int h_, int border_, int cell_size)
+      : w(w_),
+        h(h_),
+        border(border_),
+        nx(std::max(1, (w - 2 * border) / cell_size)),
+        ny(std::max(1, (h - 2 * border) / cell_size)),
+        cw(static_cast<float>(w - 2 * border) / nx),
+        ch(static_cast<float>(h - 2 * border) / ny) {}
+  int w, h, border, nx, ny;
+  float cw, ch;
+  int count() const { return nx * ny; }
+  bool inside(const cv::Point2f& p) const {
+    return p.x >= border && p.y >= border && p.x < w - border && p.y < h - border;
+  }
+  int cellOf(const cv::Point2f& p) const {
+    const int cx = std::min(static_cast<int>((p.x - border) / cw), nx - 1);
+    const int cy = std::min(static_cast<int>((p.y - border) / ch), ny - 1);
+    return cy * nx + cx;
+  }
+  // FAST at `threshold` on cell `index` and a 3 px margin (so the cell's own pixels are all tested), the
+  // corners kept inside the cell and the border, level pixels.
+  std::vector<cv::KeyPoint> search(const cv::Mat& level_image, int index, int threshold) const {
+    const int cx = index % nx, cy = index / nx;
+    const int x0 = border + static_cast<int>(cx * cw), y0 = border + static_cast<int>(cy * ch);
+    const int x1 = border + static_cast<int>((cx + 1) * cw), y1 = border + static_cast<int>((cy + 1) * ch);
+    const cv::Rect roi(x0 - 3, y0 - 3, x1 - x0 + 6, y1 - y0 + 6);
+    std::vector<cv::KeyPoint> raw, out;
+    cv::FAST(level_image(roi), raw, threshold, true);
+    for (cv::KeyPoint kp : raw) {
+      kp.pt.x += roi.x;
+      kp.pt.y += roi.y;
+      if (kp.pt.x < x0 || kp.pt.y < y0 || kp.pt.x >= x1 || kp.pt.y >= y1 || !inside(kp.pt)) continue;
+      out.push_back(kp);
+    }
+    return out;
+  }
+};
+
+}  // namespace
+
 void OrbExtractor::detectLevel(const cv::Mat& level_image, int level, const cv::Mat& labels, const cv::Rect& static_box,
-                               int n_level, std::vector<cv::KeyPoint>& level_kps,
+                               int n_level, const PreparedLevel* prepared, std::vector<cv::KeyPoint>& level_kps,
                                std::vector<uint16_t>& level_labels) const {
   const bool has_labels = !labels.empty();
   const int border = options_.border;
@@ -146,55 +190,40 @@ void OrbExtractor::detectLevel(const cv::Mat& level_image, int level, const cv::
   const double s = pyramid_.scale[level];
   // FAST at the initial threshold over the whole level; cells left without a corner are searched
   // again at the fallback threshold; static-object regions at their own (lower) threshold.
-  const int cells_x = std::max(1, (w - 2 * border) / options_.cell_size);
-  const int cells_y = std::max(1, (h - 2 * border) / options_.cell_size);
-  const float cell_w = static_cast<float>(w - 2 * border) / cells_x;
-  const float cell_h = static_cast<float>(h - 2 * border) / cells_y;
+  const LevelCells cells(w, h, border, options_.cell_size);
   auto labelAt = [&](const cv::Point2f& p) -> uint16_t {
     if (!has_labels) return 0;
     const int x0 = std::min(static_cast<int>((p.x + 0.5) * s), labels.cols - 1);  // level-0 pixel
     const int y0 = std::min(static_cast<int>((p.y + 0.5) * s), labels.rows - 1);
     return labels.at<uint16_t>(y0, x0);
   };
-  auto inside = [&](const cv::Point2f& p) {
-    return p.x >= border && p.y >= border && p.x < w - border && p.y < h - border;
-  };
+  auto inside = [&](const cv::Point2f& p) { return cells.inside(p); };
   std::vector<cv::KeyPoint> background, objects;
   std::vector<uint16_t> bg_label, obj_label;
-  std::vector<uint8_t> cell_found(cells_x * cells_y, 0);
-  auto cellOf = [&](const cv::Point2f& p) {
-    const int cx = std::min(static_cast<int>((p.x - border) / cell_w), cells_x - 1);
-    const int cy = std::min(static_cast<int>((p.y - border) / cell_h), cells_y - 1);
-    return cy * cells_x + cx;
-  };
+  std::vector<uint8_t> cell_found(cells.count(), 0);
   std::vector<cv::KeyPoint> raw;
-  cv::FAST(level_image, raw, options_.fast_initial, true);
-  for (const cv::KeyPoint& kp : raw) {
+  if (!prepared) cv::FAST(level_image, raw, options_.fast_initial, true);
+  for (const cv::KeyPoint& kp : prepared ? prepared->corners : raw) {
     if (!inside(kp.pt)) continue;
     const uint16_t label = labelAt(kp.pt);
     if (label == 1 || label >= 1000) continue;  // dynamic: dropped; static objects: searched below
-    cell_found[cellOf(kp.pt)] = 1;
+    cell_found[cells.cellOf(kp.pt)] = 1;
     background.push_back(kp);
     bg_label.push_back(label);
   }
-  for (int cy = 0; cy < cells_y; ++cy)
-    for (int cx = 0; cx < cells_x; ++cx) {
-      if (cell_found[cy * cells_x + cx]) continue;
-      const int x0 = border + static_cast<int>(cx * cell_w), y0 = border + static_cast<int>(cy * cell_h);
-      const int x1 = border + static_cast<int>((cx + 1) * cell_w), y1 = border + static_cast<int>((cy + 1) * cell_h);
-      const cv::Rect roi(x0 - 3, y0 - 3, x1 - x0 + 6, y1 - y0 + 6);
-      raw.clear();
-      cv::FAST(level_image(roi), raw, options_.fast_fallback, true);
-      for (cv::KeyPoint kp : raw) {
-        kp.pt.x += roi.x;
-        kp.pt.y += roi.y;
-        if (kp.pt.x < x0 || kp.pt.y < y0 || kp.pt.x >= x1 || kp.pt.y >= y1 || !inside(kp.pt)) continue;
-        const uint16_t label = labelAt(kp.pt);
-        if (label == 1 || label >= 1000) continue;
-        background.push_back(kp);
-        bg_label.push_back(label);
-      }
+  for (int cell = 0; cell < cells.count(); ++cell) {
+    if (cell_found[cell]) continue;
+    // Searched ahead when the cell was empty without the mask too; else (the mask emptied it) here.
+    const bool known = prepared && prepared->cell_searched[cell];
+    const std::vector<cv::KeyPoint> found =
+        known ? std::vector<cv::KeyPoint>() : cells.search(level_image, cell, options_.fast_fallback);
+    for (const cv::KeyPoint& kp : known ? prepared->cell_corners[cell] : found) {
+      const uint16_t label = labelAt(kp.pt);
+      if (label == 1 || label >= 1000) continue;
+      background.push_back(kp);
+      bg_label.push_back(label);
     }
+  }
   if (!static_box.empty()) {
     cv::Rect roi(static_cast<int>(static_box.x / s) - 3, static_cast<int>(static_box.y / s) - 3,
                  static_cast<int>(static_box.width / s) + 8, static_cast<int>(static_box.height / s) + 8);
@@ -235,16 +264,82 @@ void OrbExtractor::detectLevel(const cv::Mat& level_image, int level, const cv::
   }
 }
 
-std::shared_ptr<FeatureSet> OrbExtractor::extract(const cv::Mat& image, const cv::Mat& labels, int budget) const {
+namespace {
+
+cv::Mat greyOf(const cv::Mat& image) {
   if (image.empty()) throw std::invalid_argument("OrbExtractor: empty image");
+  if (image.type() == CV_8UC1) return image;
+  if (image.type() != CV_8UC3) throw std::invalid_argument("OrbExtractor: image must be CV_8UC1 or CV_8UC3");
   cv::Mat grey;
-  if (image.type() == CV_8UC3) {
-    cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
-  } else if (image.type() == CV_8UC1) {
-    grey = image;
-  } else {
-    throw std::invalid_argument("OrbExtractor: image must be CV_8UC1 or CV_8UC3");
+  cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  return grey;
+}
+
+}  // namespace
+
+PreparedImage OrbExtractor::pyramids(const cv::Mat& grey) const {
+  PreparedImage p;
+  p.grey = grey;
+  const int border = options_.border;
+  // The pyramid (each level from the one before), up to the first level too small for features.
+  for (int level = 0; level < options_.levels; ++level) {
+    cv::Mat level_image = grey;
+    if (level > 0) {
+      const double s = pyramid_.scale[level];
+      cv::Size size(static_cast<int>(std::lround(grey.cols / s)), static_cast<int>(std::lround(grey.rows / s)));
+      cv::resize(p.level_images.back(), level_image, size, 0, 0, cv::INTER_LINEAR);
+    }
+    if (level_image.cols <= 2 * border + 8 || level_image.rows <= 2 * border + 8) break;
+    p.level_images.push_back(level_image);
   }
+  // rBRIEF is read where OpenCV's ORB always read it: on its own pyramid, each level resized from the one
+  // before with INTER_LINEAR_EXACT (ours uses INTER_LINEAR; 2-3.5 of 256 bits would differ on levels 1-7).
+  p.describe_images.resize(p.level_images.size());
+  for (size_t level = 0; level < p.level_images.size(); ++level) {
+    if (level == 0)
+      p.describe_images[0] = grey;
+    else
+      cv::resize(p.describe_images[level - 1], p.describe_images[level], p.level_images[level].size(), 0, 0,
+                 cv::INTER_LINEAR_EXACT);
+  }
+  return p;
+}
+
+std::shared_ptr<const PreparedImage> OrbExtractor::prepare(const cv::Mat& image) const {
+  cv::Mat grey = greyOf(image);
+  if (grey.data == image.data) grey = grey.clone();  // the caller's pixels are borrowed
+  auto p = std::make_shared<PreparedImage>(pyramids(grey));
+  p->levels.resize(p->level_images.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(p->level_images.size())), [&](const cv::Range& range) {
+    for (int level = range.start; level < range.end; ++level) {
+      const cv::Mat& image = p->level_images[level];
+      PreparedLevel& out = p->levels[level];
+      cv::FAST(image, out.corners, options_.fast_initial, true);
+      const LevelCells cells(image.cols, image.rows, options_.border, options_.cell_size);
+      std::vector<char> found(cells.count(), 0);
+      for (const cv::KeyPoint& kp : out.corners)
+        if (cells.inside(kp.pt)) found[cells.cellOf(kp.pt)] = 1;
+      out.cell_searched.assign(cells.count(), 0);
+      out.cell_corners.resize(cells.count());
+      for (int cell = 0; cell < cells.count(); ++cell)
+        if (!found[cell]) {
+          out.cell_corners[cell] = cells.search(image, cell, options_.fast_fallback);
+          out.cell_searched[cell] = 1;
+        }
+    }
+  });
+  return p;
+}
+
+std::shared_ptr<FeatureSet> OrbExtractor::extract(const cv::Mat& image, const cv::Mat& labels, int budget,
+                                                  const PreparedImage* prepared) const {
+  if (prepared && (image.empty() || prepared->grey.size() != image.size()))
+    throw std::invalid_argument("OrbExtractor: the prepared image is not this image's size");
+  const PreparedImage own = prepared ? PreparedImage{} : pyramids(greyOf(image));
+  const PreparedImage& p = prepared ? *prepared : own;
+  const cv::Mat& grey = p.grey;
+  const std::vector<cv::Mat>& level_images = p.level_images;
+  const std::vector<cv::Mat>& describe_images = p.describe_images;
   const bool has_labels = !labels.empty();
   if (has_labels && (labels.type() != CV_16UC1 || labels.size() != image.size()))
     throw std::invalid_argument("OrbExtractor: label mask must be CV_16UC1 of the image size");
@@ -253,35 +348,12 @@ std::shared_ptr<FeatureSet> OrbExtractor::extract(const cv::Mat& image, const cv
   features->width = image.cols;
   features->height = image.rows;
   const std::vector<int> budgets = levelBudgets(budget > 0 ? budget : options_.features);
-  const int border = options_.border;
   cv::Rect static_box;  // level-0 bounding box of static-object pixels
   if (has_labels) {
     cv::Mat static_mask = labels >= 1000;
     if (cv::countNonZero(static_mask) > 0) static_box = cv::boundingRect(static_mask);
   }
 
-  // The pyramid (each level from the one before), up to the first level too small for features.
-  std::vector<cv::Mat> level_images;
-  for (int level = 0; level < options_.levels; ++level) {
-    cv::Mat level_image = grey;
-    if (level > 0) {
-      const double s = pyramid_.scale[level];
-      cv::Size size(static_cast<int>(std::lround(grey.cols / s)), static_cast<int>(std::lround(grey.rows / s)));
-      cv::resize(level_images.back(), level_image, size, 0, 0, cv::INTER_LINEAR);
-    }
-    if (level_image.cols <= 2 * border + 8 || level_image.rows <= 2 * border + 8) break;
-    level_images.push_back(level_image);
-  }
-  // rBRIEF is read where OpenCV's ORB always read it: on its own pyramid, each level resized from the one
-  // before with INTER_LINEAR_EXACT (ours uses INTER_LINEAR; 2-3.5 of 256 bits would differ on levels 1-7).
-  std::vector<cv::Mat> describe_images(level_images.size());
-  for (size_t level = 0; level < level_images.size(); ++level) {
-    if (level == 0)
-      describe_images[0] = grey;
-    else
-      cv::resize(describe_images[level - 1], describe_images[level], level_images[level].size(), 0, 0,
-                 cv::INTER_LINEAR_EXACT);
-  }
   // Each level's keypoints and descriptors depend on that level alone: the levels are worked in parallel
   // (OpenCV's thread pool), each into its own slot, and gathered in level order, so the result is the same
   // as one level after the other, whatever the threads. rBRIEF: the level's own cv::ORB (one level) blurs
@@ -294,7 +366,8 @@ std::shared_ptr<FeatureSet> OrbExtractor::extract(const cv::Mat& image, const cv
   std::vector<char> described_in_order(n_levels, 1);
   cv::parallel_for_(cv::Range(0, n_levels), [&](const cv::Range& range) {
     for (int level = range.start; level < range.end; ++level) {
-      detectLevel(level_images[level], level, labels, static_box, budgets[level], found[level], found_labels[level]);
+      detectLevel(level_images[level], level, labels, static_box, budgets[level],
+                  p.levels.empty() ? nullptr : &p.levels[level], found[level], found_labels[level]);
       if (found[level].empty()) continue;
       std::vector<cv::KeyPoint> described = found[level];
       describers_[level]->compute(describe_images[level], described, found_descriptors[level]);

@@ -19,13 +19,34 @@
 
 namespace beslam::orb {
 
+// The part of an extraction that needs no label mask: the grey image, both pyramids, each level's FAST
+// corners at the initial threshold and, in the cells where those found nothing, at the fallback threshold
+// (a mask can only empty more cells; those are searched when the mask is known). Owns its pixels (the
+// input image may go away).
+struct PreparedLevel {
+  std::vector<cv::KeyPoint> corners;                    // initial threshold, level pixels
+  std::vector<char> cell_searched;                      // per FAST cell: fallback corners below are known
+  std::vector<std::vector<cv::KeyPoint>> cell_corners;  // per FAST cell, inside the cell and the border
+};
+struct PreparedImage {
+  cv::Mat grey;
+  std::vector<cv::Mat> level_images;     // INTER_LINEAR pyramid: where corners are found
+  std::vector<cv::Mat> describe_images;  // INTER_LINEAR_EXACT pyramid: where rBRIEF is read
+  std::vector<PreparedLevel> levels;
+};
+
 class OrbExtractor {
  public:
   explicit OrbExtractor(const ExtractorOptions& options);
 
   // image: CV_8UC1 or CV_8UC3 (BGR); labels: CV_16UC1 of the same size or empty.
-  // budget <= 0 means options.features.
-  std::shared_ptr<FeatureSet> extract(const cv::Mat& image, const cv::Mat& labels, int budget = 0) const;
+  // budget <= 0 means options.features. prepared: prepare(image) done ahead (e.g. on another thread);
+  // the features are the same with it as without.
+  std::shared_ptr<FeatureSet> extract(const cv::Mat& image, const cv::Mat& labels, int budget = 0,
+                                      const PreparedImage* prepared = nullptr) const;
+  // The label-independent first part of extract(). Const and thread-safe: may run while another thread
+  // extracts.
+  std::shared_ptr<const PreparedImage> prepare(const cv::Mat& image) const;
 
   const ScalePyramid& pyramid() const { return pyramid_; }
   const ExtractorOptions& options() const { return options_; }
@@ -40,9 +61,13 @@ class OrbExtractor {
 
  private:
   float icAngle(const cv::Mat& image, const cv::Point2f& pt) const;
+  // grey (its pixels referenced, not copied) and both pyramids, without corners.
+  PreparedImage pyramids(const cv::Mat& grey) const;
   // One pyramid level's keypoints (level pixels, oriented) and the labels under them, n_level at most.
+  // prepared: the level's corners found ahead (prepare()), else all are found here.
   void detectLevel(const cv::Mat& level_image, int level, const cv::Mat& labels, const cv::Rect& static_box,
-                   int n_level, std::vector<cv::KeyPoint>& level_kps, std::vector<uint16_t>& level_labels) const;
+                   int n_level, const PreparedLevel* prepared, std::vector<cv::KeyPoint>& level_kps,
+                   std::vector<uint16_t>& level_labels) const;
 
   ExtractorOptions options_;
   ScalePyramid pyramid_;
