@@ -50,8 +50,7 @@ class CurveFit {
       }
     };
     for (const PointTerm& p : points) {
-      const auto& a = c[p.piece];
-      const double r = a[0] + p.t * (a[1] + p.t * (a[2] + p.t * a[3])) - p.y, s = r * r;
+      const double r = cubic(c[p.piece], p.t) - p.y, s = r * r;
       cost += 0.5 * p.weight * kCauchy2 * std::log1p(s / kCauchy2);
       if (H) add(p.piece, {1, p.t, p.t * p.t, p.t * p.t * p.t}, r, p.weight / (1 + s / kCauchy2));
     }

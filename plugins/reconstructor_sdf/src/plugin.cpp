@@ -153,7 +153,8 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
     l.confidence = obs.p_world.empty() ? 0.0f : static_cast<float>(double(r.inliers) / double(obs.p_world.size()));
     // One mesh for both: the surface samples are drawn from it (as ShapePrior::surfaceSamples does).
     const recon::shape::Mesh mesh = prior_.mesh(r.code, r.size);
-    for (const Eigen::Vector3d& p : recon::shape::surfaceSamples(mesh, options_.surface_samples, 1))
+    for (const Eigen::Vector3d& p :
+         recon::shape::surfaceSamples(mesh, options_.surface_samples, recon::shape::ShapePrior::kSurfaceSampleSeed))
       l.surface_points.insert(l.surface_points.end(), {float(p.x()), float(p.y()), float(p.z())});
     if (options_.meshes) {
       for (const auto& v : mesh.vertices)

@@ -197,14 +197,13 @@ void OrbExtractor::detectLevel(const cv::Mat& level_image, int level, const cv::
     const int y0 = std::min(static_cast<int>((p.y + 0.5) * s), labels.rows - 1);
     return labels.at<uint16_t>(y0, x0);
   };
-  auto inside = [&](const cv::Point2f& p) { return cells.inside(p); };
   std::vector<cv::KeyPoint> background, objects;
   std::vector<uint16_t> bg_label, obj_label;
   std::vector<uint8_t> cell_found(cells.count(), 0);
   std::vector<cv::KeyPoint> raw;
   if (!prepared) cv::FAST(level_image, raw, options_.fast_initial, true);
   for (const cv::KeyPoint& kp : prepared ? prepared->corners : raw) {
-    if (!inside(kp.pt)) continue;
+    if (!cells.inside(kp.pt)) continue;
     const uint16_t label = labelAt(kp.pt);
     if (label == 1 || label >= 1000) continue;  // dynamic: dropped; static objects: searched below
     cell_found[cells.cellOf(kp.pt)] = 1;
@@ -234,7 +233,7 @@ void OrbExtractor::detectLevel(const cv::Mat& level_image, int level, const cv::
       for (cv::KeyPoint kp : raw) {
         kp.pt.x += roi.x;
         kp.pt.y += roi.y;
-        if (!inside(kp.pt)) continue;
+        if (!cells.inside(kp.pt)) continue;
         const uint16_t label = labelAt(kp.pt);
         if (label < 1000) continue;
         objects.push_back(kp);

@@ -100,7 +100,8 @@ class ShapePrior {
 
   Mesh mesh(const Eigen::VectorXd& code, const Eigen::Vector3d& size) const;
   std::vector<Eigen::Vector3d> surfaceSamples(const Eigen::VectorXd& code, const Eigen::Vector3d& size, int n,
-                                              std::uint64_t seed = 1) const;
+                                              std::uint64_t seed = kSurfaceSampleSeed) const;
+  static constexpr std::uint64_t kSurfaceSampleSeed = 1;  // the default seed of surfaceSamples
 
   // Normalised signed-distance grid of a training mesh (node order: x fastest, then y, then z).
   std::vector<double> sampleGrid(const TrainingShape& shape) const;
