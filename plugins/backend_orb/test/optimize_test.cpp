@@ -1,5 +1,5 @@
 // Ceres problems on simulated geometry: pose-only optimisation with outliers, local BA reducing the
-// reprojection error of perturbed keyframes and points.
+// reprojection error of perturbed keyframes and points, our Schur LM against Ceres (local and global BA).
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -150,6 +150,40 @@ TEST(BundleAdjustment, SchurLmGivesTheSameBitsOnOneThreadAndTwo) {
     Map map;
     const auto kfs = perturbedScene(map, pyr, true);
     optimize::localBundleAdjustment(kfs.back(), map, optimize::BundleAdjustmentOptions{});
+    results.push_back(poses(kfs));
+  }
+  cv::setNumThreads(threads_before);
+  for (size_t k = 0; k < results[0].size(); ++k) EXPECT_EQ(results[0][k].matrix(), results[1][k].matrix()) << k;
+}
+
+// Block-sparse Schur LM and Ceres' sparse Schur LM on a global BA of a 90-keyframe road (past
+// SchurLevenbergMarquardt::kMaxDensePoses, so solved block-sparse): the same steps, so the same minimum
+// but for rounding; and the same bits on one thread and two.
+TEST(BundleAdjustment, GlobalBaSparseSchurLmAndCeresReachTheSameMinimum) {
+  const ScalePyramid pyr(8, 1.2);
+  Map map_ceres, map_schur;
+  const auto kfs_ceres = test::buildRoad(map_ceres, kCam, pyr, 90, 10, 11);
+  const auto kfs_schur = test::buildRoad(map_schur, kCam, pyr, 90, 10, 11);
+  ASSERT_GT(static_cast<int>(kfs_schur.size()) - 1, optimize::SchurLevenbergMarquardt::kMaxDensePoses);
+  const auto ceres_report = optimize::globalBundleAdjustment(map_ceres, 10, optimize::BaSolver::Ceres);
+  const auto schur_report = optimize::globalBundleAdjustment(map_schur, 10, optimize::BaSolver::SchurLm);
+  EXPECT_GT(schur_report.initial_cost, 50 * schur_report.final_cost);
+  EXPECT_NEAR(schur_report.initial_cost, ceres_report.initial_cost, 1e-9 * ceres_report.initial_cost);
+  EXPECT_NEAR(schur_report.final_cost, ceres_report.final_cost, 1e-8 * ceres_report.final_cost);
+  for (size_t k = 0; k < kfs_ceres.size(); ++k) {
+    EXPECT_LT((kfs_schur[k]->T_cw.translation() - kfs_ceres[k]->T_cw.translation()).norm(), 1e-7) << k;
+    EXPECT_LT(Eigen::AngleAxisd(kfs_schur[k]->T_cw.linear() * kfs_ceres[k]->T_cw.linear().transpose()).angle(), 1e-8)
+        << k;
+  }
+  EXPECT_EQ(kfs_schur[0]->T_cw.matrix(), test::roadAt(0).inverse().matrix()) << "the origin keyframe stays fixed";
+
+  std::vector<std::vector<Eigen::Isometry3d>> results;
+  const int threads_before = cv::getNumThreads();
+  for (int threads : {1, 2}) {
+    cv::setNumThreads(threads);
+    Map map;
+    const auto kfs = test::buildRoad(map, kCam, pyr, 90, 10, 11);
+    optimize::globalBundleAdjustment(map, 10, optimize::BaSolver::SchurLm);
     results.push_back(poses(kfs));
   }
   cv::setNumThreads(threads_before);

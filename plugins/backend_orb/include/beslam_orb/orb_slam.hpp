@@ -46,8 +46,8 @@ enum class ObjectLandmarkMode { Off, BA };
 // per car measured by its box centres (unbiased), or a range prior per keypoint where its ray enters the
 // box (biased short by how a car fills its box; kept for ablations).
 enum class ObjectScaleHold { Anchors, Ranges };
-// Local BA's solver (src/optimize/schur_lm.hpp): our Schur-complement LM on both cores, or Ceres.
-enum class LocalBaSolver { Schur, Ceres };
+// A bundle adjustment's solver (src/optimize/schur_lm.hpp): our Schur-complement LM on both cores, or Ceres.
+enum class BundleAdjustmentSolver { Schur, Ceres };
 
 // ORB extraction (features/orb_extractor.hpp): the pyramid, the FAST thresholds and the share of the
 // budget that static objects (mask label >= 1000) may take.
@@ -92,6 +92,9 @@ struct Options {
   bool loop_object_check = true;
   int loop_own_stretch_keyframes = 30;
   int loop_global_ba_iterations = 10;  // 0: none after the essential graph
+  // schur: SchurLevenbergMarquardt, block-sparse past 60 keyframes (the same steps as Ceres, on both
+  // cores); ceres: Ceres' SPARSE_SCHUR LM, as before.
+  BundleAdjustmentSolver loop_global_ba_solver = BundleAdjustmentSolver::Schur;
   // Local mapping.
   int triangulation_neighbours = 20;  // covisible keyframes to triangulate with
   // Epipolar matching for new points as ORB-SLAM2 does it: best under the strict threshold, no ratio
@@ -106,7 +109,7 @@ struct Options {
   int local_ba_max_keyframes = 0;       // 0 = all covisible keyframes move
   // schur: SchurLevenbergMarquardt (deterministic on any thread count; object landmarks and windows of
   // more than 60 keyframes still go to Ceres); ceres: Ceres' DENSE_SCHUR LM, as before issue 19.
-  LocalBaSolver local_ba_solver = LocalBaSolver::Schur;
+  BundleAdjustmentSolver local_ba_solver = BundleAdjustmentSolver::Schur;
   bool keyframe_culling = true;
   // Ground-height prior (beyond ORB-SLAM2; for a camera on a vehicle over a road): local BA holds the
   // camera's height above the plane fitted to each keyframe's low points at the height seen over the

@@ -424,7 +424,8 @@ bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, 
     mp->position = solved.S_cw[n].inverse() * (graph.S_cw[n] * mp->position);
     mp->updateNormalAndDepth();
   }
-  if (options_.global_ba_iterations > 0) optimize::globalBundleAdjustment(map_, options_.global_ba_iterations);
+  if (options_.global_ba_iterations > 0)
+    optimize::globalBundleAdjustment(map_, options_.global_ba_iterations, options_.global_ba_solver);
 
   LoopClosureEvent event;
   event.keyframe_id = kf->id;

@@ -29,6 +29,7 @@
 #include "beslam_orb/orb_slam.hpp"
 #include "features/scale_pyramid.hpp"
 #include "loop/sim3.hpp"
+#include "optimize/bundle_adjustment.hpp"
 
 namespace beslam::orb {
 
@@ -49,6 +50,7 @@ struct LoopOptions {
   int object_min_cars = 2;               // the check needs at least this many cars on both sides
   int pose_graph_iterations = 20;
   int global_ba_iterations = 10;  // 0: no global BA after the pose graph
+  optimize::BaSolver global_ba_solver = optimize::BaSolver::SchurLm;
   uint64_t seed = 1;
 };
 

@@ -83,8 +83,8 @@ double chi2(const Edge& e, bool* behind) {
 }
 
 // Local BA without object nodes on at most this many poses goes to SchurLevenbergMarquardt (unless the
-// options ask for Ceres); global BA and object landmarks always to Ceres.
-constexpr int kMaxSchurLmPoses = 60;
+// options ask for Ceres), larger windows and object landmarks to Ceres; global BA to the solver asked for.
+constexpr int kMaxSchurLmPoses = SchurLevenbergMarquardt::kMaxDensePoses;
 
 // The robust losses of a solve.
 struct Losses {
@@ -154,8 +154,8 @@ double solve(Problem& P, bool robust, int iterations, double chi2_threshold, boo
   Losses losses(chi2_threshold);
   const std::vector<Block> blocks = activeBlocks(P, robust, losses);
   if (blocks.empty()) return 0;
-  if (solver == BaSolver::SchurLm && !fix_origin_only && !P.objects &&
-      static_cast<int>(P.moving.size()) <= kMaxSchurLmPoses)
+  if (solver == BaSolver::SchurLm && !P.objects &&
+      (fix_origin_only || static_cast<int>(P.moving.size()) <= kMaxSchurLmPoses))
     return solveSchurLm(P, blocks, iterations, origin, initial_cost);
   ceres::Problem::Options popts;
   popts.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -394,7 +394,7 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   return report;
 }
 
-BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double chi2_threshold) {
+BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, BaSolver solver, double chi2_threshold) {
   BundleAdjustmentReport report;
   Problem P;
   for (KeyFrame* kf : map.keyframes()) P.moving.push_back(kf);
@@ -405,7 +405,7 @@ BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double c
   report.points = static_cast<int>(P.points.size());
   report.observations = static_cast<int>(P.edges.size());
   if (P.edges.empty()) return report;
-  report.final_cost = solve(P, true, iterations, chi2_threshold, true, map.origin(), &report.initial_cost);
+  report.final_cost = solve(P, true, iterations, chi2_threshold, true, map.origin(), &report.initial_cost, solver);
   writeBack(P);
   return report;
 }

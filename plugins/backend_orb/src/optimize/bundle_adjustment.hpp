@@ -69,7 +69,10 @@ struct GroundPrior {
 BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const BundleAdjustmentOptions& options,
                                              const GroundPrior* ground = nullptr);
 
-// Every keyframe and point; the origin keyframe fixed. Used right after initialisation.
-BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, double chi2_threshold = 5.991);
+// Every keyframe and point; the origin keyframe fixed. Used right after initialisation (Ceres) and after a
+// loop correction (LoopOptions::global_ba_solver). SchurLm takes Ceres' steps (the same minimum up to
+// rounding) and solves a map of more than SchurLevenbergMarquardt::kMaxDensePoses keyframes block-sparse.
+BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, BaSolver solver = BaSolver::Ceres,
+                                              double chi2_threshold = 5.991);
 
 }  // namespace beslam::orb::optimize

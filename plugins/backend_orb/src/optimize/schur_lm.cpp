@@ -2,6 +2,8 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -91,6 +93,30 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
   }
   pair_begin[n_vectors] = static_cast<int>(pair_slot.size());
 
+  // Past kMaxDensePoses the reduced system is block-sparse: a 6 x 6 block for each pair of poses that share
+  // a 3-vector (a global BA's covisibility), found once; each vector's pair (a, b >= a) names its block.
+  const bool sparse = n > kMaxDensePoses;
+  std::vector<std::pair<int, int>> block_pos;  // (row slot, column slot), column >= row, sorted
+  std::vector<int> pair_block_begin, pair_block;
+  if (sparse) {
+    for (int v = 0; v < n_vectors; ++v)
+      for (int a = pair_begin[v]; a < pair_begin[v + 1]; ++a)
+        for (int bb = a; bb < pair_begin[v + 1]; ++bb) block_pos.emplace_back(pair_slot[a], pair_slot[bb]);
+    for (int k = 0; k < n; ++k) block_pos.emplace_back(k, k);  // every diagonal block, shared or not
+    std::sort(block_pos.begin(), block_pos.end());
+    block_pos.erase(std::unique(block_pos.begin(), block_pos.end()), block_pos.end());
+    pair_block_begin.assign(pair_slot.size() + 1, 0);
+    for (int v = 0; v < n_vectors; ++v)
+      for (int a = pair_begin[v]; a < pair_begin[v + 1]; ++a) {
+        pair_block_begin[a] = static_cast<int>(pair_block.size());
+        for (int bb = a; bb < pair_begin[v + 1]; ++bb)
+          pair_block.push_back(static_cast<int>(
+              std::lower_bound(block_pos.begin(), block_pos.end(), std::make_pair(pair_slot[a], pair_slot[bb])) -
+              block_pos.begin()));
+      }
+    pair_block_begin[pair_slot.size()] = static_cast<int>(pair_block.size());
+  }
+
   // Vector ranges of about equal residual counts.
   std::array<int, kRanges + 1> range_begin{};
   range_begin[kRanges] = n_vectors;
@@ -112,8 +138,9 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
   struct RangeSums {
     std::vector<Matrix6d> U;
     std::vector<Vector6d> gp;
-    Eigen::MatrixXd S;  // upper blocks of sum W V^-1 W^T
-    Eigen::VectorXd t;  // sum W V^-1 gx
+    Eigen::MatrixXd S;               // upper blocks of sum W V^-1 W^T (dense)
+    std::vector<Matrix6d> S_blocks;  // the same by block_pos (sparse)
+    Eigen::VectorXd t;               // sum W V^-1 gx
     double cost = 0, predicted = 0;
   };
   std::array<RangeSums, kRanges> sums;
@@ -204,13 +231,22 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
   summary.initial_cost = cost;
   summary.iterations = 1;
   double mu = 1e-4, nu = 2;  // Ceres' initial trust region radius 1e4
-  Eigen::MatrixXd S(dim, dim);
+  Eigen::MatrixXd S(sparse ? 0 : dim, sparse ? 0 : dim);
   Eigen::VectorXd b(dim), dp(dim);
+  // Sparse: the upper triangle in a fixed pattern (one triplet per block entry, in block_pos order), its
+  // fill-reducing ordering and symbolic factorisation computed once.
+  Eigen::SparseMatrix<double> S_sparse(dim, dim);
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::AMDOrdering<int>> sparse_llt;
+  bool analysed = false;
+  std::vector<Eigen::Triplet<double>> triplets;
   for (int step = 0; step < max_iterations; ++step) {  // steps tried, successful or not (Ceres' iterations)
     // The damped reduced system.
     runRanges([&](int c) {
       RangeSums& s = sums[c];
-      s.S.setZero(dim, dim);
+      if (sparse)
+        s.S_blocks.assign(block_pos.size(), Matrix6d::Zero());
+      else
+        s.S.setZero(dim, dim);
       s.t.setZero(dim);
       for (int v = range_begin[c]; v < range_begin[c + 1]; ++v) {
         if (res_begin[v] == res_begin[v + 1]) {  // no residual: does not move
@@ -226,28 +262,50 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
         for (int a = pair_begin[v]; a < pair_begin[v + 1]; ++a) {
           const Matrix63 WV = W[a] * V_inv[v];
           s.t.segment<6>(6 * pair_slot[a]) += WV * gx[v];
-          for (int bb = a; bb < pair_begin[v + 1]; ++bb)  // slots increase along a vector's pairs
-            s.S.block<6, 6>(6 * pair_slot[a], 6 * pair_slot[bb]).noalias() += WV * W[bb].transpose();
+          for (int bb = a; bb < pair_begin[v + 1]; ++bb) {  // slots increase along a vector's pairs
+            if (sparse)
+              s.S_blocks[pair_block[pair_block_begin[a] + (bb - a)]].noalias() += WV * W[bb].transpose();
+            else
+              s.S.block<6, 6>(6 * pair_slot[a], 6 * pair_slot[bb]).noalias() += WV * W[bb].transpose();
+          }
         }
       }
     });
-    S.setZero();
     b.setZero();
-    for (int k = 0; k < n; ++k) {
+    for (int k = 0; k < n; ++k) b.segment<6>(6 * k) = -gp_total[k];
+    for (const RangeSums& s : sums) b += s.t;
+    const auto dampedU = [&](int k) {
       Matrix6d U = U_total[k];
       for (int d = 0; d < 6; ++d) U(d, d) += mu * clampDiagonal(U(d, d));
-      S.block<6, 6>(6 * k, 6 * k) = U;
-      b.segment<6>(6 * k) = -gp_total[k];
-    }
-    for (const RangeSums& s : sums) {
-      S -= s.S;
-      b += s.t;
-    }
+      return U;
+    };
     bool solved = dim == 0;
-    if (dim > 0) {
+    if (dim > 0 && !sparse) {
+      S.setZero();
+      for (int k = 0; k < n; ++k) S.block<6, 6>(6 * k, 6 * k) = dampedU(k);
+      for (const RangeSums& s : sums) S -= s.S;
       const Eigen::LLT<Eigen::MatrixXd, Eigen::Upper> llt(S);
       if (llt.info() == Eigen::Success) {
         dp = llt.solve(b);
+        solved = dp.allFinite();
+      }
+    } else if (dim > 0) {
+      triplets.clear();
+      for (size_t blk = 0; blk < block_pos.size(); ++blk) {
+        const auto [row, col] = block_pos[blk];
+        Matrix6d B = row == col ? dampedU(row) : Matrix6d::Zero();
+        for (const RangeSums& s : sums) B -= s.S_blocks[blk];
+        for (int i = 0; i < 6; ++i)
+          for (int j = row == col ? i : 0; j < 6; ++j) triplets.emplace_back(6 * row + i, 6 * col + j, B(i, j));
+      }
+      S_sparse.setFromTriplets(triplets.begin(), triplets.end());
+      if (!analysed) {
+        sparse_llt.analyzePattern(S_sparse);
+        analysed = true;
+      }
+      sparse_llt.factorize(S_sparse);
+      if (sparse_llt.info() == Eigen::Success) {
+        dp = sparse_llt.solve(b);
         solved = dp.allFinite();
       }
     }

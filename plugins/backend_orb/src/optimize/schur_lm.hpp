@@ -1,8 +1,10 @@
 // Levenberg-Marquardt for local bundle adjustment: SE(3) poses (7 numbers [qx qy qz qw tx ty tz], left
 // update as SE3LeftManifold) and 3-vectors (map points, object anchors), each residual block on one pose
 // and one 3-vector, any number of rows (reprojection, ground height, object range, box centre). The
-// 3-vectors are eliminated by the Schur complement and the reduced pose system is solved densely, so it is
-// meant for local windows (tens of moving poses), not global BA.
+// 3-vectors are eliminated by the Schur complement; the reduced pose system is solved densely for up to
+// kMaxDensePoses moving poses (local windows) and as a block-sparse system past that (global BA: a 6 x 6
+// block for each pair of poses sharing a 3-vector, Eigen's simplicial Cholesky in an AMD ordering found
+// once per solve).
 //
 // What it does per iteration: one evaluation of every residual and Jacobian (cost functions write their
 // tangent Jacobian into the first six columns of the pose block, as for Ceres), robust losses by
@@ -21,6 +23,8 @@ namespace beslam::orb::optimize {
 
 class SchurLevenbergMarquardt {
  public:
+  static constexpr int kMaxDensePoses = 60;  // moving poses solved densely; more: sparse
+
   struct Summary {
     double initial_cost = 0, final_cost = 0;  // 0.5 * sum of rho(|r|^2), as Ceres reports it
     int iterations = 0;                       // evaluations of the Jacobians
