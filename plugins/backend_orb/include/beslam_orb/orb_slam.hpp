@@ -107,8 +107,8 @@ struct Options {
   int local_ba_iterations_robust = 5;   // Huber round
   int local_ba_iterations_refine = 10;  // round without robust loss, outliers removed
   int local_ba_max_keyframes = 0;       // 0 = all covisible keyframes move
-  // schur: SchurLevenbergMarquardt (deterministic on any thread count; object landmarks and windows of
-  // more than 60 keyframes still go to Ceres); ceres: Ceres' DENSE_SCHUR LM, as before issue 19.
+  // schur: SchurLevenbergMarquardt (deterministic on any thread count; dense up to 60 moving keyframes,
+  // block-sparse past that; with object landmarks Ceres); ceres: Ceres' Schur LM, as before issue 19.
   BundleAdjustmentSolver local_ba_solver = BundleAdjustmentSolver::Schur;
   bool keyframe_culling = true;
   // Ground-height prior (beyond ORB-SLAM2; for a camera on a vehicle over a road): local BA holds the

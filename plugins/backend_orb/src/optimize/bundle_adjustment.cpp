@@ -82,10 +82,6 @@ double chi2(const Edge& e, bool* behind) {
   return r[0] * r[0] + r[1] * r[1];
 }
 
-// Local BA without object nodes on at most this many poses goes to SchurLevenbergMarquardt (unless the
-// options ask for Ceres), larger windows and object landmarks to Ceres; global BA to the solver asked for.
-constexpr int kMaxSchurLmPoses = SchurLevenbergMarquardt::kMaxDensePoses;
-
 // The robust losses of a solve.
 struct Losses {
   explicit Losses(double chi2_threshold) : reprojection(std::sqrt(chi2_threshold)) {}
@@ -154,9 +150,9 @@ double solve(Problem& P, bool robust, int iterations, double chi2_threshold, boo
   Losses losses(chi2_threshold);
   const std::vector<Block> blocks = activeBlocks(P, robust, losses);
   if (blocks.empty()) return 0;
-  if (solver == BaSolver::SchurLm && !P.objects &&
-      (fix_origin_only || static_cast<int>(P.moving.size()) <= kMaxSchurLmPoses))
-    return solveSchurLm(P, blocks, iterations, origin, initial_cost);
+  // Our solver unless Ceres is asked for or object landmarks take part (their factors are not pose-vector
+  // pairs): dense for local windows, block-sparse past SchurLevenbergMarquardt::kMaxDensePoses poses.
+  if (solver == BaSolver::SchurLm && !P.objects) return solveSchurLm(P, blocks, iterations, origin, initial_cost);
   ceres::Problem::Options popts;
   popts.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   popts.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
