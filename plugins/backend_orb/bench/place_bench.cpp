@@ -7,11 +7,11 @@
 // chain of keyframes 1 m apart round a circle with 2 % scale drift and a heading drift, its spanning-tree
 // and covisibility edges, and the loop edge that closes it; Sim(3) (argument 0) and SE(3) (argument 1).
 // BM_GlobalBa300: the global BA that follows it (10 iterations, as loop_global_ba_iterations) on a map of
-// 300 keyframes along a road, 20 points a metre, each seen by the keyframes 4-30 m behind it; Ceres'
+// 300 keyframes down a road, 20 points a metre, each seen by the keyframes it is 4-30 m ahead of; Ceres'
 // sparse Schur LM (first argument 0) or our block-sparse one (1, loop_global_ba_solver: schur); keyframes
-// 4 m apart as on KITTI (second argument 4: 24,000 points seen by 6.5 keyframes each) or 1 m apart (1:
-// 6,500 points seen by 26 each, a denser reduced system). A whole loop correction is the essential
-// graph, the fusion and this global BA.
+// 4 m apart as on KITTI (second argument 4: 24,375 points seen by 6 keyframes each) or 1 m apart (1: 6,439
+// points seen by 22 each, a denser reduced system). A whole loop correction is the essential graph, the
+// fusion and this global BA.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
