@@ -218,6 +218,23 @@ TEST(KeyFrameDatabase, FindsKeyFramesSharingWordsAndForgetsErasedOnes) {
   EXPECT_EQ(shared[0].first, a);
   a->bad = true;
   EXPECT_TRUE(db.sharedWords(query).empty());
+  a->bad = false;
+  // A keyframe added after an erase takes the freed slot (b's, before c's): it is counted for its own words
+  // only, and the result stays in id order (a, c, d), not in slot order (a, d, c).
+  KeyFrame* d = keyframe({{1, 0.2f}, {3, 0.3f}, {5, 0.5f}});
+  db.add(d);
+  db.add(d);  // indexed once
+  const BowVector query2{{1, 0.4f}, {3, 0.4f}, {4, 0.2f}};
+  shared = db.sharedWords(query2);
+  ASSERT_EQ(shared.size(), 3u);
+  EXPECT_EQ(shared[0].first, a);
+  EXPECT_EQ(shared[0].second, 1);
+  EXPECT_EQ(shared[1].first, c);
+  EXPECT_EQ(shared[1].second, 1);
+  EXPECT_EQ(shared[2].first, d);
+  EXPECT_EQ(shared[2].second, 2);
+  db.erase(b);  // not indexed any more: nothing happens
+  EXPECT_EQ(db.sharedWords(query2).size(), 3u);
   db.clear();
   EXPECT_TRUE(db.sharedWords({{4, 1.0f}}).empty());
 }

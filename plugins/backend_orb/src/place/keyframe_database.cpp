@@ -9,28 +9,55 @@
 namespace beslam::orb {
 
 void KeyFrameDatabase::add(KeyFrame* kf) {
-  for (const auto& [word, weight] : kf->bow) index_[word].push_back(kf);
+  if (slot_of_.count(kf)) return;  // indexed already
+  int slot = static_cast<int>(slots_.size());
+  if (!free_slots_.empty()) {
+    slot = free_slots_.back();
+    free_slots_.pop_back();
+    slots_[static_cast<size_t>(slot)] = kf;
+  } else {
+    slots_.push_back(kf);
+  }
+  slot_of_[kf] = slot;
+  for (const auto& [word, weight] : kf->bow) index_[word].push_back(slot);
 }
 
 void KeyFrameDatabase::erase(KeyFrame* kf) {
+  const auto found = slot_of_.find(kf);
+  if (found == slot_of_.end()) return;
+  const int slot = found->second;
   for (const auto& [word, weight] : kf->bow) {
     auto it = index_.find(word);
     if (it == index_.end()) continue;
     auto& list = it->second;
-    list.erase(std::remove(list.begin(), list.end(), kf), list.end());
+    list.erase(std::remove(list.begin(), list.end(), slot), list.end());
     if (list.empty()) index_.erase(it);
   }
+  slots_[static_cast<size_t>(slot)] = nullptr;
+  free_slots_.push_back(slot);
+  slot_of_.erase(found);
+}
+
+void KeyFrameDatabase::clear() {
+  index_.clear();
+  slots_.clear();
+  slot_of_.clear();
+  free_slots_.clear();
 }
 
 std::vector<std::pair<KeyFrame*, int>> KeyFrameDatabase::sharedWords(const place::BowVector& bow) const {
-  std::map<KeyFrame*, int, IdLess<KeyFrame>> count;
+  std::vector<int> count(slots_.size(), 0);
   for (const auto& [word, weight] : bow) {
     auto it = index_.find(word);
     if (it == index_.end()) continue;
-    for (KeyFrame* kf : it->second)
-      if (!kf->bad) ++count[kf];
+    for (int slot : it->second) ++count[static_cast<size_t>(slot)];
   }
-  return {count.begin(), count.end()};
+  std::vector<std::pair<KeyFrame*, int>> shared;
+  for (size_t slot = 0; slot < slots_.size(); ++slot)
+    if (count[slot] > 0 && slots_[slot] && !slots_[slot]->bad) shared.emplace_back(slots_[slot], count[slot]);
+  const IdLess<KeyFrame> less;
+  std::sort(shared.begin(), shared.end(), [&](const auto& a, const auto& b) { return less(a.first, b.first); });
+  return shared;
 }
 
 std::vector<KeyFrame*> KeyFrameDatabase::relocalisationCandidates(const place::BowVector& bow) const {

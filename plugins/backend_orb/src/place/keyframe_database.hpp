@@ -5,7 +5,9 @@
 // at least 0.8 x the best share of shared words (counted relative to the keyframe's word count, where
 // ORB-SLAM2 uses raw counts), scored by BoW similarity, grouped with their 10 best covisible keyframes;
 // the best keyframe of every group scoring above 0.75 x the best group, best group first. Results come
-// in a deterministic order (keyframe ids break ties), whatever the pointers' addresses.
+// in a deterministic order (keyframe ids break ties), whatever the pointers' addresses. Each indexed
+// keyframe has a slot (a small integer, reused after erase()), and the index lists slots, so counting the
+// words a query shares with every keyframe is a pass over flat arrays.
 #pragma once
 
 #include <cstdint>
@@ -23,7 +25,7 @@ class KeyFrameDatabase {
  public:
   void add(KeyFrame* kf);
   void erase(KeyFrame* kf);
-  void clear() { index_.clear(); }
+  void clear();
 
   // Keyframes that share at least one word with bow, with the number of shared words, in id order.
   std::vector<std::pair<KeyFrame*, int>> sharedWords(const place::BowVector& bow) const;
@@ -31,7 +33,10 @@ class KeyFrameDatabase {
   std::vector<KeyFrame*> relocalisationCandidates(const place::BowVector& bow) const;
 
  private:
-  std::unordered_map<uint32_t, std::vector<KeyFrame*>> index_;
+  std::unordered_map<uint32_t, std::vector<int>> index_;  // word -> slots of the keyframes that have it
+  std::vector<KeyFrame*> slots_;                          // slot -> keyframe, nullptr when free
+  std::unordered_map<const KeyFrame*, int> slot_of_;
+  std::vector<int> free_slots_;
 };
 
 }  // namespace beslam::orb
