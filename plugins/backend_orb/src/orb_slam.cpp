@@ -33,6 +33,10 @@
 namespace beslam::orb {
 namespace {
 
+optimize::BaSolver baSolver(BundleAdjustmentSolver solver) {
+  return solver == BundleAdjustmentSolver::Schur ? optimize::BaSolver::SchurLm : optimize::BaSolver::Ceres;
+}
+
 LocalMapperOptions mapperOptions(const Options& o) {
   LocalMapperOptions m;
   m.triangulation_neighbours = o.triangulation_neighbours;
@@ -44,8 +48,7 @@ LocalMapperOptions mapperOptions(const Options& o) {
   m.ba.robust_iterations = o.local_ba_iterations_robust;
   m.ba.refine_iterations = o.local_ba_iterations_refine;
   m.ba.max_local_keyframes = o.local_ba_max_keyframes;
-  m.ba.solver =
-      o.local_ba_solver == BundleAdjustmentSolver::Schur ? optimize::BaSolver::SchurLm : optimize::BaSolver::Ceres;
+  m.ba.solver = baSolver(o.local_ba_solver);
   m.ba.trusted_weight = o.static_object_weight;
   m.ba.objects.enabled = o.object_landmarks != ObjectLandmarkMode::Off;
   m.ba.objects.pose_weight = o.object_pose_weight;
@@ -204,8 +207,7 @@ struct OrbSlam::Impl {
       LoopOptions lo;
       lo.object_check = options.loop_object_check;
       lo.global_ba_iterations = options.loop_global_ba_iterations;
-      lo.global_ba_solver = options.loop_global_ba_solver == BundleAdjustmentSolver::Schur ? optimize::BaSolver::SchurLm
-                                                                                           : optimize::BaSolver::Ceres;
+      lo.global_ba_solver = baSolver(options.loop_global_ba_solver);
       lo.seed = options.seed;
       loop_closer = std::make_unique<LoopCloser>(map, database, extractor.pyramid(), lo);
     }
