@@ -9,9 +9,10 @@
 _Static_assert(sizeof(beslam_pose) == 96, "beslam_pose");
 _Static_assert(sizeof(beslam_image_view) == 24, "beslam_image_view");
 _Static_assert(sizeof(beslam_point_cloud_view) == 24, "beslam_point_cloud_view");
-_Static_assert(sizeof(beslam_box3d) == 144, "beslam_box3d");
+_Static_assert(sizeof(beslam_box3d) == 168, "beslam_box3d");
 _Static_assert(offsetof(beslam_box3d, center_cam) == 16, "beslam_box3d.center_cam");
 _Static_assert(offsetof(beslam_box3d, score) == 128, "beslam_box3d.score");
+_Static_assert(offsetof(beslam_box3d, position_sigma) == 144, "ABI 1.5 appends position_sigma to 1.4's 144 bytes");
 _Static_assert(offsetof(beslam_plugin_descriptor, struct_size) == 0, "descriptor starts with struct_size");
 _Static_assert(offsetof(beslam_plugin_descriptor, functions) == 80, "beslam_plugin_descriptor.functions");
 _Static_assert(sizeof(beslam_plugin_descriptor) == 88, "beslam_plugin_descriptor");

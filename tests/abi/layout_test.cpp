@@ -8,7 +8,7 @@
 
 extern "C" size_t beslam_c_layout(int i);
 
-static_assert(sizeof(beslam_box3d) == 144, "beslam_box3d");
+static_assert(sizeof(beslam_box3d) == 168, "beslam_box3d");
 static_assert(offsetof(beslam_plugin_descriptor, functions) == 80, "descriptor.functions");
 static_assert(sizeof(beslam_frame) == 104, "beslam_frame");
 

@@ -113,7 +113,7 @@ TEST(Registry, ScanCollectsProblemsAndKeepsGoodPlugins) {
   EXPECT_NE(errorOf([&] { registry.find("fixture_boxes", BESLAM_KIND_BACKEND); }).find("is a detector, not a backend"),
             std::string::npos);
   const std::string unknown = errorOf([&] { registry.find("no_such_plugin", BESLAM_KIND_DETECTOR); });
-  EXPECT_NE(unknown.find("known: fixture_throwing, fixture_boxes"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("known: detector_1_4, fixture_throwing, fixture_boxes"), std::string::npos) << unknown;
 }
 
 TEST(Registry, ListsSchemaOfSdkPlugin) {
@@ -262,6 +262,27 @@ TEST(Registry, AnAbi13BackendStillLoadsWithoutPrepare) {
   EXPECT_NO_THROW(old_backend.prepare(frame));  // no call
   EXPECT_EQ(old_backend.track(frame, beslam_image_view{}, {}).result.state, BESLAM_TRACKING_NOT_INITIALIZED);
   EXPECT_EQ(registry.find("backend_pose_replay").functions_size, sizeof(beslam_backend_v1));
+}
+
+// ABI 1.5 appends position_sigma and range_drift to the box: a 1.4 detector's 144-byte boxes are read at
+// their own stride, and the new fields (and the flag that says they are set) come out zero.
+TEST(Registry, AnAbi14DetectorsBoxesReadAsHavingNoPositionSigma) {
+  Registry registry;
+  registry.loadLibrary(fixture("detector_1_4"));
+  beslam::registry::HostLog log;
+  beslam::registry::DetectorInstance detector(registry.find("detector_1_4"), createInfo(log, {}), log);
+  beslam_frame frame{};
+  frame.struct_size = sizeof(frame);
+  const std::vector<beslam_box3d> boxes = detector.detect(frame);
+  ASSERT_EQ(boxes.size(), 2u);
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    EXPECT_DOUBLE_EQ(boxes[i].center_cam[2], 10.0 + static_cast<double>(i));
+    EXPECT_FLOAT_EQ(boxes[i].score, 0.5f);
+    EXPECT_EQ(boxes[i].flags & BESLAM_BOX_HAS_POSITION_SIGMA, 0u);
+    EXPECT_EQ(boxes[i].position_sigma[0], 0.0);
+    EXPECT_EQ(boxes[i].position_sigma[1], 0.0);
+    EXPECT_EQ(boxes[i].range_drift, 0.0);
+  }
 }
 
 // The one checked copy the host and the backends read landmarks through (sdk::fromC): counts that

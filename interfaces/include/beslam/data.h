@@ -92,9 +92,10 @@ typedef struct beslam_camera {
 #define BESLAM_MOTION_STATIC 1
 #define BESLAM_MOTION_DYNAMIC 2
 
-#define BESLAM_BOX_HAS_VELOCITY 0x1u /* velocity_cam is set */
-#define BESLAM_BOX_HAS_BBOX2D 0x2u   /* bbox2d is set */
-#define BESLAM_BOX_UNCERTAIN 0x4u    /* the detector doubts this box (too far, too small) */
+#define BESLAM_BOX_HAS_VELOCITY 0x1u       /* velocity_cam is set */
+#define BESLAM_BOX_HAS_BBOX2D 0x2u         /* bbox2d is set */
+#define BESLAM_BOX_UNCERTAIN 0x4u          /* the detector doubts this box (too far, too small) */
+#define BESLAM_BOX_HAS_POSITION_SIGMA 0x8u /* position_sigma is set (ABI 1.5) */
 
 /* The unit of a backend's world frame (ABI 1.1). */
 #define BESLAM_WORLD_SCALE_UNKNOWN 0 /* monocular map: metres times an unknown (drifting) factor */
@@ -115,6 +116,15 @@ typedef struct beslam_box3d {
   float truncation;       /* 0..1, KITTI */
   int32_t occlusion;      /* 0..3, KITTI */
   int32_t reserved;
+  /* ABI 1.5, if BESLAM_BOX_HAS_POSITION_SIGMA: how well the detector knows center_cam in the bird's-eye
+   * view. position_sigma: standard deviation (m) of one frame's error, [0] along the line of sight from the
+   * camera (range), [1] across it. range_drift: the part of the range error that is not new each frame but
+   * changes with the range itself, as the standard deviation of d(error)/d(range) (m per m); while the
+   * camera closes in, a parked car then seems to move along the line of sight at range_drift times the
+   * closing speed. A box lifted onto a flat road from a monocular image: range error (range^2 / camera
+   * height) * (road pitch error), so range_drift = 2 * range * pitch error / camera height. */
+  double position_sigma[2];
+  double range_drift;
 } beslam_box3d;
 
 /* A host-owned array a plugin may modify in place (motion checker) or fill (detector output copy). */
