@@ -12,6 +12,9 @@ namespace beslam::detector_image {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// Relative spread of a class's true height about its prior (cars 1.4-1.7 m about 1.5 m): the distance error
+// of a box placed by its pixel height.
+constexpr double kClassHeightSpread = 0.1;
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("detector_image: " + what);
@@ -215,6 +218,25 @@ beslam_box3d GroundLifter::lift(const Detection2D& d) const {
       std::abs(best.dv_dZ) > 1e-9 ? sigma_v / std::abs(best.dv_dZ) : std::numeric_limits<double>::infinity();
   if (distance > o.max_distance || !(sigma_z / std::max(best.Z, 1e-6) <= o.max_relative_uncertainty)) uncertain = true;
   if (uncertain) box.flags |= BESLAM_BOX_UNCERTAIN;
+
+  // The centre's noise in the bird's-eye view. Along the line of sight, each frame: the road contact's
+  // distance error, sigma_z above (the bottom edge's pixels and the camera's pitch against the road, which
+  // the car's own pitching changes from frame to frame, through dv/dZ, which falls with the square of the
+  // distance), or for a box placed by its class height the box's pixel height. Across it: the box centre's
+  // pixel noise at that distance.
+  const double range_bev = std::hypot(center.x(), center.z());
+  const double sigma_height_prior = best.Z * std::sqrt(2.0) * o.pixel_sigma / std::max(y2 - y1, 1.0);
+  const double sigma_depth = std::isfinite(sigma_z) ? sigma_z : sigma_height_prior;
+  box.position_sigma[0] = sigma_depth * range_bev / std::max(best.Z, 1e-6);
+  // The road's own slope is not new each frame: its range error, Z^2 pitch / H, changes by 2 Z pitch / H per
+  // metre of range. A box placed by its class height is off by its car's height against the prior, the
+  // same fraction at every range.
+  box.range_drift = std::isfinite(sigma_z) ? 2 * best.Z * o.pitch_sigma / o.camera_height : kClassHeightSpread;
+  box.position_sigma[1] = range_bev * o.pixel_sigma / g.fx;
+  // A box cut by the image border shows part of its object: the centre is known to about half its length.
+  if (cut_left || cut_right || cut_bottom)
+    for (double& s : box.position_sigma) s = std::max(s, 0.5 * size[0]);
+  box.flags |= BESLAM_BOX_HAS_POSITION_SIGMA;
   return box;
 }
 

@@ -237,6 +237,59 @@ TEST(GroundLifter, FlagsFarCutAndHorizonBoxes) {
   EXPECT_TRUE(std::isfinite(ped.center_cam[2]));
 }
 
+// ABI 1.5: every lifted box says how well its centre is known, along the line of sight and across it, and how
+// its range error drifts with the range (the road pitch). The stated range noise matches the scatter that
+// pixel noise on the box edges causes.
+TEST(GroundLifter, BoxesCarryTheirRangeAndBearingNoise) {
+  const beslam_camera cam = kittiCamera();
+  auto boxAt = [&](double z, double x) {  // exact 2D box of a road-aligned car
+    beslam_box3d t{};
+    t.size[0] = 3.9, t.size[1] = 1.6, t.size[2] = 1.5, t.yaw = -1.5708;
+    t.center_cam[0] = x, t.center_cam[1] = 1.65 - 0.75, t.center_cam[2] = z;
+    cv::Rect2d r;
+    EXPECT_TRUE(projectBox(cam, t, r));
+    return r;
+  };
+  const GroundLifter lifter(cam, LiftOptions{});
+  const beslam_box3d near = lifter.lift({BESLAM_CLASS_CAR, 0.8f, boxAt(10, 3)});
+  const beslam_box3d far = lifter.lift({BESLAM_CLASS_CAR, 0.8f, boxAt(30, 3)});
+  for (const beslam_box3d* b : {&near, &far}) {
+    ASSERT_TRUE(b->flags & BESLAM_BOX_HAS_POSITION_SIGMA);
+    EXPECT_GT(b->position_sigma[0], 2 * b->position_sigma[1]);  // range is the weak direction
+  }
+  // Range noise grows with the square of the range (of the bottom edge, the car's near end: (29/9)^2 = 10.4
+  // from 10 to 30 m), bearing noise and the drift with the range.
+  EXPECT_NEAR(far.position_sigma[0] / near.position_sigma[0], 10.4, 2.0);
+  EXPECT_NEAR(far.position_sigma[1] / near.position_sigma[1], 3.0, 0.5);
+  EXPECT_NEAR(far.range_drift / near.range_drift, 3.0, 0.5);
+  EXPECT_NEAR(near.range_drift, 2 * 10 * 0.005 / 1.65, 0.01);  // 2 Z pitch_sigma / camera height
+  // A box cut by the border: the centre is known to about half a car length.
+  const beslam_box3d cut = lifter.lift({BESLAM_CLASS_CAR, 0.8f, cv::Rect2d(0, 150, 200, 150)});
+  EXPECT_GE(cut.position_sigma[0], 3.9 / 2);
+  EXPECT_GE(cut.position_sigma[1], 3.9 / 2);
+
+  // Calibration: 2 px of noise on every edge, no pitch error: the stated range sigma against the scatter.
+  LiftOptions no_pitch;
+  no_pitch.pitch_sigma = 0;
+  const GroundLifter pixel_only(cam, no_pitch);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> px(0, 2.0);
+  const cv::Rect2d exact = boxAt(20, 3);
+  const double stated = pixel_only.lift({BESLAM_CLASS_CAR, 0.8f, exact}).position_sigma[0];
+  double sum = 0, sum2 = 0;
+  const int n = 400;
+  for (int i = 0; i < n; ++i) {
+    const double x0 = exact.x + px(rng), y0 = exact.y + px(rng), x1 = exact.br().x + px(rng),
+                 y1 = exact.br().y + px(rng);
+    const beslam_box3d b = pixel_only.lift({BESLAM_CLASS_CAR, 0.8f, cv::Rect2d(x0, y0, x1 - x0, y1 - y0)});
+    const double r = std::hypot(b.center_cam[0], b.center_cam[2]);
+    sum += r, sum2 += r * r;
+  }
+  const double scatter = std::sqrt(sum2 / n - (sum / n) * (sum / n));
+  std::printf("car at 20 m, 2 px edge noise: range scatter %.3f m, stated %.3f m\n", scatter, stated);
+  EXPECT_NEAR(scatter / stated, 1.0, 0.3);
+}
+
 TEST(ImageDetector, ModelFileErrorsNameThePath) {
   DnnOptions o;
   EXPECT_THROW(Detector2D{o}, std::invalid_argument);  // no model set
