@@ -1,5 +1,6 @@
 #include "beslam/motion/bev_tracker.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -10,7 +11,9 @@ namespace beslam::motion {
 
 namespace {
 
-constexpr double kNoMatch = 1e6;  // cost of a gated-out pair
+constexpr double kNoMatch = 1e6;    // cost of a gated-out pair
+constexpr double kRoadSpeed = 1.0;  // m/s: an ego slower than this gives no road direction
+constexpr double kGateChi2 = 13.8;  // a box with its own noise: innovation chi-square gate (2 dof, 99.9 %)
 
 bool carLike(int32_t c) { return c == BESLAM_CLASS_CAR || c == BESLAM_CLASS_VAN || c == BESLAM_CLASS_TRUCK; }
 
@@ -121,6 +124,7 @@ void BevTracker::reset() {
   jitter_.clear();
   jitter_rms_ = 0;
   ego_speed_ = ego_yaw_rate_ = 0;
+  road_direction_ = Eigen::Vector2d::Zero();
 }
 
 BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
@@ -128,14 +132,23 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
   Speed s;
   const auto& h = track.history;
   Eigen::Vector2d v_fit = Eigen::Vector2d::Zero();
-  double sigma_fit = 0;
+  double sigma_fit = 0, sigma_bound = 0;
+  double speed_bound = -1;  // set by the anisotropic fit; else speed + z_static * sigma_bound
   bool fit = false;
   if (!h.empty()) {
     const double t_end = h.back().t;
     size_t first = h.size();
     while (first > 0 && h[first - 1].t >= t_end - window - 1e-6) --first;
     const size_t n = h.size() - first;
-    if (static_cast<int>(n) >= params_.min_observations) {
+    bool isotropic = true;
+    for (size_t i = first; i < h.size(); ++i) isotropic = isotropic && h[i].isotropic;
+    if (static_cast<int>(n) >= params_.min_observations && !isotropic) {
+      const std::optional<Fit> g = fitSpeedAnisotropic(h, first);
+      if (g) {
+        v_fit = g->velocity, sigma_fit = g->sigma, sigma_bound = g->sigma_bound, fit = g->consistent;
+        speed_bound = g->speed_bound;
+      }
+    } else if (static_cast<int>(n) >= params_.min_observations) {
       double t_mean = 0, var_model = 0, var_ego = 0;
       Eigen::Vector2d p_mean = Eigen::Vector2d::Zero();
       for (size_t i = first; i < h.size(); ++i) {
@@ -166,6 +179,7 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
         // Detection noise averages down with the window's length and number of positions (sum of (t - t_mean)^2);
         // the ego-motion error is a velocity bias shared by all of them and does not.
         sigma_fit = std::sqrt(var / stt + var_ego);
+        sigma_bound = sigma_fit;
         fit = consistent;
       }
     }
@@ -175,9 +189,10 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
       const double w1 = 1 / (sigma_fit * sigma_fit), w2 = 1 / (det_sigma * det_sigma);
       v_fit = (w1 * v_fit + w2 * *det_velocity) / (w1 + w2);
       sigma_fit = 1 / std::sqrt(w1 + w2);
+      sigma_bound = 1 / std::sqrt(1 / (sigma_bound * sigma_bound) + w2);
     } else {
       v_fit = *det_velocity;
-      sigma_fit = det_sigma;
+      sigma_fit = sigma_bound = det_sigma;
     }
     fit = true;
   }
@@ -185,7 +200,80 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
   s.valid = true;
   s.speed = v_fit.norm();
   s.sigma = sigma_fit;
+  s.sigma_bound = sigma_bound;
+  s.speed_bound = det_velocity || speed_bound < 0 ? s.speed + params_.z_static * sigma_bound : speed_bound;
   return s;
+}
+
+std::optional<BevTracker::Fit> BevTracker::fitSpeedAnisotropic(const std::deque<Observation>& h, size_t first) const {
+  // Generalised least squares of p_i = a + v (t_i - t_mean), each position weighted by its inverse
+  // covariance: a range error along the line of sight says nothing about the motion across it.
+  const size_t n = h.size() - first;
+  double t_mean = 0, var_ego = 0, stt = 0;
+  Eigen::Vector2d p_mean = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d drift = Eigen::Matrix2d::Zero();
+  for (size_t i = first; i < h.size(); ++i) {
+    t_mean += h[i].t, p_mean += h[i].p, var_ego += h[i].v_sigma * h[i].v_sigma;
+    drift += h[i].drift_cov;
+  }
+  t_mean /= static_cast<double>(n), p_mean /= static_cast<double>(n), var_ego /= static_cast<double>(n);
+  drift /= static_cast<double>(n);
+  for (size_t i = first; i < h.size(); ++i) stt += (h[i].t - t_mean) * (h[i].t - t_mean);
+  if (!(stt > 1e-9)) return std::nullopt;
+  Eigen::Matrix4d N = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d g = Eigen::Vector4d::Zero();
+  std::vector<Eigen::Matrix2d> W(n);
+  for (size_t i = first; i < h.size(); ++i) {
+    const double dt = h[i].t - t_mean;
+    const Eigen::Matrix2d& w = W[i - first] = h[i].cov.inverse();
+    const Eigen::Vector2d q = h[i].p - p_mean;
+    N.topLeftCorner<2, 2>() += w;
+    N.topRightCorner<2, 2>() += dt * w;
+    N.bottomRightCorner<2, 2>() += dt * dt * w;
+    g.head<2>() += w * q;
+    g.tail<2>() += dt * (w * q);
+  }
+  N.bottomLeftCorner<2, 2>() = N.topRightCorner<2, 2>().transpose();
+  const Eigen::LDLT<Eigen::Matrix4d> ldlt(N);
+  if (ldlt.info() != Eigen::Success) return std::nullopt;
+  const Eigen::Vector4d x = ldlt.solve(g);
+  Fit f;
+  f.velocity = x.tail<2>();
+  double scale = 1;  // the residual spread, when it is larger than the model
+  if (n > 2) {
+    double chi2 = 0;
+    for (size_t i = first; i < h.size(); ++i) {
+      const Eigen::Vector2d r = h[i].p - p_mean - x.head<2>() - f.velocity * (h[i].t - t_mean);
+      chi2 += r.dot(W[i - first] * r);
+    }
+    const double per_dof = chi2 / (2.0 * static_cast<double>(n - 2));
+    f.consistent = per_dof <= params_.max_residual * params_.max_residual;
+    scale = std::max(1.0, per_dof);
+  }
+  // The velocity's covariance: detection noise (what more positions average away) and the errors they
+  // share, the ego-motion error (isotropic) and the boxes' range drift (along their lines of sight).
+  const Eigen::Matrix2d C = scale * ldlt.solve(Eigen::Matrix4d::Identity()).bottomRightCorner<2, 2>() + drift +
+                            var_ego * Eigen::Matrix2d::Identity();
+  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(C, Eigen::EigenvaluesOnly).eigenvalues()(1);
+  const double speed = f.velocity.norm();
+  const double along = speed > 1e-9 ? f.velocity.dot(C * f.velocity) / (speed * speed) : largest;
+  f.sigma = std::sqrt(along);
+  f.sigma_bound = std::sqrt(largest);
+  f.speed_bound = speed + params_.z_static * f.sigma_bound;
+  if (road_direction_.squaredNorm() > 0) {
+    // Traffic moves along the road, which runs along the ego's own travel: a speed along the road is
+    // seen across the line of sight of every car not straight ahead, where the boxes are precise. So a
+    // car is also shown slower than a speed when both its speed along the road (the velocity constrained
+    // to that direction) and its velocity across the road (unconstrained) are.
+    const Eigen::Vector2d d = road_direction_, e(-d.y(), d.x());
+    const Eigen::Matrix2d C_inv = C.inverse();
+    const double info = d.dot(C_inv * d);
+    const double s_road = d.dot(C_inv * f.velocity) / info;
+    const double bound_road = std::abs(s_road) + params_.z_static * std::sqrt(1 / info);
+    const double bound_across = std::abs(e.dot(f.velocity)) + params_.z_static * std::sqrt(e.dot(C * e));
+    f.speed_bound = std::min(f.speed_bound, std::max(bound_road, bound_across));
+  }
+  return f;
 }
 
 void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_velocity, Decision& out) {
@@ -196,24 +284,27 @@ void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_
   if (track.state == BESLAM_MOTION_STATIC && track.anchor_n > 0 && !track.history.empty()) {
     const size_t k = std::min<size_t>(3, track.history.size());
     Eigen::Vector2d recent = Eigen::Vector2d::Zero();
-    double var = 0, v_sigma = 0, t_recent = 0;
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero(), range_drift = Eigen::Matrix2d::Zero();
+    double v_sigma = 0, t_recent = 0;
     for (size_t i = track.history.size() - k; i < track.history.size(); ++i) {
       const Observation& o = track.history[i];
-      recent += o.p, var += o.sigma * o.sigma, v_sigma += o.v_sigma, t_recent += o.t;
+      recent += o.p, cov += o.cov, v_sigma += o.v_sigma, t_recent += o.t, range_drift += o.drift_cov;
     }
     recent /= static_cast<double>(k);
-    var /= static_cast<double>(k * k);
+    const double since = std::max(0.0, t_recent / static_cast<double>(k) - track.anchor_t);
+    // The boxes' range drift since the parked position was measured, along their lines of sight.
+    cov = cov / static_cast<double>(k * k) + track.anchor_cov + range_drift / static_cast<double>(k) * since * since;
+    // The noise along the displacement (a range error moves a box along its line of sight only).
+    const Eigen::Vector2d step = recent - track.anchor;
+    double var = step.norm() > 1e-12 ? step.dot(cov * step) / step.squaredNorm() : 0.5 * cov.trace();
     // Pose drift since the parked position was measured: the ego-motion velocity error over that time.
-    const double drift =
-        v_sigma / static_cast<double>(k) * std::max(0.0, t_recent / static_cast<double>(k) - track.anchor_t);
+    const double drift = v_sigma / static_cast<double>(k) * since;
     var += drift * drift;
-    const double d = (recent - track.anchor).norm();
-    displaced = d > params_.z_dynamic * std::sqrt(var + track.anchor_var) + params_.displacement_margin;
+    displaced = step.norm() > params_.z_dynamic * std::sqrt(var) + params_.displacement_margin;
   }
   const bool dynamic_evidence =
       displaced || (dyn.valid && dyn.speed - params_.z_dynamic * dyn.sigma > params_.dynamic_speed);
-  const bool static_evidence =
-      !dynamic_evidence && sta.valid && sta.speed + params_.z_static * sta.sigma < params_.static_speed;
+  const bool static_evidence = !dynamic_evidence && sta.valid && sta.speed_bound < params_.static_speed;
   if (dynamic_evidence) {
     ++track.dynamic_run;
     track.static_run = 0;
@@ -241,7 +332,7 @@ void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_
     track.anchor_n = std::min(track.anchor_n + 1, params_.anchor_frames);
     track.anchor = track.anchor_n == 1 ? o.p : Eigen::Vector2d(track.anchor + (o.p - track.anchor) / track.anchor_n);
     track.anchor_t = track.anchor_n == 1 ? o.t : track.anchor_t + (o.t - track.anchor_t) / track.anchor_n;
-    track.anchor_var = o.sigma * o.sigma / track.anchor_n;
+    track.anchor_cov = o.cov / track.anchor_n;
   } else if (track.state != BESLAM_MOTION_STATIC) {
     track.anchor_n = 0;
   }
@@ -263,7 +354,12 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     for (double v : b.center_cam) ok = ok && std::isfinite(v);
     if ((b.flags & BESLAM_BOX_HAS_VELOCITY) != 0)
       for (double v : b.velocity_cam) ok = ok && std::isfinite(v);
-    if (!ok) throw std::invalid_argument("motion tracker: box " + std::to_string(i) + " has a non-finite field");
+    if ((b.flags & BESLAM_BOX_HAS_POSITION_SIGMA) != 0)
+      ok = ok && std::isfinite(b.position_sigma[0]) && std::isfinite(b.position_sigma[1]) &&
+           std::isfinite(b.range_drift) && b.position_sigma[0] >= 0 && b.position_sigma[1] >= 0 && b.range_drift >= 0;
+    if (!ok)
+      throw std::invalid_argument("motion tracker: box " + std::to_string(i) +
+                                  " has a non-finite field or a negative sigma");
   }
   // Time step.
   double dt = params_.default_dt;
@@ -300,6 +396,8 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       ego_speed_ = std::hypot(d.x(), d.z()) / span;
       ego_yaw_rate_ =
           Eigen::AngleAxisd(poses_[0].second.linear().transpose() * poses_[1].second.linear()).angle() / span;
+      const Eigen::Vector2d travel(d.x(), d.z());
+      road_direction_ = ego_speed_ > kRoadSpeed ? Eigen::Vector2d(travel.normalized()) : Eigen::Vector2d::Zero();
     }
   } else if (!poses_.empty() && now - poses_.back().first > params_.max_miss_time) {
     // The backend has given no pose for longer than a track may coast: an extrapolated ego pose would place
@@ -332,6 +430,8 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
   const size_t n = boxes.size(), m = tracks_.size();
   std::vector<Eigen::Vector2d> p(n);
   std::vector<double> range(n), sigma(n), v_sigma(n), yaw(n);
+  std::vector<Eigen::Matrix2d> cov(n), drift_cov(n, Eigen::Matrix2d::Zero());
+  std::vector<Eigen::Vector2d> line_of_sight(n, Eigen::Vector2d::Zero());  // unit BEV bearing; zero: isotropic
   std::vector<std::optional<Eigen::Vector2d>> vel(n);
   for (size_t i = 0; i < n; ++i) {
     const beslam_box3d& b = boxes[i];
@@ -339,7 +439,28 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     const Eigen::Vector3d c_w = T_wc * c_cam;
     p[i] = Eigen::Vector2d(c_w.x(), c_w.z());
     range[i] = std::hypot(c_cam.x(), c_cam.z());
-    sigma[i] = std::hypot(params_.pos_sigma + params_.pos_sigma_per_m * range[i], jitter_rms_);
+    const double model = params_.pos_sigma + params_.pos_sigma_per_m * range[i];
+    const Eigen::Vector2d sight(c_w.x() - T_wc.translation().x(), c_w.z() - T_wc.translation().z());
+    if ((b.flags & BESLAM_BOX_HAS_POSITION_SIGMA) != 0 && sight.norm() > 1e-6) {
+      // The detector's own range and bearing noise (the model is the floor), with the pose jitter.
+      const double s_range = std::hypot(std::max(b.position_sigma[0], model), jitter_rms_);
+      const double s_across = std::hypot(std::max(b.position_sigma[1], model), jitter_rms_);
+      line_of_sight[i] = sight.normalized();
+      cov[i] = s_across * s_across * Eigen::Matrix2d::Identity() +
+               (s_range * s_range - s_across * s_across) * line_of_sight[i] * line_of_sight[i].transpose();
+      sigma[i] = std::max(s_range, s_across);
+      // Range drift: a parked car closes in at the ego's speed along the line of sight.
+      if (poses_.size() == 2 && poses_[1].first > poses_[0].first) {
+        const Eigen::Vector3d v3 =
+            (poses_[1].second.translation() - poses_[0].second.translation()) / (poses_[1].first - poses_[0].first);
+        const double closing = std::abs(line_of_sight[i].dot(Eigen::Vector2d(v3.x(), v3.z())));
+        const double s = b.range_drift * closing;
+        drift_cov[i] = s * s * line_of_sight[i] * line_of_sight[i].transpose();
+      }
+    } else {
+      sigma[i] = std::hypot(model, jitter_rms_);
+      cov[i] = sigma[i] * sigma[i] * Eigen::Matrix2d::Identity();
+    }
     v_sigma[i] = params_.ego_speed_noise * ego_speed_ + params_.ego_turn_noise * ego_yaw_rate_ * range[i];
     yaw[i] = bevYaw(R_wc, b.yaw);
     if (b.flags & BESLAM_BOX_HAS_VELOCITY) {
@@ -363,7 +484,19 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
               rotatedRectIoU(p[i], yaw[i], boxes[i].size[0], boxes[i].size[1], pred, t.yaw_bev, t.length, t.width);
           if (o >= params_.min_iou) cost[i * m + j] = 1.0 - o;
         } else {
-          const double d = (p[i] - pred).norm();
+          const Eigen::Vector2d e = p[i] - pred;
+          double d = e.norm();
+          if (line_of_sight[i].squaredNorm() > 0) {
+            // A range error is no evidence of another object: the distance along the line of sight counts
+            // in units of the noise across it, and is gated by the innovation's own covariance.
+            const Eigen::Vector2d u = line_of_sight[i], v(-u.y(), u.x());
+            const double along = u.dot(e), across = v.dot(e);
+            const double g = params_.gate + params_.gate_per_m * range[i];
+            const double excess = std::sqrt(std::max(0.0, u.dot(cov[i] * u) - v.dot(cov[i] * v)));
+            const Eigen::Matrix2d S = t.P.topLeftCorner<2, 2>() + cov[i];
+            if (e.dot(S.inverse() * e) > kGateChi2) continue;
+            d = std::hypot(across, along * g / (g + 3 * excess));
+          }
           const double spread = std::min(2.0 * std::sqrt(t.P(0, 0) + t.P(1, 1)), params_.gate);
           const double g = params_.gate + params_.gate_per_m * range[i] + spread;
           if (d <= g) cost[i * m + j] = d;
@@ -390,6 +523,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       Eigen::VectorXd z(k);
       z.head<2>() = p[i];
       Eigen::MatrixXd R = Eigen::MatrixXd::Identity(k, k) * (sigma[i] * sigma[i]);
+      R.topLeftCorner<2, 2>() = cov[i];
       if (vel[i]) {
         z.tail<2>() = *vel[i];
         R(2, 2) = R(3, 3) = params_.velocity_sigma * params_.velocity_sigma;
@@ -404,7 +538,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       t->id = next_id_++;
       t->x << p[i], (vel[i] ? *vel[i] : Eigen::Vector2d::Zero());
       t->P = Eigen::Matrix4d::Zero();
-      t->P(0, 0) = t->P(1, 1) = sigma[i] * sigma[i];
+      t->P.topLeftCorner<2, 2>() = cov[i];
       t->P(2, 2) = t->P(3, 3) = vel[i] ? params_.velocity_sigma * params_.velocity_sigma
                                        : params_.init_velocity_sigma * params_.init_velocity_sigma;
     }
@@ -414,7 +548,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     t->length = b.size[0] > 0 ? b.size[0] : t->length;
     t->width = b.size[1] > 0 ? b.size[1] : t->width;
     ++t->hits;
-    t->history.push_back({now, p[i], sigma[i], v_sigma[i]});
+    t->history.push_back({now, p[i], sigma[i], v_sigma[i], cov[i], drift_cov[i], line_of_sight[i].squaredNorm() == 0});
     while (static_cast<int>(t->history.size()) > params_.max_history) t->history.pop_front();
 
     Decision& d = out[i];

@@ -31,6 +31,17 @@
 // cannot be pinned down stay UNKNOWN (the paper checks nearby cars first). Without any camera pose the
 // tracker still tracks (camera frame) but reports UNKNOWN.
 //
+// Boxes with their own noise (ABI 1.5, BESLAM_BOX_HAS_POSITION_SIGMA: a ground-lifted monocular box knows its
+// bearing far better than its range): each position gets a covariance, range noise along the line of sight
+// and bearing noise across it (each at least the model's sigma(r)), which the Kalman update, the gate (the
+// distance along the line of sight counts in units of the noise across it) and a generalised least-squares
+// line fit use. The box's range drift (a range error that changes with the range, e.g. a road pitch error)
+// adds (range_drift * closing speed)^2 along the line of sight to the velocity's covariance. Static evidence
+// then needs the speed bound in every direction, or, since traffic moves along the road and the road runs
+// along the ego's travel, both the speed along that direction (velocity constrained to it) and the velocity
+// across it (unconstrained) below static_speed. Windows whose boxes carry no noise take the plain fit above,
+// unchanged.
+//
 // Pose jitter (pose_jitter: true, for the poses of a monocular SLAM backend): a vehicle cannot leave its
 // constant-velocity path by much between two frames, so how far the given poses do (a backend correcting
 // itself) is measured as an RMS over the last window_static seconds, and every world position made with
@@ -132,9 +143,12 @@ class BevTracker {
  private:
   struct Observation {
     double t;
-    Eigen::Vector2d p;  // world BEV
-    double sigma;       // position noise
-    double v_sigma;     // apparent velocity from ego-motion error (m/s)
+    Eigen::Vector2d p;          // world BEV
+    double sigma;               // position noise (the largest axis of cov)
+    double v_sigma;             // apparent velocity from ego-motion error (m/s)
+    Eigen::Matrix2d cov;        // position covariance in the world BEV
+    Eigen::Matrix2d drift_cov;  // velocity covariance of the box's range drift while the camera closes in
+    bool isotropic;             // cov == sigma^2 I and no drift (the box gave no noise of its own)
   };
   struct Track {
     int32_t id = -1;
@@ -149,15 +163,26 @@ class BevTracker {
     int32_t state = BESLAM_MOTION_UNKNOWN;
     int dynamic_run = 0, static_run = 0;
     Eigen::Vector2d anchor = Eigen::Vector2d::Zero();  // where a static track is parked
-    double anchor_var = 0;
+    Eigen::Matrix2d anchor_cov = Eigen::Matrix2d::Zero();
     double anchor_t = 0;  // mean time of the parked position's observations
     int anchor_n = 0;
   };
   struct Speed {
     bool valid = false;
-    double speed = 0, sigma = 0;
+    double speed = 0;
+    double sigma = 0;        // standard error of the speed (along the fitted velocity)
+    double sigma_bound = 0;  // the largest standard error in any direction
+    double speed_bound = 0;  // the static test's: speed plus z_static standard errors, at most
   };
 
+  struct Fit {
+    Eigen::Vector2d velocity = Eigen::Vector2d::Zero();
+    double sigma = 0, sigma_bound = 0, speed_bound = 0;  // as in Speed, the ego-motion error included
+    bool consistent = true;                              // the residuals are within max_residual of the noise
+  };
+  // The line fit when some position of the window has its own (range, bearing) noise; nullopt when the
+  // window spans no time.
+  std::optional<Fit> fitSpeedAnisotropic(const std::deque<Observation>& history, size_t first) const;
   Speed fitSpeed(const Track& track, double window, const std::optional<Eigen::Vector2d>& det_velocity,
                  double det_sigma) const;
   void decide(Track& track, const std::optional<Eigen::Vector2d>& det_velocity, Decision& out);
@@ -175,7 +200,8 @@ class BevTracker {
   std::deque<std::pair<double, double>> jitter_;  // (time, squared BEV distance of a pose from its prediction)
   double jitter_rms_ = 0;                         // m, over the last window_static seconds
   double first_pose_t_ = 0;  // time of the first pose: with pose_jitter, decisions wait window_static from it
-  double ego_speed_ = 0, ego_yaw_rate_ = 0;  // between the last two known poses (m/s, rad/s)
+  double ego_speed_ = 0, ego_yaw_rate_ = 0;                   // between the last two known poses (m/s, rad/s)
+  Eigen::Vector2d road_direction_ = Eigen::Vector2d::Zero();  // unit BEV direction of the ego's travel; zero: none
 };
 
 // BEV footprint helpers (x-z plane of the frame the box is expressed in).
