@@ -61,6 +61,16 @@ bool projectBox(const beslam_camera& cam, const beslam_box3d& box, cv::Rect2d& o
   return true;
 }
 
+// The exact 2D box of a road-aligned prior-size car standing on the road at (x, z) of the KITTI camera.
+cv::Rect2d roadCarBox(const beslam_camera& cam, double z, double x) {
+  beslam_box3d t{};
+  t.size[0] = 3.9, t.size[1] = 1.6, t.size[2] = 1.5, t.yaw = -1.5708;
+  t.center_cam[0] = x, t.center_cam[1] = 1.65 - 0.75, t.center_cam[2] = z;
+  cv::Rect2d r;
+  EXPECT_TRUE(projectBox(cam, t, r));
+  return r;
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? NAN : v[v.size() / 2];
@@ -209,14 +219,7 @@ TEST(GroundLifter, SyntheticCarsWithin20mMedianDistanceErrorUnder10Percent) {
 TEST(GroundLifter, FlagsFarCutAndHorizonBoxes) {
   const beslam_camera cam = kittiCamera();
   const GroundLifter lifter(cam, LiftOptions{});
-  auto boxAt = [&](double z, double x) {  // exact 2D box of a road-aligned car
-    beslam_box3d t{};
-    t.size[0] = 3.9, t.size[1] = 1.6, t.size[2] = 1.5, t.yaw = -1.5708;
-    t.center_cam[0] = x, t.center_cam[1] = 1.65 - 0.75, t.center_cam[2] = z;
-    cv::Rect2d r;
-    EXPECT_TRUE(projectBox(cam, t, r));
-    return r;
-  };
+  auto boxAt = [&](double z, double x) { return roadCarBox(cam, z, x); };
   const beslam_box3d near = lifter.lift({BESLAM_CLASS_CAR, 0.8f, boxAt(10, 2)});
   EXPECT_FALSE(near.flags & BESLAM_BOX_UNCERTAIN);
   EXPECT_NEAR(near.center_cam[2], 10, 0.3);
@@ -242,14 +245,7 @@ TEST(GroundLifter, FlagsFarCutAndHorizonBoxes) {
 // pixel noise on the box edges causes.
 TEST(GroundLifter, BoxesCarryTheirRangeAndBearingNoise) {
   const beslam_camera cam = kittiCamera();
-  auto boxAt = [&](double z, double x) {  // exact 2D box of a road-aligned car
-    beslam_box3d t{};
-    t.size[0] = 3.9, t.size[1] = 1.6, t.size[2] = 1.5, t.yaw = -1.5708;
-    t.center_cam[0] = x, t.center_cam[1] = 1.65 - 0.75, t.center_cam[2] = z;
-    cv::Rect2d r;
-    EXPECT_TRUE(projectBox(cam, t, r));
-    return r;
-  };
+  auto boxAt = [&](double z, double x) { return roadCarBox(cam, z, x); };
   const GroundLifter lifter(cam, LiftOptions{});
   const beslam_box3d near = lifter.lift({BESLAM_CLASS_CAR, 0.8f, boxAt(10, 3)});
   const beslam_box3d far = lifter.lift({BESLAM_CLASS_CAR, 0.8f, boxAt(30, 3)});
