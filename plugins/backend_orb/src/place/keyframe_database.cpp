@@ -19,7 +19,10 @@ void KeyFrameDatabase::add(KeyFrame* kf) {
     slots_.push_back(kf);
   }
   slot_of_[kf] = slot;
-  for (const auto& [word, weight] : kf->bow) index_[word].push_back(slot);
+  for (const auto& [word, weight] : kf->bow) {
+    if (word >= index_.size()) index_.resize(static_cast<size_t>(word) + 1);
+    index_[word].push_back(slot);
+  }
 }
 
 void KeyFrameDatabase::erase(KeyFrame* kf) {
@@ -27,11 +30,9 @@ void KeyFrameDatabase::erase(KeyFrame* kf) {
   if (found == slot_of_.end()) return;
   const int slot = found->second;
   for (const auto& [word, weight] : kf->bow) {
-    auto it = index_.find(word);
-    if (it == index_.end()) continue;
-    auto& list = it->second;
+    if (word >= index_.size()) continue;
+    auto& list = index_[word];
     list.erase(std::remove(list.begin(), list.end(), slot), list.end());
-    if (list.empty()) index_.erase(it);
   }
   slots_[static_cast<size_t>(slot)] = nullptr;
   free_slots_.push_back(slot);
@@ -47,10 +48,9 @@ void KeyFrameDatabase::clear() {
 
 std::vector<std::pair<KeyFrame*, int>> KeyFrameDatabase::sharedWords(const place::BowVector& bow) const {
   std::vector<int> count(slots_.size(), 0);
-  for (const auto& [word, weight] : bow) {
-    auto it = index_.find(word);
-    if (it == index_.end()) continue;
-    for (int slot : it->second) ++count[static_cast<size_t>(slot)];
+  for (const auto& [word, weight] : bow) {  // words in increasing order: one pass over the index
+    if (word >= index_.size()) break;
+    for (int slot : index_[word]) ++count[static_cast<size_t>(slot)];
   }
   std::vector<std::pair<KeyFrame*, int>> shared;
   for (size_t slot = 0; slot < slots_.size(); ++slot)

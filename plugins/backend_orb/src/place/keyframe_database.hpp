@@ -33,8 +33,11 @@ class KeyFrameDatabase {
   std::vector<KeyFrame*> relocalisationCandidates(const place::BowVector& bow) const;
 
  private:
-  std::unordered_map<uint32_t, std::vector<int>> index_;  // word -> slots of the keyframes that have it
-  std::vector<KeyFrame*> slots_;                          // slot -> keyframe, nullptr when free
+  // Word id -> slots of the keyframes that have it, indexed directly (word ids are the vocabulary's node ids,
+  // 47,778 for the default one: 1.1 MB of list headers). A query walks it in word order; a hash map cost
+  // a cache miss or two per word more, most of a late query (six laps: 2,700 words, 95,000 postings).
+  std::vector<std::vector<int>> index_;
+  std::vector<KeyFrame*> slots_;  // slot -> keyframe, nullptr when free
   std::unordered_map<const KeyFrame*, int> slot_of_;
   std::vector<int> free_slots_;
 };
