@@ -124,7 +124,7 @@ void BevTracker::reset() {
   jitter_.clear();
   jitter_rms_ = 0;
   ego_speed_ = ego_yaw_rate_ = 0;
-  road_direction_ = Eigen::Vector2d::Zero();
+  ego_velocity_ = Eigen::Vector2d::Zero();
 }
 
 BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
@@ -152,7 +152,7 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
       double t_mean = 0, var_model = 0, var_ego = 0;
       Eigen::Vector2d p_mean = Eigen::Vector2d::Zero();
       for (size_t i = first; i < h.size(); ++i) {
-        t_mean += h[i].t, p_mean += h[i].p, var_model += h[i].sigma * h[i].sigma;
+        t_mean += h[i].t, p_mean += h[i].p, var_model += h[i].cov(0, 0);  // sigma^2: isotropic
         var_ego += h[i].v_sigma * h[i].v_sigma;
       }
       t_mean /= static_cast<double>(n), p_mean /= static_cast<double>(n), var_model /= static_cast<double>(n);
@@ -260,12 +260,12 @@ std::optional<BevTracker::Fit> BevTracker::fitSpeedAnisotropic(const std::deque<
   f.sigma = std::sqrt(along);
   f.sigma_bound = std::sqrt(largest);
   f.speed_bound = speed + params_.z_static * f.sigma_bound;
-  if (road_direction_.squaredNorm() > 0) {
+  if (ego_speed_ > kRoadSpeed) {
     // Traffic moves along the road, which runs along the ego's own travel: a speed along the road is
     // seen across the line of sight of every car not straight ahead, where the boxes are precise. So a
     // car is also shown slower than a speed when both its speed along the road (the velocity constrained
     // to that direction) and its velocity across the road (unconstrained) are.
-    const Eigen::Vector2d d = road_direction_, e(-d.y(), d.x());
+    const Eigen::Vector2d d = ego_velocity_.normalized(), e(-d.y(), d.x());
     const Eigen::Matrix2d C_inv = C.inverse();
     const double info = d.dot(C_inv * d);
     const double s_road = d.dot(C_inv * f.velocity) / info;
@@ -396,8 +396,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       ego_speed_ = std::hypot(d.x(), d.z()) / span;
       ego_yaw_rate_ =
           Eigen::AngleAxisd(poses_[0].second.linear().transpose() * poses_[1].second.linear()).angle() / span;
-      const Eigen::Vector2d travel(d.x(), d.z());
-      road_direction_ = ego_speed_ > kRoadSpeed ? Eigen::Vector2d(travel.normalized()) : Eigen::Vector2d::Zero();
+      ego_velocity_ = Eigen::Vector2d(d.x(), d.z()) / span;
     }
   } else if (!poses_.empty() && now - poses_.back().first > params_.max_miss_time) {
     // The backend has given no pose for longer than a track may coast: an extrapolated ego pose would place
@@ -429,7 +428,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
   // Detections in the world BEV.
   const size_t n = boxes.size(), m = tracks_.size();
   std::vector<Eigen::Vector2d> p(n);
-  std::vector<double> range(n), sigma(n), v_sigma(n), yaw(n);
+  std::vector<double> range(n), v_sigma(n), yaw(n);
   std::vector<Eigen::Matrix2d> cov(n), drift_cov(n, Eigen::Matrix2d::Zero());
   std::vector<Eigen::Vector2d> line_of_sight(n, Eigen::Vector2d::Zero());  // unit BEV bearing; zero: isotropic
   std::vector<std::optional<Eigen::Vector2d>> vel(n);
@@ -448,18 +447,12 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       line_of_sight[i] = sight.normalized();
       cov[i] = s_across * s_across * Eigen::Matrix2d::Identity() +
                (s_range * s_range - s_across * s_across) * line_of_sight[i] * line_of_sight[i].transpose();
-      sigma[i] = std::max(s_range, s_across);
       // Range drift: a parked car closes in at the ego's speed along the line of sight.
-      if (poses_.size() == 2 && poses_[1].first > poses_[0].first) {
-        const Eigen::Vector3d v3 =
-            (poses_[1].second.translation() - poses_[0].second.translation()) / (poses_[1].first - poses_[0].first);
-        const double closing = std::abs(line_of_sight[i].dot(Eigen::Vector2d(v3.x(), v3.z())));
-        const double s = b.range_drift * closing;
-        drift_cov[i] = s * s * line_of_sight[i] * line_of_sight[i].transpose();
-      }
+      const double s = b.range_drift * std::abs(line_of_sight[i].dot(ego_velocity_));
+      drift_cov[i] = s * s * line_of_sight[i] * line_of_sight[i].transpose();
     } else {
-      sigma[i] = std::hypot(model, jitter_rms_);
-      cov[i] = sigma[i] * sigma[i] * Eigen::Matrix2d::Identity();
+      const double sigma = std::hypot(model, jitter_rms_);
+      cov[i] = sigma * sigma * Eigen::Matrix2d::Identity();
     }
     v_sigma[i] = params_.ego_speed_noise * ego_speed_ + params_.ego_turn_noise * ego_yaw_rate_ * range[i];
     yaw[i] = bevYaw(R_wc, b.yaw);
@@ -485,21 +478,19 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
           if (o >= params_.min_iou) cost[i * m + j] = 1.0 - o;
         } else {
           const Eigen::Vector2d e = p[i] - pred;
+          const double gate = params_.gate + params_.gate_per_m * range[i];
           double d = e.norm();
           if (line_of_sight[i].squaredNorm() > 0) {
             // A range error is no evidence of another object: the distance along the line of sight counts
             // in units of the noise across it, and is gated by the innovation's own covariance.
             const Eigen::Vector2d u = line_of_sight[i], v(-u.y(), u.x());
-            const double along = u.dot(e), across = v.dot(e);
-            const double g = params_.gate + params_.gate_per_m * range[i];
             const double excess = std::sqrt(std::max(0.0, u.dot(cov[i] * u) - v.dot(cov[i] * v)));
             const Eigen::Matrix2d S = t.P.topLeftCorner<2, 2>() + cov[i];
             if (e.dot(S.inverse() * e) > kGateChi2) continue;
-            d = std::hypot(across, along * g / (g + 3 * excess));
+            d = std::hypot(v.dot(e), u.dot(e) * gate / (gate + 3 * excess));
           }
           const double spread = std::min(2.0 * std::sqrt(t.P(0, 0) + t.P(1, 1)), params_.gate);
-          const double g = params_.gate + params_.gate_per_m * range[i] + spread;
-          if (d <= g) cost[i * m + j] = d;
+          if (d <= gate + spread) cost[i * m + j] = d;
         }
       }
     }
@@ -522,7 +513,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       Eigen::MatrixXd H = Eigen::MatrixXd::Identity(k, 4);
       Eigen::VectorXd z(k);
       z.head<2>() = p[i];
-      Eigen::MatrixXd R = Eigen::MatrixXd::Identity(k, k) * (sigma[i] * sigma[i]);
+      Eigen::MatrixXd R = Eigen::MatrixXd::Zero(k, k);
       R.topLeftCorner<2, 2>() = cov[i];
       if (vel[i]) {
         z.tail<2>() = *vel[i];
@@ -548,7 +539,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     t->length = b.size[0] > 0 ? b.size[0] : t->length;
     t->width = b.size[1] > 0 ? b.size[1] : t->width;
     ++t->hits;
-    t->history.push_back({now, p[i], sigma[i], v_sigma[i], cov[i], drift_cov[i], line_of_sight[i].squaredNorm() == 0});
+    t->history.push_back({now, p[i], v_sigma[i], cov[i], drift_cov[i], line_of_sight[i].squaredNorm() == 0});
     while (static_cast<int>(t->history.size()) > params_.max_history) t->history.pop_front();
 
     Decision& d = out[i];

@@ -144,7 +144,6 @@ class BevTracker {
   struct Observation {
     double t;
     Eigen::Vector2d p;          // world BEV
-    double sigma;               // position noise (the largest axis of cov)
     double v_sigma;             // apparent velocity from ego-motion error (m/s)
     Eigen::Matrix2d cov;        // position covariance in the world BEV
     Eigen::Matrix2d drift_cov;  // velocity covariance of the box's range drift while the camera closes in
@@ -200,8 +199,8 @@ class BevTracker {
   std::deque<std::pair<double, double>> jitter_;  // (time, squared BEV distance of a pose from its prediction)
   double jitter_rms_ = 0;                         // m, over the last window_static seconds
   double first_pose_t_ = 0;  // time of the first pose: with pose_jitter, decisions wait window_static from it
-  double ego_speed_ = 0, ego_yaw_rate_ = 0;                   // between the last two known poses (m/s, rad/s)
-  Eigen::Vector2d road_direction_ = Eigen::Vector2d::Zero();  // unit BEV direction of the ego's travel; zero: none
+  double ego_speed_ = 0, ego_yaw_rate_ = 0;                 // between the last two known poses (m/s, rad/s)
+  Eigen::Vector2d ego_velocity_ = Eigen::Vector2d::Zero();  // BEV, between the last two known poses (m/s)
 };
 
 // BEV footprint helpers (x-z plane of the frame the box is expressed in).
