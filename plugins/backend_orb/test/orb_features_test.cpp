@@ -2,6 +2,7 @@
 // and scale.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 
@@ -143,6 +144,81 @@ double warpedRepeatability(int seed, double angle_deg, double scale) {
 TEST(OrbExtractor, RepeatableUnderRotation) { EXPECT_GT(warpedRepeatability(9, 30.0, 1.0), 0.5); }
 
 TEST(OrbExtractor, RepeatableUnderScale) { EXPECT_GT(warpedRepeatability(10, 0.0, 1.3), 0.4); }
+
+// The static objects of a mask are one box per label (>= 1000); searched apart (parked cars on either side
+// of the road), they give the corners of one search over the box of all of them, in the same order.
+TEST(OrbExtractor, StaticObjectsSearchedApartGiveTheCornersOfOneSearchOverAll) {
+  const cv::Mat img = test::texturedImage(1226, 370, 11);
+  cv::Mat labels(img.size(), CV_16UC1, cv::Scalar(0));
+  const std::vector<cv::Rect> boxes = {
+      {60, 150, 260, 120}, {900, 140, 240, 150}, {500, 170, 90, 70}, {560, 200, 80, 80}};
+  for (size_t i = 0; i < boxes.size(); ++i) labels(boxes[i]).setTo(1000 + static_cast<int>(i));
+  labels(cv::Rect(540, 150, 30, 20)).setTo(1);  // a dynamic pixel block inside the box of all
+  const StaticRegions regions = OrbExtractor::staticRegions(labels);
+  ASSERT_EQ(regions.objects.size(), 4u);
+  cv::Rect all;
+  for (size_t i = 0; i < boxes.size(); ++i) {  // objects 2 and 3 overlap: 3 covers part of 2, not its extent
+    EXPECT_NE(std::find(regions.objects.begin(), regions.objects.end(), boxes[i]), regions.objects.end())
+        << "object " << i;
+    all |= boxes[i];
+  }
+  EXPECT_EQ(regions.all, all);
+
+  OrbExtractor ex(ExtractorOptions{});
+  const auto prepared = ex.prepare(img);
+  for (int level : {0, 3}) {
+    const cv::Mat& level_image = prepared->level_images[level];
+    const double s = ex.pyramid().scale[level];
+    // The one search over all objects, as the extractor did it before searching them apart.
+    const cv::Rect roi = cv::Rect(static_cast<int>(all.x / s) - 3, static_cast<int>(all.y / s) - 3,
+                                  static_cast<int>(all.width / s) + 8, static_cast<int>(all.height / s) + 8) &
+                         cv::Rect(0, 0, level_image.cols, level_image.rows);
+    std::vector<cv::KeyPoint> whole;
+    cv::FAST(level_image(roi), whole, 7, true);
+    const auto onObject = [&](const cv::KeyPoint& kp) {  // the level-0 pixel a corner is labelled by
+      const int x = static_cast<int>((kp.pt.x + 0.5) * s), y = static_cast<int>((kp.pt.y + 0.5) * s);
+      return x < labels.cols && y < labels.rows && labels.at<uint16_t>(y, x) >= 1000;
+    };
+    std::vector<cv::KeyPoint> expected, got;
+    for (cv::KeyPoint kp : whole) {
+      kp.pt += cv::Point2f(static_cast<float>(roi.x), static_cast<float>(roi.y));
+      if (onObject(kp)) expected.push_back(kp);
+    }
+    for (const cv::KeyPoint& kp : OrbExtractor::staticObjectCorners(level_image, s, regions, 7))
+      if (onObject(kp)) got.push_back(kp);
+    ASSERT_GT(expected.size(), 100u) << "level " << level;
+    ASSERT_EQ(got.size(), expected.size()) << "level " << level;
+    for (size_t i = 0; i < got.size(); ++i) {
+      EXPECT_EQ(got[i].pt, expected[i].pt) << "level " << level << " corner " << i;
+      EXPECT_EQ(got[i].response, expected[i].response) << "level " << level << " corner " << i;
+    }
+  }
+}
+
+// A keypoint's angle is the intensity centroid's over the disc of radius 15 around it on its level.
+TEST(OrbExtractor, AnglesAreTheIntensityCentroidsOverTheDisc) {
+  const cv::Mat img = test::texturedImage(1226, 370, 12);
+  OrbExtractor ex(ExtractorOptions{});
+  const auto prepared = ex.prepare(img);
+  const auto f = ex.extract(img, cv::Mat(), 0, prepared.get());
+  ASSERT_GT(f->size(), 1000u);
+  for (const cv::KeyPoint& kp : f->keypoints) {
+    const cv::Mat& level = prepared->level_images[kp.octave];
+    const double s = ex.pyramid().scale[kp.octave];
+    const int cx = cvRound((kp.pt.x + 0.5) / s - 0.5), cy = cvRound((kp.pt.y + 0.5) / s - 0.5);
+    int m10 = 0, m01 = 0;
+    for (int v = -15; v <= 15; ++v) {
+      const int d = static_cast<int>(std::floor(std::sqrt(15 * 15 - v * v + 0.5)));
+      for (int u = -d; u <= d; ++u) {
+        const int value = level.at<uint8_t>(cy + v, cx + u);
+        m10 += u * value;
+        m01 += v * value;
+      }
+    }
+    ASSERT_EQ(kp.angle, cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10)))
+        << "keypoint at " << kp.pt << " level " << kp.octave;
+  }
+}
 
 TEST(FeatureGrid, QueryFindsExactlyTheKeypointsInTheWindow) {
   FeatureSet f;

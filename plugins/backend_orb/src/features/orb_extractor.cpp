@@ -3,29 +3,35 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <list>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+#include <string>
 
 namespace beslam::orb {
 namespace {
 
 constexpr int kHalfPatch = 15;
 
-struct QuadNode {
-  float x0, y0, x1, y1;
-  std::vector<int> idx;
-};
-
 }  // namespace
 
 OrbExtractor::OrbExtractor(const ExtractorOptions& options)
     : options_(options), pyramid_(options.levels, options.scale_factor) {
+  if (options.border < kIcRowOffset)  // the orientation patch's rows are read 16 px either side of a corner
+    throw std::invalid_argument("OrbExtractor: border must be at least " + std::to_string(kIcRowOffset) + " px");
   // Half-width of a disc of radius 15 at each row offset v (symmetric by construction).
   umax_.resize(kHalfPatch + 1);
   for (int v = 0; v <= kHalfPatch; ++v)
     umax_[v] = static_cast<int>(std::floor(std::sqrt(kHalfPatch * kHalfPatch - v * v + 0.5)));
+  for (int r = 0; r < kIcRows; ++r) {
+    const int d = umax_[std::abs(r - kHalfPatch)];
+    for (int k = 0; k < kIcRowWidth; ++k) {
+      const int u = k - kIcRowOffset;
+      const bool inside = std::abs(u) <= d;
+      ic_u_weights_[r][k] = static_cast<int16_t>(inside ? u : 0);
+      ic_disc_[r][k] = static_cast<int16_t>(inside ? 1 : 0);
+    }
+  }
   for (int level = 0; level < options.levels; ++level)
     describers_.push_back(cv::ORB::create(options.features, static_cast<float>(options.scale_factor), 1, options.border,
                                           0, 2, cv::ORB::FAST_SCORE, 31, 20));
@@ -50,62 +56,96 @@ std::vector<int> OrbExtractor::distributeQuadtree(const std::vector<cv::KeyPoint
                                                   float x1, float y1, int n) {
   std::vector<int> out;
   if (candidates.empty() || n <= 0) return out;
-  // Initial nodes: roughly square, side by side along the longer axis.
+  // The nodes are a list (in `next` order) over one pool; each node's candidates are a contiguous range of
+  // `order`, in candidate order, so a split partitions its range stably into its four quadrants.
+  struct Node {
+    float x0, y0, x1, y1;
+    int begin, end;  // range in `order`
+    int next;        // the next node in the list, -1 at its end
+    int size() const { return end - begin; }
+  };
+  std::vector<Node> pool;
+  std::vector<int> order, scratch;
+  scratch.resize(candidates.size());
+
+  // Initial nodes: roughly square, side by side along the longer axis; the empty ones dropped.
   const float w = x1 - x0, h = y1 - y0;
   const int n_init = std::max(1, static_cast<int>(std::lround(w / std::max(h, 1.0f))));
   const float step = w / n_init;
-  std::list<QuadNode> nodes;
-  std::vector<QuadNode*> init;
-  for (int i = 0; i < n_init; ++i) {
-    nodes.push_back({x0 + step * i, y0, x0 + step * (i + 1), y1, {}});
-  }
-  std::vector<std::list<QuadNode>::iterator> by_col;
-  for (auto it = nodes.begin(); it != nodes.end(); ++it) by_col.push_back(it);
+  std::vector<int> column_count(n_init, 0), column_of(candidates.size());
   for (size_t i = 0; i < candidates.size(); ++i) {
-    const int c = std::clamp(static_cast<int>((candidates[i].pt.x - x0) / step), 0, n_init - 1);
-    by_col[c]->idx.push_back(static_cast<int>(i));
+    column_of[i] = std::clamp(static_cast<int>((candidates[i].pt.x - x0) / step), 0, n_init - 1);
+    ++column_count[column_of[i]];
   }
-  for (auto it = nodes.begin(); it != nodes.end();) it = it->idx.empty() ? nodes.erase(it) : std::next(it);
+  std::vector<int> column_start(n_init + 1, 0);
+  for (int c = 0; c < n_init; ++c) column_start[c + 1] = column_start[c] + column_count[c];
+  order.resize(candidates.size());
+  {
+    std::vector<int> fill(column_start.begin(), column_start.end() - 1);
+    for (size_t i = 0; i < candidates.size(); ++i) order[fill[column_of[i]]++] = static_cast<int>(i);
+  }
+  int head = -1, tail = -1, n_nodes = 0;
+  for (int c = 0; c < n_init; ++c) {
+    if (column_count[c] == 0) continue;
+    pool.push_back({x0 + step * c, y0, x0 + step * (c + 1), y1, column_start[c], column_start[c + 1], -1});
+    const int id = static_cast<int>(pool.size()) - 1;
+    (tail < 0 ? head : pool[tail].next) = id;
+    tail = id;
+    ++n_nodes;
+  }
 
-  auto split = [&](const QuadNode& node, std::array<QuadNode, 4>& children) {
-    const float mx = 0.5f * (node.x0 + node.x1), my = 0.5f * (node.y0 + node.y1);
-    children = {{{node.x0, node.y0, mx, my, {}},
-                 {mx, node.y0, node.x1, my, {}},
-                 {node.x0, my, mx, node.y1, {}},
-                 {mx, my, node.x1, node.y1, {}}}};
-    const auto quadrant = [&](int i) {
-      const cv::Point2f& p = candidates[i].pt;
-      return (p.x < mx ? 0 : 1) + (p.y < my ? 0 : 2);
-    };
-    std::array<size_t, 4> count{};  // one allocation per child, not one per doubling
-    for (int i : node.idx) ++count[quadrant(i)];
-    for (int k = 0; k < 4; ++k) children[k].idx.reserve(count[k]);
-    for (int i : node.idx) children[quadrant(i)].idx.push_back(i);
-  };
-  auto splittable = [](const QuadNode& node) { return node.idx.size() > 1 && node.x1 - node.x0 > 1.0f; };
-
-  while (static_cast<int>(nodes.size()) < n) {
+  auto splittable = [](const Node& node) { return node.size() > 1 && node.x1 - node.x0 > 1.0f; };
+  std::vector<int> to_split, prev_of;
+  while (n_nodes < n) {
     // Nodes with the most keypoints are split first, so the last pass stops exactly at the budget.
-    std::vector<std::list<QuadNode>::iterator> order;
-    for (auto it = nodes.begin(); it != nodes.end(); ++it)
-      if (splittable(*it)) order.push_back(it);
-    if (order.empty()) break;
-    std::stable_sort(order.begin(), order.end(),
-                     [](const auto& a, const auto& b) { return a->idx.size() > b->idx.size(); });
-    std::array<QuadNode, 4> children;
-    for (auto it : order) {
-      split(*it, children);
-      for (auto& child : children)
-        if (!child.idx.empty()) nodes.insert(it, std::move(child));
-      nodes.erase(it);
-      if (static_cast<int>(nodes.size()) >= n) break;
+    to_split.clear();
+    for (int id = head; id >= 0; id = pool[id].next)
+      if (splittable(pool[id])) to_split.push_back(id);
+    if (to_split.empty()) break;
+    std::stable_sort(to_split.begin(), to_split.end(), [&](int a, int b) { return pool[a].size() > pool[b].size(); });
+    // Each node's predecessor, to put its children where it was.
+    prev_of.assign(pool.size(), -1);
+    for (int id = head, prev = -1; id >= 0; prev = id, id = pool[id].next) prev_of[id] = prev;
+    for (const int id : to_split) {
+      const Node node = pool[id];
+      const float mx = 0.5f * (node.x0 + node.x1), my = 0.5f * (node.y0 + node.y1);
+      const auto quadrant = [&](int i) {
+        const cv::Point2f& p = candidates[i].pt;
+        return (p.x < mx ? 0 : 1) + (p.y < my ? 0 : 2);
+      };
+      std::array<int, 5> start{};
+      for (int k = node.begin; k < node.end; ++k) ++start[quadrant(order[k]) + 1];
+      for (int q = 0; q < 4; ++q) start[q + 1] += start[q];
+      std::array<int, 4> fill = {start[0], start[1], start[2], start[3]};
+      for (int k = node.begin; k < node.end; ++k) scratch[fill[quadrant(order[k])]++] = order[k];
+      std::copy(scratch.begin(), scratch.begin() + node.size(), order.begin() + node.begin);
+      const std::array<std::array<float, 4>, 4> box = {{{node.x0, node.y0, mx, my},
+                                                        {mx, node.y0, node.x1, my},
+                                                        {node.x0, my, mx, node.y1},
+                                                        {mx, my, node.x1, node.y1}}};
+      // The non-empty children replace the node in the list, in quadrant order.
+      int prev = prev_of[id];
+      for (int q = 0; q < 4; ++q) {
+        if (start[q + 1] == start[q]) continue;
+        pool.push_back(
+            {box[q][0], box[q][1], box[q][2], box[q][3], node.begin + start[q], node.begin + start[q + 1], -1});
+        const int child = static_cast<int>(pool.size()) - 1;
+        (prev < 0 ? head : pool[prev].next) = child;
+        prev = child;
+        ++n_nodes;
+      }
+      pool[prev].next = node.next;  // a node with two or more keypoints has a child
+      if (node.next >= 0) prev_of.resize(pool.size(), -1), prev_of[node.next] = prev;
+      --n_nodes;
+      if (n_nodes >= n) break;
     }
   }
-  out.reserve(nodes.size());
-  for (const QuadNode& node : nodes) {
-    int best = node.idx.front();
-    for (int i : node.idx)
-      if (candidates[i].response > candidates[best].response) best = i;
+  out.reserve(n_nodes);
+  for (int id = head; id >= 0; id = pool[id].next) {
+    const Node& node = pool[id];
+    int best = order[node.begin];
+    for (int k = node.begin; k < node.end; ++k)
+      if (candidates[order[k]].response > candidates[best].response) best = order[k];
     out.push_back(best);
   }
   if (static_cast<int>(out.size()) > n) {  // the last split may overshoot by up to 3
@@ -120,21 +160,23 @@ std::vector<int> OrbExtractor::distributeQuadtree(const std::vector<cv::KeyPoint
 float OrbExtractor::icAngle(const cv::Mat& image, const cv::Point2f& pt) const {
   const int cx = cvRound(pt.x), cy = cvRound(pt.y);
   const int step = static_cast<int>(image.step1());
-  const uint8_t* centre = image.ptr<uint8_t>(cy) + cx;
+  // Each row of the disc is read as 32 pixels (u = -16..15) against its weights, zero outside the disc: a
+  // fixed-length loop the compiler vectorises; the sums are the same integers as over the disc alone.
+  const uint8_t* first = image.ptr<uint8_t>(cy - kHalfPatch) + cx - kIcRowOffset;
   int m10 = 0, m01 = 0;
-  for (int u = -kHalfPatch; u <= kHalfPatch; ++u) m10 += u * centre[u];
-  for (int v = 1; v <= kHalfPatch; ++v) {
-    int row_sum = 0;
-    const int d = umax_[v];
-    for (int u = -d; u <= d; ++u) {
-      const int below = centre[u + v * step], above = centre[u - v * step];
-      row_sum += below - above;
-      m10 += u * (below + above);
+  for (int r = 0; r < kIcRows; ++r) {
+    const uint8_t* row = first + r * step;
+    const int16_t* wu = ic_u_weights_[r].data();
+    const int16_t* in = ic_disc_[r].data();
+    int row_m10 = 0, row_sum = 0;
+    for (int k = 0; k < kIcRowWidth; ++k) {
+      row_m10 += wu[k] * row[k];
+      row_sum += in[k] * row[k];
     }
-    m01 += v * row_sum;
+    m10 += row_m10;
+    m01 += (r - kHalfPatch) * row_sum;
   }
-  float angle = cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
-  return angle;
+  return cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
 }
 
 namespace {
@@ -155,6 +197,13 @@ struct LevelCells {
   bool inside(const cv::Point2f& p) const {
     return p.x >= border && p.y >= border && p.x < w - border && p.y < h - border;
   }
+  // Cell `index`'s level pixels.
+  cv::Rect rect(int index) const {
+    const int cx = index % nx, cy = index / nx;
+    const int x0 = border + static_cast<int>(cx * cw), y0 = border + static_cast<int>(cy * ch);
+    const int x1 = border + static_cast<int>((cx + 1) * cw), y1 = border + static_cast<int>((cy + 1) * ch);
+    return cv::Rect(x0, y0, x1 - x0, y1 - y0);
+  }
   int cellOf(const cv::Point2f& p) const {
     const int cx = std::min(static_cast<int>((p.x - border) / cw), nx - 1);
     const int cy = std::min(static_cast<int>((p.y - border) / ch), ny - 1);
@@ -163,9 +212,8 @@ struct LevelCells {
   // FAST at `threshold` on cell `index` and a 3 px margin (so the cell's own pixels are all tested), the
   // corners kept inside the cell and the border, level pixels.
   std::vector<cv::KeyPoint> search(const cv::Mat& level_image, int index, int threshold) const {
-    const int cx = index % nx, cy = index / nx;
-    const int x0 = border + static_cast<int>(cx * cw), y0 = border + static_cast<int>(cy * ch);
-    const int x1 = border + static_cast<int>((cx + 1) * cw), y1 = border + static_cast<int>((cy + 1) * ch);
+    const cv::Rect cell = rect(index);
+    const int x0 = cell.x, y0 = cell.y, x1 = cell.x + cell.width, y1 = cell.y + cell.height;
     const cv::Rect roi(x0 - 3, y0 - 3, x1 - x0 + 6, y1 - y0 + 6);
     std::vector<cv::KeyPoint> raw, out;
     cv::FAST(level_image(roi), raw, threshold, true);
@@ -179,11 +227,104 @@ struct LevelCells {
   }
 };
 
+// Whether any level-0 pixel that a corner of the level cell [x0,x1) x [y0,y1) would be labelled by is
+// neither dynamic (1) nor a static object (>= 1000): if none is, every corner the cell could give is dropped.
+bool cellHasUnlabelledPixel(const cv::Mat& labels, double s, int x0, int y0, int x1, int y1) {
+  const int u0 = std::min(static_cast<int>((x0 + 0.5) * s), labels.cols - 1);
+  const int u1 = std::min(static_cast<int>((x1 - 1 + 0.5) * s), labels.cols - 1);
+  const int v0 = std::min(static_cast<int>((y0 + 0.5) * s), labels.rows - 1);
+  const int v1 = std::min(static_cast<int>((y1 - 1 + 0.5) * s), labels.rows - 1);
+  for (int v = v0; v <= v1; ++v) {
+    const uint16_t* row = labels.ptr<uint16_t>(v);
+    for (int u = u0; u <= u1; ++u)
+      if (row[u] != 1 && row[u] < 1000) return true;
+  }
+  return false;
+}
+
+// The level rect FAST searches for the level-0 pixel box `box`: 3 px before it (FAST's own border) and 5
+// after, plus `pad` on every side.
+cv::Rect levelSearchRect(const cv::Rect& box, double s, int pad) {
+  return cv::Rect(static_cast<int>(box.x / s) - 3 - pad, static_cast<int>(box.y / s) - 3 - pad,
+                  static_cast<int>(box.width / s) + 8 + 2 * pad, static_cast<int>(box.height / s) + 8 + 2 * pad);
+}
+
 }  // namespace
 
-void OrbExtractor::detectLevel(const cv::Mat& level_image, int level, const cv::Mat& labels, const cv::Rect& static_box,
-                               int n_level, const PreparedLevel* prepared, std::vector<cv::KeyPoint>& level_kps,
-                               std::vector<uint16_t>& level_labels) const {
+StaticRegions OrbExtractor::staticRegions(const cv::Mat& labels) {
+  StaticRegions out;
+  std::vector<uint16_t> ids;
+  std::vector<cv::Vec4i> extent;  // per id: x0, y0, x1, y1 (inclusive)
+  for (int y = 0; y < labels.rows; ++y) {
+    const uint16_t* row = labels.ptr<uint16_t>(y);
+    size_t last = 0;
+    for (int x = 0; x < labels.cols; ++x) {
+      if (row[x] < 1000) continue;
+      if (ids.empty() || ids[last] != row[x]) {
+        last = static_cast<size_t>(std::find(ids.begin(), ids.end(), row[x]) - ids.begin());
+        if (last == ids.size()) {
+          ids.push_back(row[x]);
+          extent.emplace_back(x, y, x, y);
+        }
+      }
+      cv::Vec4i& e = extent[last];
+      e[0] = std::min(e[0], x);
+      e[2] = std::max(e[2], x);
+      e[3] = y;  // rows are visited in order
+    }
+  }
+  for (const cv::Vec4i& e : extent) {
+    const cv::Rect box(e[0], e[1], e[2] - e[0] + 1, e[3] - e[1] + 1);
+    out.objects.push_back(box);
+    out.all = out.all.empty() ? box : (out.all | box);
+  }
+  return out;
+}
+
+// Each object is searched in its own rect: its level box with 6 px more on every side (a corner's test and
+// its non-maximum suppression read 4 px around it), clipped to the rect of all objects, whose edges the
+// single search had too; overlapping rects are merged.
+std::vector<cv::KeyPoint> OrbExtractor::staticObjectCorners(const cv::Mat& level_image, double s,
+                                                            const StaticRegions& regions, int threshold) {
+  const cv::Rect level_rect(0, 0, level_image.cols, level_image.rows);
+  const cv::Rect all = levelSearchRect(regions.all, s, 0) & level_rect;
+  std::vector<cv::Rect> rects;
+  for (const cv::Rect& box : regions.objects) {
+    cv::Rect r = levelSearchRect(box, s, 6) & all;
+    if (r.empty()) continue;
+    // Merge with every rect it overlaps, until it overlaps none.
+    for (bool merged = true; merged;) {
+      merged = false;
+      for (size_t i = 0; i < rects.size(); ++i)
+        if (!(rects[i] & r).empty()) {
+          r |= rects[i];
+          rects.erase(rects.begin() + static_cast<std::ptrdiff_t>(i));
+          merged = true;
+          break;
+        }
+    }
+    rects.push_back(r);
+  }
+  std::vector<cv::KeyPoint> corners, raw;
+  for (const cv::Rect& roi : rects) {
+    if (roi.width <= 7 || roi.height <= 7) continue;
+    raw.clear();
+    cv::FAST(level_image(roi), raw, threshold, true);
+    for (cv::KeyPoint kp : raw) {
+      kp.pt.x += roi.x;
+      kp.pt.y += roi.y;
+      corners.push_back(kp);
+    }
+  }
+  std::stable_sort(corners.begin(), corners.end(), [](const cv::KeyPoint& a, const cv::KeyPoint& b) {
+    return a.pt.y != b.pt.y ? a.pt.y < b.pt.y : a.pt.x < b.pt.x;
+  });
+  return corners;
+}
+
+void OrbExtractor::detectLevel(const cv::Mat& level_image, int level, const cv::Mat& labels,
+                               const StaticRegions& static_regions, int n_level, const PreparedLevel* prepared,
+                               std::vector<cv::KeyPoint>& level_kps, std::vector<uint16_t>& level_labels) const {
   const bool has_labels = !labels.empty();
   const int border = options_.border;
   const int w = level_image.cols, h = level_image.rows;
@@ -212,8 +353,13 @@ void OrbExtractor::detectLevel(const cv::Mat& level_image, int level, const cv::
   }
   for (int cell = 0; cell < cells.count(); ++cell) {
     if (cell_found[cell]) continue;
-    // Searched ahead when the cell was empty without the mask too; else (the mask emptied it) here.
+    // Searched ahead when the cell was empty without the mask too; else (the mask emptied it) here, unless
+    // the mask covers all of it.
     const bool known = prepared && prepared->cell_searched[cell];
+    if (!known && has_labels) {
+      const cv::Rect r = cells.rect(cell);
+      if (!cellHasUnlabelledPixel(labels, s, r.x, r.y, r.x + r.width, r.y + r.height)) continue;
+    }
     const std::vector<cv::KeyPoint> found =
         known ? std::vector<cv::KeyPoint>() : cells.search(level_image, cell, options_.fast_fallback);
     for (const cv::KeyPoint& kp : known ? prepared->cell_corners[cell] : found) {
@@ -223,22 +369,13 @@ void OrbExtractor::detectLevel(const cv::Mat& level_image, int level, const cv::
       bg_label.push_back(label);
     }
   }
-  if (!static_box.empty()) {
-    cv::Rect roi(static_cast<int>(static_box.x / s) - 3, static_cast<int>(static_box.y / s) - 3,
-                 static_cast<int>(static_box.width / s) + 8, static_cast<int>(static_box.height / s) + 8);
-    roi &= cv::Rect(0, 0, w, h);
-    if (roi.width > 7 && roi.height > 7) {
-      raw.clear();
-      cv::FAST(level_image(roi), raw, options_.static_object_fast, true);
-      for (cv::KeyPoint kp : raw) {
-        kp.pt.x += roi.x;
-        kp.pt.y += roi.y;
-        if (!cells.inside(kp.pt)) continue;
-        const uint16_t label = labelAt(kp.pt);
-        if (label < 1000) continue;
-        objects.push_back(kp);
-        obj_label.push_back(label);
-      }
+  if (!static_regions.all.empty()) {
+    for (const cv::KeyPoint& kp : staticObjectCorners(level_image, s, static_regions, options_.static_object_fast)) {
+      if (!cells.inside(kp.pt)) continue;
+      const uint16_t label = labelAt(kp.pt);
+      if (label < 1000) continue;
+      objects.push_back(kp);
+      obj_label.push_back(label);
     }
   }
 
@@ -347,11 +484,7 @@ std::shared_ptr<FeatureSet> OrbExtractor::extract(const cv::Mat& image, const cv
   features->width = image.cols;
   features->height = image.rows;
   const std::vector<int> budgets = levelBudgets(budget > 0 ? budget : options_.features);
-  cv::Rect static_box;  // level-0 bounding box of static-object pixels
-  if (has_labels) {
-    cv::Mat static_mask = labels >= 1000;
-    if (cv::countNonZero(static_mask) > 0) static_box = cv::boundingRect(static_mask);
-  }
+  const StaticRegions static_regions = has_labels ? staticRegions(labels) : StaticRegions{};
 
   // Each level's keypoints and descriptors depend on that level alone: the levels are worked in parallel
   // (OpenCV's thread pool), each into its own slot, and gathered in level order, so the result is the same
@@ -365,7 +498,7 @@ std::shared_ptr<FeatureSet> OrbExtractor::extract(const cv::Mat& image, const cv
   std::vector<char> described_in_order(n_levels, 1);
   cv::parallel_for_(cv::Range(0, n_levels), [&](const cv::Range& range) {
     for (int level = range.start; level < range.end; ++level) {
-      detectLevel(level_images[level], level, labels, static_box, budgets[level],
+      detectLevel(level_images[level], level, labels, static_regions, budgets[level],
                   p.levels.empty() ? nullptr : &p.levels[level], found[level], found_labels[level]);
       if (found[level].empty()) continue;
       std::vector<cv::KeyPoint> described = found[level];

@@ -8,6 +8,8 @@
 // lower FAST threshold and get up to a configurable share of every level's budget.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
@@ -35,6 +37,13 @@ struct PreparedImage {
   std::vector<PreparedLevel> levels;
 };
 
+// Where a label mask has static objects (labels >= 1000), level-0 pixels: each object's bounding box and
+// the box of all of them.
+struct StaticRegions {
+  cv::Rect all;
+  std::vector<cv::Rect> objects;
+};
+
 class OrbExtractor {
  public:
   explicit OrbExtractor(const ExtractorOptions& options);
@@ -59,19 +68,32 @@ class OrbExtractor {
   static std::vector<int> distributeQuadtree(const std::vector<cv::KeyPoint>& candidates, float x0, float y0, float x1,
                                              float y1, int n);
 
+  // The static objects of a CV_16UC1 label mask, one box per label value >= 1000.
+  static StaticRegions staticRegions(const cv::Mat& labels);
+  // FAST at `threshold` (non-maximum suppressed) on the static objects of one pyramid level (scale s):
+  // the corners, in raster order, that one search over the level rect of all objects (`regions.all`, 3 px
+  // before and 5 after) finds inside the objects' level boxes, without searching the space between
+  // objects that lie apart (parked cars on either side of the road). Level pixels.
+  static std::vector<cv::KeyPoint> staticObjectCorners(const cv::Mat& level_image, double s,
+                                                       const StaticRegions& regions, int threshold);
+
  private:
   float icAngle(const cv::Mat& image, const cv::Point2f& pt) const;
   // grey (its pixels referenced, not copied) and both pyramids, without corners.
   PreparedImage pyramids(const cv::Mat& grey) const;
   // One pyramid level's keypoints (level pixels, oriented) and the labels under them, n_level at most.
   // prepared: the level's corners found ahead (prepare()), else all are found here.
-  void detectLevel(const cv::Mat& level_image, int level, const cv::Mat& labels, const cv::Rect& static_box,
+  void detectLevel(const cv::Mat& level_image, int level, const cv::Mat& labels, const StaticRegions& static_regions,
                    int n_level, const PreparedLevel* prepared, std::vector<cv::KeyPoint>& level_kps,
                    std::vector<uint16_t>& level_labels) const;
 
   ExtractorOptions options_;
   ScalePyramid pyramid_;
-  std::vector<int> umax_;                     // half-widths of the circular orientation patch
+  std::vector<int> umax_;  // half-widths of the circular orientation patch
+  // The orientation patch as rows of 32 pixels (u = -16..15, v = -15..15): per pixel, u inside the disc
+  // and 0 outside (for m10), and 1 inside and 0 outside (for the row sums of m01).
+  static constexpr int kIcRows = 31, kIcRowWidth = 32, kIcRowOffset = 16;
+  std::array<std::array<int16_t, kIcRowWidth>, kIcRows> ic_u_weights_{}, ic_disc_{};
   std::vector<cv::Ptr<cv::ORB>> describers_;  // rBRIEF, one single-level cv::ORB per pyramid level
 };
 
