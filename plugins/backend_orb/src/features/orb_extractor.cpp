@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -253,13 +254,19 @@ cv::Rect levelSearchRect(const cv::Rect& box, double s, int pad) {
 
 StaticRegions OrbExtractor::staticRegions(const cv::Mat& labels) {
   StaticRegions out;
+  cv::Mat is_static;  // 255 where a label is >= 1000: memchr and memrchr find where a row has any
+  cv::compare(labels, 999, is_static, cv::CMP_GT);
   std::vector<uint16_t> ids;
   std::vector<cv::Vec4i> extent;  // per id: x0, y0, x1, y1 (inclusive)
   for (int y = 0; y < labels.rows; ++y) {
+    const uint8_t* flag = is_static.ptr<uint8_t>(y);
+    const auto* first = static_cast<const uint8_t*>(std::memchr(flag, 255, static_cast<size_t>(labels.cols)));
+    if (!first) continue;
+    const auto* end = static_cast<const uint8_t*>(memrchr(flag, 255, static_cast<size_t>(labels.cols))) + 1;
     const uint16_t* row = labels.ptr<uint16_t>(y);
     size_t last = 0;
-    for (int x = 0; x < labels.cols; ++x) {
-      if (row[x] < 1000) continue;
+    for (int x = static_cast<int>(first - flag); x < static_cast<int>(end - flag); ++x) {
+      if (!flag[x]) continue;
       if (ids.empty() || ids[last] != row[x]) {
         last = static_cast<size_t>(std::find(ids.begin(), ids.end(), row[x]) - ids.begin());
         if (last == ids.size()) {
