@@ -45,17 +45,21 @@ void FeatureGrid::cellsInWindow(float x0, float y0, float x1, float y1, std::vec
 
 std::vector<int> FeatureGrid::query(const std::vector<cv::KeyPoint>& keypoints, float u, float v, float r,
                                     int min_level, int max_level) const {
+  // The cells' keypoints filtered as they are visited (the order cellsInWindow gives), without gathering
+  // them first: a query is made per projected map point, thousands per frame.
   std::vector<int> out;
-  std::vector<int> cand;
-  cellsInWindow(u - r, v - r, u + r, v + r, cand);
-  out.reserve(cand.size());
-  for (int i : cand) {
-    const cv::KeyPoint& kp = keypoints[i];
-    if (min_level >= 0 && kp.octave < min_level) continue;
-    if (max_level >= 0 && kp.octave > max_level) continue;
-    if (std::fabs(kp.pt.x - u) > r || std::fabs(kp.pt.y - v) > r) continue;
-    out.push_back(i);
-  }
+  int c0 = 0, c1 = -1, r0 = 0, r1 = -1;
+  if (!cellRange(u - r, v - r, u + r, v + r, c0, c1, r0, r1)) return out;
+  for (int row = r0; row <= r1; ++row)
+    for (int cell = row * kCols + c0, last = row * kCols + c1; cell <= last; ++cell)
+      for (int k = start_[cell]; k < start_[cell + 1]; ++k) {
+        const int i = index_[k];
+        const cv::KeyPoint& kp = keypoints[i];
+        if (min_level >= 0 && kp.octave < min_level) continue;
+        if (max_level >= 0 && kp.octave > max_level) continue;
+        if (std::fabs(kp.pt.x - u) > r || std::fabs(kp.pt.y - v) > r) continue;
+        out.push_back(i);
+      }
   return out;
 }
 
