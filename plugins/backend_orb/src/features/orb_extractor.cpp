@@ -136,7 +136,10 @@ std::vector<int> OrbExtractor::distributeQuadtree(const std::vector<cv::KeyPoint
         ++n_nodes;
       }
       pool[prev].next = node.next;  // a node with two or more keypoints has a child
-      if (node.next >= 0) prev_of.resize(pool.size(), -1), prev_of[node.next] = prev;
+      if (node.next >= 0) {         // (the next node may be a child made in this pass)
+        prev_of.resize(pool.size(), -1);
+        prev_of[node.next] = prev;
+      }
       --n_nodes;
       if (n_nodes >= n) break;
     }
