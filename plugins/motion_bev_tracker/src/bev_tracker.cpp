@@ -140,15 +140,16 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
     size_t first = h.size();
     while (first > 0 && h[first - 1].t >= t_end - window - 1e-6) --first;
     const size_t n = h.size() - first;
-    bool isotropic = true;
-    for (size_t i = first; i < h.size(); ++i) isotropic = isotropic && h[i].isotropic;
-    if (static_cast<int>(n) >= params_.min_observations && !isotropic) {
+    const bool enough = static_cast<int>(n) >= params_.min_observations;
+    const bool isotropic = std::all_of(h.begin() + static_cast<std::ptrdiff_t>(first), h.end(),
+                                       [](const Observation& o) { return o.isotropic; });
+    if (enough && !isotropic) {
       const std::optional<Fit> g = fitSpeedAnisotropic(h, first);
       if (g) {
         v_fit = g->velocity, sigma_fit = g->sigma, sigma_bound = g->sigma_bound, fit = g->consistent;
         speed_bound = g->speed_bound;
       }
-    } else if (static_cast<int>(n) >= params_.min_observations) {
+    } else if (enough) {
       double t_mean = 0, var_model = 0, var_ego = 0;
       Eigen::Vector2d p_mean = Eigen::Vector2d::Zero();
       for (size_t i = first; i < h.size(); ++i) {
