@@ -558,6 +558,19 @@ struct OrbSlam::Impl {
     parked_scale.rescale(s);
     stats.metric_from_frame = index;
     stats.metric_scale_factor = s;
+    if (std::getenv("BESLAM_ORB_DEBUG")) {  // the young map, now in metres: its path and its own ground fits
+      double path_m = 0;
+      std::optional<Eigen::Vector3d> previous;
+      for (const FrameRecord& r : tracker.records()) {
+        const Eigen::Vector3d c = composedPose(r).translation();
+        if (previous) path_m += (c - *previous).norm();
+        previous = c;
+      }
+      std::fprintf(stderr, "frame %ld: metric (x%.4f), camera path %.3f m over %zu frames; keyframes' ground heights:",
+                   static_cast<long>(index), s, path_m, tracker.records().size());
+      for (const auto& [kf, h] : mapper.keyFrameGroundHeights()) std::fprintf(stderr, " %.3f", h);
+      std::fprintf(stderr, " m\n");
+    }
   }
 
   // FeatureSet::object_range: where each static-object keypoint's ray enters its object's box (slab test).

@@ -159,6 +159,15 @@ std::optional<double> LocalMapper::currentObjectScale(KeyFrame* kf) const {
   return median(std::move(scales));
 }
 
+std::vector<std::pair<KeyFrame*, double>> LocalMapper::keyFrameGroundHeights() const {
+  std::vector<std::pair<KeyFrame*, double>> out;
+  for (KeyFrame* k : map_.keyframes())
+    if (const auto plane = fitGroundPlane(*k, options_.ground, ground_reference_.normal(),
+                                          options_.ground.max_tilt_from_reference_deg))
+      out.emplace_back(k, plane->height);
+  return out;
+}
+
 double LocalMapper::currentGroundHeight(KeyFrame* kf) const {
   // The fits behind the reference were made when each keyframe was new; local BA has moved the map since.
   // The scale that matters is the map's as it is now: refit the newest keyframes' planes.

@@ -112,6 +112,9 @@ class LocalMapper {
     pending_correction_.reset();
   }
   bool metric() const { return metric_; }
+  // Each live keyframe's camera height over its own ground fit, in the map's unit as it is now (keyframes
+  // without a fit left out), oldest first.
+  std::vector<std::pair<KeyFrame*, double>> keyFrameGroundHeights() const;
   // Reference camera height of the ground prior (0 until the first fits have set it).
   double groundReferenceHeight() const { return ground_reference_.ready() ? ground_reference_.height() : 0; }
 
