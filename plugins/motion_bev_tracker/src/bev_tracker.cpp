@@ -11,6 +11,17 @@ namespace beslam::motion {
 
 namespace {
 
+// Kalman update of the state (x z vx vz) by a measurement z of its first K components with covariance R.
+template <int K>
+void kalmanUpdate(Eigen::Vector4d& x, Eigen::Matrix4d& P, const Eigen::Matrix<double, K, 1>& z,
+                  const Eigen::Matrix<double, K, K>& R) {
+  const Eigen::Matrix<double, K, 4> H = Eigen::Matrix<double, K, 4>::Identity();
+  const Eigen::Matrix<double, K, K> S = H * P * H.transpose() + R;
+  const Eigen::Matrix<double, 4, K> gain = P * H.transpose() * S.inverse();
+  x += gain * (z - H * x);
+  P = (Eigen::Matrix4d::Identity() - gain * H) * P;
+}
+
 constexpr double kNoMatch = 1e6;    // cost of a gated-out pair
 constexpr double kRoadSpeed = 1.0;  // m/s: an ego slower than this gives no road direction
 constexpr double kGateChi2 = 13.8;  // a box with its own noise: innovation chi-square gate (2 dof, 99.9 %)
@@ -510,20 +521,16 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       t = &tracks_[static_cast<size_t>(det_to_track[i])];
       matched[static_cast<size_t>(det_to_track[i])] = 1;
       // Kalman update: position (and velocity when the detector gives one).
-      const int k = vel[i] ? 4 : 2;
-      Eigen::MatrixXd H = Eigen::MatrixXd::Identity(k, 4);
-      Eigen::VectorXd z(k);
-      z.head<2>() = p[i];
-      Eigen::MatrixXd R = Eigen::MatrixXd::Zero(k, k);
-      R.topLeftCorner<2, 2>() = cov[i];
       if (vel[i]) {
-        z.tail<2>() = *vel[i];
+        Eigen::Vector4d z;
+        z << p[i], *vel[i];
+        Eigen::Matrix4d R = Eigen::Matrix4d::Zero();
+        R.topLeftCorner<2, 2>() = cov[i];
         R(2, 2) = R(3, 3) = params_.velocity_sigma * params_.velocity_sigma;
+        kalmanUpdate<4>(t->x, t->P, z, R);
+      } else {
+        kalmanUpdate<2>(t->x, t->P, p[i], cov[i]);
       }
-      const Eigen::MatrixXd S = H * t->P * H.transpose() + R;
-      const Eigen::MatrixXd K = t->P * H.transpose() * S.inverse();
-      t->x += K * (z - H * t->x);
-      t->P = (Eigen::Matrix4d::Identity() - K * H) * t->P;
     } else {
       tracks_.emplace_back();
       t = &tracks_.back();
