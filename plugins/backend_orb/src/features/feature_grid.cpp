@@ -33,20 +33,10 @@ bool FeatureGrid::cellRange(float x0, float y0, float x1, float y1, int& c0, int
   return c0 <= c1 && r0 <= r1;
 }
 
-void FeatureGrid::cellsInWindow(float x0, float y0, float x1, float y1, std::vector<int>& out) const {
-  int c0 = 0, c1 = -1, r0 = 0, r1 = -1;
-  if (!cellRange(x0, y0, x1, y1, c0, c1, r0, r1)) return;
-  for (int r = r0; r <= r1; ++r)
-    for (int c = c0; c <= c1; ++c) {
-      const int cell = r * kCols + c;
-      out.insert(out.end(), index_.begin() + start_[cell], index_.begin() + start_[cell + 1]);
-    }
-}
-
 std::vector<int> FeatureGrid::query(const std::vector<cv::KeyPoint>& keypoints, float u, float v, float r,
                                     int min_level, int max_level) const {
-  // The cells' keypoints filtered as they are visited (the order cellsInWindow gives), without gathering
-  // them first: a query is made per projected map point, thousands per frame.
+  // The cells' keypoints filtered as they are visited, row by row, without gathering them first: a query
+  // is made per projected map point, thousands per frame.
   std::vector<int> out;
   int c0 = 0, c1 = -1, r0 = 0, r1 = -1;
   if (!cellRange(u - r, v - r, u + r, v + r, c0, c1, r0, r1)) return out;

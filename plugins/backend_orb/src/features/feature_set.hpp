@@ -19,10 +19,9 @@ class FeatureGrid {
   // (a negative bound means unbounded).
   std::vector<int> query(const std::vector<cv::KeyPoint>& keypoints, float u, float v, float r, int min_level = -1,
                          int max_level = -1) const;
-  // Indices in the grid cells that intersect the window [x0,x1] x [y0,y1] (no distance test).
-  void cellsInWindow(float x0, float y0, float x1, float y1, std::vector<int>& out) const;
-  // The cells cellsInWindow visits, row by row: columns c0..c1 of rows r0..r1 (none when either range is
-  // empty or the grid is); a cell's keypoint indices, increasing, are [cellBegin, cellEnd).
+  // The grid cells that intersect the window [x0,x1] x [y0,y1], row by row: columns c0..c1 of rows r0..r1
+  // (none when either range is empty or the grid is); a cell's keypoint indices, increasing, are
+  // [cellBegin, cellEnd).
   bool cellRange(float x0, float y0, float x1, float y1, int& c0, int& c1, int& r0, int& r1) const;
   const int* cellBegin(int cell) const { return start_.empty() ? nullptr : index_.data() + start_[cell]; }
   const int* cellEnd(int cell) const { return start_.empty() ? nullptr : index_.data() + start_[cell + 1]; }

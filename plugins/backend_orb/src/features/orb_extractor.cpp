@@ -231,13 +231,13 @@ struct LevelCells {
   }
 };
 
-// Whether any level-0 pixel that a corner of the level cell [x0,x1) x [y0,y1) would be labelled by is
-// neither dynamic (1) nor a static object (>= 1000): if none is, every corner the cell could give is dropped.
-bool cellHasUnlabelledPixel(const cv::Mat& labels, double s, int x0, int y0, int x1, int y1) {
-  const int u0 = std::min(static_cast<int>((x0 + 0.5) * s), labels.cols - 1);
-  const int u1 = std::min(static_cast<int>((x1 - 1 + 0.5) * s), labels.cols - 1);
-  const int v0 = std::min(static_cast<int>((y0 + 0.5) * s), labels.rows - 1);
-  const int v1 = std::min(static_cast<int>((y1 - 1 + 0.5) * s), labels.rows - 1);
+// Whether any level-0 pixel that a corner of the level cell `cell` would be labelled by is neither dynamic
+// (1) nor a static object (>= 1000): if none is, every corner the cell could give is dropped.
+bool cellHasUnlabelledPixel(const cv::Mat& labels, double s, const cv::Rect& cell) {
+  const int u0 = std::min(static_cast<int>((cell.x + 0.5) * s), labels.cols - 1);
+  const int u1 = std::min(static_cast<int>((cell.x + cell.width - 1 + 0.5) * s), labels.cols - 1);
+  const int v0 = std::min(static_cast<int>((cell.y + 0.5) * s), labels.rows - 1);
+  const int v1 = std::min(static_cast<int>((cell.y + cell.height - 1 + 0.5) * s), labels.rows - 1);
   for (int v = v0; v <= v1; ++v) {
     const uint16_t* row = labels.ptr<uint16_t>(v);
     for (int u = u0; u <= u1; ++u)
@@ -366,10 +366,7 @@ void OrbExtractor::detectLevel(const cv::Mat& level_image, int level, const cv::
     // Searched ahead when the cell was empty without the mask too; else (the mask emptied it) here, unless
     // the mask covers all of it.
     const bool known = prepared && prepared->cell_searched[cell];
-    if (!known && has_labels) {
-      const cv::Rect r = cells.rect(cell);
-      if (!cellHasUnlabelledPixel(labels, s, r.x, r.y, r.x + r.width, r.y + r.height)) continue;
-    }
+    if (!known && has_labels && !cellHasUnlabelledPixel(labels, s, cells.rect(cell))) continue;
     const std::vector<cv::KeyPoint> found =
         known ? std::vector<cv::KeyPoint>() : cells.search(level_image, cell, options_.fast_fallback);
     for (const cv::KeyPoint& kp : known ? prepared->cell_corners[cell] : found) {
