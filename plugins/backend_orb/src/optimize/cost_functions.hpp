@@ -57,28 +57,6 @@ void writeJacobian(const Eigen::Matrix<double, Rows, Cols>& J, double* out) {
 }
 }  // namespace detail
 
-// Pose only: the map point is a constant.
-class PoseReprojectionCost : public ceres::SizedCostFunction<2, 7> {
- public:
-  PoseReprojectionCost(const Eigen::Vector3d& pw, const Eigen::Vector2d& obs, double inv_sigma, const Intrinsics& K)
-      : pw_(pw), obs_(obs), inv_sigma_(inv_sigma), K_(K) {}
-  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
-    Eigen::Vector3d pc;
-    Eigen::Matrix<double, 2, 3> J_proj;
-    Eigen::Matrix3d R;
-    const bool need = jacobians && jacobians[0];
-    detail::reproject(params[0], pw_, K_, obs_, inv_sigma_, residuals, pc, J_proj, R, need);
-    if (need) detail::poseJacobian(J_proj, pc, jacobians[0]);
-    return true;
-  }
-
- private:
-  Eigen::Vector3d pw_;
-  Eigen::Vector2d obs_;
-  double inv_sigma_;
-  Intrinsics K_;
-};
-
 // Bundle adjustment: pose and point.
 class ReprojectionCost : public ceres::SizedCostFunction<2, 7, 3> {
  public:

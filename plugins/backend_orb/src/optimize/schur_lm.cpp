@@ -12,6 +12,7 @@
 #include <opencv2/core/utility.hpp>
 #include <stdexcept>
 
+#include "optimize/lm_damping.hpp"
 #include "optimize/se3.hpp"
 
 namespace beslam::orb::optimize {
@@ -24,10 +25,7 @@ using Matrix63 = Eigen::Matrix<double, 6, 3>;
 // Fixed, whatever the thread count: the sums of each range are added in range order.
 constexpr int kRanges = 2;
 constexpr int kMaxRows = 3;
-constexpr double kMinDiagonal = 1e-6, kMaxDiagonal = 1e32;  // Ceres' LM defaults
-constexpr double kFunctionTolerance = 1e-6, kParameterTolerance = 1e-8, kMinRelativeDecrease = 1e-3;  // Ceres'
-
-double clampDiagonal(double d) { return std::min(std::max(d, kMinDiagonal), kMaxDiagonal); }
+using lm::clampDiagonal;
 
 void runRanges(const std::function<void(int)>& work) {
   cv::parallel_for_(
@@ -230,7 +228,8 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
   double cost = linearise();
   summary.initial_cost = cost;
   summary.iterations = 1;
-  double mu = 1e-4, nu = 2;  // Ceres' initial trust region radius 1e4
+  lm::Damping damping;
+  const double& mu = damping.mu;
   Eigen::MatrixXd S(sparse ? 0 : dim, sparse ? 0 : dim);
   Eigen::VectorXd b(dim), dp(dim);
   // Sparse: the upper triangle in a fixed pattern (one triplet per block entry, in block_pos order), its
@@ -355,25 +354,22 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
         if (res_begin[v] < res_begin[v + 1]) step_sq += dx[v].squaredNorm();
       for (double x : pose_now) x_sq += x * x;
       for (double x : vec_now) x_sq += x * x;
-      if (std::sqrt(step_sq) <= kParameterTolerance * (std::sqrt(x_sq) + kParameterTolerance)) break;
-      if (std::isfinite(new_cost) && std::abs(cost - new_cost) <= kFunctionTolerance * std::abs(cost)) break;
+      if (std::sqrt(step_sq) <= lm::kParameterTolerance * (std::sqrt(x_sq) + lm::kParameterTolerance)) break;
+      if (std::isfinite(new_cost) && std::abs(cost - new_cost) <= lm::kFunctionTolerance * std::abs(cost)) break;
     }
     const double rho = solved && predicted > 0 ? (cost - new_cost) / predicted : -1;
-    if (std::isfinite(new_cost) && rho > kMinRelativeDecrease) {
+    if (std::isfinite(new_cost) && rho > lm::kMinRelativeDecrease) {
       pose_now.swap(pose_try);
       vec_now.swap(vec_try);
-      mu *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
-      nu = 2;
+      damping.accepted(rho);
       if (step + 1 == max_iterations) {
         cost = new_cost;
         break;
       }
       cost = linearise();
       ++summary.iterations;
-    } else {
-      mu *= nu;
-      nu *= 2;
-      if (mu > 1e32) break;
+    } else if (!damping.refused()) {
+      break;
     }
   }
   summary.final_cost = cost;
