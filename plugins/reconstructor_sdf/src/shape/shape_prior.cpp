@@ -235,7 +235,12 @@ Mesh ShapePrior::mesh(const Eigen::VectorXd& code, const Eigen::Vector3d& size) 
     for (int j = 0; j + 1 < n_[1]; ++j)
       for (int i = 0; i + 1 < n_[0]; ++i) {
         size_t corner[8];
-        for (int c = 0; c < 8; ++c) corner[c] = node(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+        int inside = 0;
+        for (int c = 0; c < 8; ++c) {
+          corner[c] = node(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+          inside += phi[corner[c]] < 0;
+        }
+        if (inside == 0 || inside == 8) continue;  // no tetrahedron of the cube crosses the surface
         for (const auto& tet : kTets) {
           size_t in[4], outv[4];
           int ni = 0, no = 0;
