@@ -10,7 +10,7 @@
 
 namespace beslam::orb::optimize::lm {
 
-constexpr double kMinDiagonal = 1e-6, kMaxDiagonal = 1e32;                                       // Ceres' defaults
+constexpr double kMinDiagonal = 1e-6, kMaxDiagonal = 1e32;                                            // Ceres' defaults
 constexpr double kFunctionTolerance = 1e-6, kParameterTolerance = 1e-8, kMinRelativeDecrease = 1e-3;  // Ceres'
 
 inline double clampDiagonal(double d) { return std::min(std::max(d, kMinDiagonal), kMaxDiagonal); }
