@@ -44,18 +44,27 @@ std::vector<Eigen::Vector3d> randomPoints(int n, uint64_t seed) {
   return p;
 }
 
-TEST(PoseOptimizer, RecoversThePoseAndFlagsOutliers) {
-  const Eigen::Isometry3d truth = poseAt(1.0, 0.03);
-  const auto points = randomPoints(300, 5);
-  std::mt19937 rng(6);
-  std::normal_distribution<double> noise(0, 0.7);
+// The points seen from `truth` with Gaussian pixel noise (sigma px, seeded); every `every`-th moved by
+// `outlier` px (a gross outlier).
+std::vector<optimize::PoseObservation> observe(const Eigen::Isometry3d& truth,
+                                               const std::vector<Eigen::Vector3d>& points, unsigned seed, double sigma,
+                                               size_t every, const Eigen::Vector2d& outlier) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, sigma);
   std::vector<optimize::PoseObservation> obs;
   for (size_t i = 0; i < points.size(); ++i) {
     Eigen::Vector2d uv = proj(truth, points[i]) + Eigen::Vector2d(noise(rng), noise(rng));
-    if (i % 10 == 0) uv += Eigen::Vector2d(40, -25);  // 10% gross outliers
+    if (i % every == 0) uv += outlier;
     obs.push_back({points[i], uv, 1.0});
   }
-  Eigen::Isometry3d T = poseAt(0.8, 0.0);  // the constant-velocity guess is off
+  return obs;
+}
+
+TEST(PoseOptimizer, RecoversThePoseAndFlagsOutliers) {
+  const Eigen::Isometry3d truth = poseAt(1.0, 0.03);
+  const auto points = randomPoints(300, 5);
+  const auto obs = observe(truth, points, 6, 0.7, 10, {40, -25});  // 10 % gross outliers
+  Eigen::Isometry3d T = poseAt(0.8, 0.0);                          // the constant-velocity guess is off
   std::vector<bool> outlier;
   const int inliers = optimize::optimizePose(kCam, obs, T, outlier);
   EXPECT_GE(inliers, 250);
@@ -90,14 +99,7 @@ struct AngleAxisReprojection {
 TEST(PoseOptimizer, FindsTheMinimumCeresFinds) {
   const Eigen::Isometry3d truth = poseAt(2.0, -0.05);
   const auto points = randomPoints(400, 11);
-  std::mt19937 rng(12);
-  std::normal_distribution<double> noise(0, 1.0);
-  std::vector<optimize::PoseObservation> obs;
-  for (size_t i = 0; i < points.size(); ++i) {
-    Eigen::Vector2d uv = proj(truth, points[i]) + Eigen::Vector2d(noise(rng), noise(rng));
-    if (i % 8 == 0) uv += Eigen::Vector2d(-30, 35);
-    obs.push_back({points[i], uv, 1.0});
-  }
+  const auto obs = observe(truth, points, 12, 1.0, 8, {-30, 35});
   const Eigen::Isometry3d guess = poseAt(1.7, -0.02);
   Eigen::Isometry3d T = guess;
   std::vector<bool> outlier;
