@@ -61,8 +61,8 @@ class PoseProblem {
 // Levenberg-Marquardt on the 6-dof pose (the step control of lm_damping.hpp): at most `iterations` steps,
 // successful or not, as Ceres counts them.
 void solve(const PoseProblem& problem, double* pose, int iterations) {
-  Matrix6d H;
-  Vector6d g;
+  Matrix6d H, H_try;
+  Vector6d g, g_try;
   double cost = problem.evaluate(pose, &H, &g);
   lm::Damping damping;
   double pose_try[7];
@@ -85,7 +85,8 @@ void solve(const PoseProblem& problem, double* pose, int iterations) {
     double new_cost = cost;
     if (solved && predicted > 0) {
       SE3LeftManifold().Plus(pose, dp.data(), pose_try);
-      new_cost = problem.evaluate(pose_try);
+      // Linearised at the candidate too: most steps are taken, and their next system is this one.
+      new_cost = problem.evaluate(pose_try, &H_try, &g_try);
       // Ceres' convergence tests on the candidate before it is accepted: it is dropped and the solve ends.
       double x_sq = 0;
       for (int i = 0; i < 7; ++i) x_sq += pose[i] * pose[i];
@@ -97,7 +98,9 @@ void solve(const PoseProblem& problem, double* pose, int iterations) {
       std::copy(pose_try, pose_try + 7, pose);
       damping.accepted(rho);
       if (step + 1 == iterations) break;
-      cost = problem.evaluate(pose, &H, &g);
+      cost = new_cost;
+      H = H_try;
+      g = g_try;
     } else if (!damping.refused()) {
       break;
     }
