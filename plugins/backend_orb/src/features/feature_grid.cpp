@@ -24,15 +24,6 @@ FeatureGrid::FeatureGrid(const std::vector<cv::KeyPoint>& keypoints, int width, 
   for (size_t i = 0; i < keypoints.size(); ++i) index_[fill[cell_of[i]]++] = static_cast<int>(i);
 }
 
-bool FeatureGrid::cellRange(float x0, float y0, float x1, float y1, int& c0, int& c1, int& r0, int& r1) const {
-  if (start_.empty()) return false;
-  c0 = std::max(0, static_cast<int>(std::floor(x0 * inv_cell_w_)));
-  c1 = std::min(kCols - 1, static_cast<int>(std::floor(x1 * inv_cell_w_)));
-  r0 = std::max(0, static_cast<int>(std::floor(y0 * inv_cell_h_)));
-  r1 = std::min(kRows - 1, static_cast<int>(std::floor(y1 * inv_cell_h_)));
-  return c0 <= c1 && r0 <= r1;
-}
-
 std::vector<int> FeatureGrid::query(const std::vector<cv::KeyPoint>& keypoints, float u, float v, float r,
                                     int min_level, int max_level) const {
   // The cells' keypoints filtered as they are visited, row by row, without gathering them first: a query

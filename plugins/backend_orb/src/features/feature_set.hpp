@@ -2,6 +2,8 @@
 // per-keypoint label/colour, and a 64 x 48 grid for constant-time "keypoints near (u, v)" queries.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -22,11 +24,26 @@ class FeatureGrid {
   // The grid cells that intersect the window [x0,x1] x [y0,y1], row by row: columns c0..c1 of rows r0..r1
   // (none when either range is empty or the grid is); a cell's keypoint indices, increasing, are
   // [cellBegin, cellEnd).
-  bool cellRange(float x0, float y0, float x1, float y1, int& c0, int& c1, int& r0, int& r1) const;
+  // Inline: the epipolar search of triangulation asks it for every grid row a keypoint's line crosses.
+  bool cellRange(float x0, float y0, float x1, float y1, int& c0, int& c1, int& r0, int& r1) const {
+    if (start_.empty()) return false;
+    c0 = std::max(0, floorToInt(x0 * inv_cell_w_));
+    c1 = std::min(kCols - 1, floorToInt(x1 * inv_cell_w_));
+    r0 = std::max(0, floorToInt(y0 * inv_cell_h_));
+    r1 = std::min(kRows - 1, floorToInt(y1 * inv_cell_h_));
+    return c0 <= c1 && r0 <= r1;
+  }
   const int* cellBegin(int cell) const { return start_.empty() ? nullptr : index_.data() + start_[cell]; }
   const int* cellEnd(int cell) const { return start_.empty() ? nullptr : index_.data() + start_[cell + 1]; }
 
  private:
+  // static_cast<int>(std::floor(v)) without a call to floorf: truncation, one down for negative fractions;
+  // NaN and values beyond int's range go the old way.
+  static int floorToInt(float v) {
+    if (!(v > -2147483520.f && v < 2147483520.f)) return static_cast<int>(std::floor(v));
+    const int i = static_cast<int>(v);
+    return static_cast<float>(i) > v ? i - 1 : i;
+  }
   float inv_cell_w_ = 0, inv_cell_h_ = 0;
   std::vector<int> start_;  // kCols*kRows+1 offsets into index_
   std::vector<int> index_;

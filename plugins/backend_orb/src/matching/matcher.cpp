@@ -333,12 +333,15 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
     }
   }
   cell_start.back() = static_cast<int>(c2.size());
+  // The line test's operands again, apart: a cell range is screened in one branch-free pass.
+  std::vector<double> c2_x(c2.size()), c2_y(c2.size()), c2_line_th(c2.size());
+  for (size_t k = 0; k < c2.size(); ++k) c2_x[k] = c2[k].x, c2_y[k] = c2[k].y, c2_line_th[k] = c2[k].line_th;
   // Each keypoint of kf1 finds its nearest two along its line independently of the others: in parallel
   // (OpenCV's thread pool, a few stripes, each with its own visit stamps), into its own slot. Which one
   // keeps a contested keypoint of kf2 is decided afterwards in index order, as in one sequential pass, so
   // the matches do not depend on the threads.
   std::vector<NearestTwo> nearest(f1.size());
-  auto nearestAlongLine = [&](int i1, std::vector<int>& stamp) {
+  auto nearestAlongLine = [&](int i1, std::vector<int>& stamp, std::vector<int>& near) {
     NearestTwo nn;
     const cv::KeyPoint& kp1 = f1.keypoints[i1];
     const Eigen::Vector3d x1(kp1.pt.x, kp1.pt.y, 1.0);
@@ -363,6 +366,7 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
     // The epipolar test first, on the contiguous array; descriptors only for what passes it.
     const uint8_t* d1 = f1.descriptor(i1);
     const double ln2 = ln * ln;
+    const double lx = line.x(), ly = line.y(), lz = line.z();
     const int row0 = static_cast<int>(y_lo / cell_h), row1 = static_cast<int>(y_hi / cell_h);
     for (int row = row0; row <= row1; ++row) {
       const double ry0 = std::max(y_lo, row * static_cast<double>(cell_h));
@@ -380,29 +384,38 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
       if (!f2.grid.cellRange(static_cast<float>(xa), static_cast<float>(ry0), static_cast<float>(xb),
                              static_cast<float>(ry1), gc0, gc1, gr0, gr1))
         continue;
-      for (int gr = gr0; gr <= gr1; ++gr)
-        for (int gc = gc0; gc <= gc1; ++gc) {
-          const int cell = gr * FeatureGrid::kCols + gc;
-          for (int k = cell_start[cell]; k < cell_start[cell + 1]; ++k) {
-            if (stamp[k] == static_cast<int>(i1)) continue;
-            stamp[k] = static_cast<int>(i1);
-            const Candidate& c = c2[k];
-            const double dl = line.x() * c.x + line.y() * c.y + line.z();
-            if (dl * dl / ln2 >= c.line_th) continue;
-            const double ex = epipole.x() - c.x, ey = epipole.y() - c.y;
-            if (ex * ex + ey * ey < c.epipole_th) continue;
-            const int i2 = c.index;
-            if (!node2.empty() && node2[i2] != node1[i1]) continue;  // triangulation_bow
-            nn.add(hamming(d1, f2.descriptor(i2)), i2);
-          }
+      for (int gr = gr0; gr <= gr1; ++gr) {
+        // The cells gc0..gc1 of grid row gr are contiguous in c2: the line test over all of them first
+        // (no branch per candidate), then the rest for the ones near the line, in the same order. A
+        // candidate failing the line test fails it again whenever this keypoint's search meets it, so only
+        // the ones passing it need the visit stamp.
+        const int b = cell_start[gr * FeatureGrid::kCols + gc0], e = cell_start[gr * FeatureGrid::kCols + gc1 + 1];
+        int n_near = 0;
+        for (int k = b; k < e; ++k) {
+          const double dl = lx * c2_x[k] + ly * c2_y[k] + lz;
+          near[n_near] = k;
+          n_near += !(dl * dl / ln2 >= c2_line_th[k]);
         }
+        for (int j = 0; j < n_near; ++j) {
+          const int k = near[j];
+          if (stamp[k] == static_cast<int>(i1)) continue;
+          stamp[k] = static_cast<int>(i1);
+          const Candidate& c = c2[k];
+          const double ex = epipole.x() - c.x, ey = epipole.y() - c.y;
+          if (ex * ex + ey * ey < c.epipole_th) continue;
+          const int i2 = c.index;
+          if (!node2.empty() && node2[i2] != node1[i1]) continue;  // triangulation_bow
+          nn.add(hamming(d1, f2.descriptor(i2)), i2);
+        }
+      }
     }
     return nn;
   };
   auto searchRange = [&](const cv::Range& range) {
     std::vector<int> stamp(c2.size(), -1);  // by position in c2
+    std::vector<int> near(c2.size());       // a cell range's candidates near the line
     for (int i1 = range.start; i1 < range.end; ++i1)
-      if (!kf1->points[i1]) nearest[i1] = nearestAlongLine(i1, stamp);
+      if (!kf1->points[i1]) nearest[i1] = nearestAlongLine(i1, stamp, near);
   };
   cv::parallel_for_(cv::Range(0, static_cast<int>(f1.size())), searchRange, 4);
   for (size_t i1 = 0; i1 < f1.size(); ++i1) {
