@@ -3,8 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
+#include <tuple>
 
 #include "features/orb_extractor.hpp"
 #include "matching/hamming.hpp"
@@ -233,6 +236,48 @@ TEST(FeatureGrid, QueryFindsExactlyTheKeypointsInTheWindow) {
   for (const auto& kp : f.keypoints)
     expected += std::fabs(kp.pt.x - 300) <= 40 && std::fabs(kp.pt.y - 200) <= 40 && kp.octave >= 2 && kp.octave <= 5;
   EXPECT_EQ(static_cast<int>(got.size()), expected);
+}
+
+TEST(FeatureGrid, CellRangeIsTheFloorOfTheWindowInCells) {
+  // The columns and rows of std::floor(coordinate / cell size), clamped to the grid, for negative fractions,
+  // exact cell edges and their neighbours, and coordinates far beyond the image; none for a NaN bound.
+  FeatureSet f;
+  f.width = 1241;
+  f.height = 376;
+  f.keypoints.emplace_back(10.f, 10.f, 7.f);
+  f.buildGrid();
+  const float inv_w = static_cast<float>(FeatureGrid::kCols) / 1241.f;
+  const float inv_h = static_cast<float>(FeatureGrid::kRows) / 376.f;
+  const auto floorIn = [](float v, int lo, int hi) {  // no float-to-int conversion out of range
+    const float f = std::floor(v);
+    return f < static_cast<float>(lo) ? lo : f > static_cast<float>(hi) ? hi + 1 : static_cast<int>(f);
+  };
+  std::vector<float> xs = {-1e12f, -3e9f, -19.4f, -19.39f, -0.5f,  -0.f,   0.f,  0.2f,
+                           19.39f, 19.4f, 620.5f, 1240.9f, 1241.f, 5000.f, 3e9f, 1e12f};
+  cv::RNG rng(11);
+  for (int i = 0; i < 2000; ++i) xs.push_back(rng.uniform(-100.f, 1400.f));
+  for (int k = 0; k <= FeatureGrid::kCols; ++k) {  // the column edges and their neighbours
+    const float edge = static_cast<float>(k) / inv_w;
+    xs.insert(xs.end(), {edge, std::nextafter(edge, -1e30f), std::nextafter(edge, 1e30f)});
+  }
+  for (float x0 : xs)
+    for (float x1 : {x0, x0 + 25.f, 1300.f, -5.f}) {
+      const float y0 = x0 * 0.3f, y1 = x1 * 0.3f;
+      int c0 = 0, c1 = 0, r0 = 0, r1 = 0;
+      const bool any = f.grid.cellRange(x0, y0, x1, y1, c0, c1, r0, r1);
+      const int e_c0 = std::max(0, floorIn(x0 * inv_w, -1, FeatureGrid::kCols));
+      const int e_c1 = std::min(FeatureGrid::kCols - 1, floorIn(x1 * inv_w, -1, FeatureGrid::kCols));
+      const int e_r0 = std::max(0, floorIn(y0 * inv_h, -1, FeatureGrid::kRows));
+      const int e_r1 = std::min(FeatureGrid::kRows - 1, floorIn(y1 * inv_h, -1, FeatureGrid::kRows));
+      ASSERT_EQ(any, e_c0 <= e_c1 && e_r0 <= e_r1) << "x0 " << x0 << " x1 " << x1;
+      if (any) {
+        EXPECT_EQ(std::make_tuple(c0, c1, r0, r1), std::make_tuple(e_c0, e_c1, e_r0, e_r1)) << "x0 " << x0;
+      }
+    }
+  int c0 = 0, c1 = 0, r0 = 0, r1 = 0;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_FALSE(f.grid.cellRange(nan, 0.f, 100.f, 100.f, c0, c1, r0, r1));
+  EXPECT_FALSE(f.grid.cellRange(0.f, 0.f, 100.f, nan, c0, c1, r0, r1));
 }
 
 }  // namespace
