@@ -313,29 +313,33 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
   std::vector<int> matched2(f2.size(), -1), dist2(f2.size(), 256);
   std::vector<int> match12(f1.size(), -1);
   // kf2's keypoints without a point, copied once into grid order (a cell's keypoints are contiguous) with
-  // their tests' thresholds. The candidates are visited as before (cell by cell, increasing index within a
-  // cell), so the matches are the same.
+  // their tests' thresholds: the line test's operands in arrays of their own (a cell range is screened in
+  // one branch-free pass), the rest per candidate. The candidates are visited as before (cell by cell,
+  // increasing index within a cell), so the matches are the same.
   struct Candidate {
     double x, y;
-    double line_th;     // 3.84 sigma^2 of its level: squared distance to the epipolar line, px^2
     double epipole_th;  // 100 x its level's scale: squared distance to the epipole, px^2
     int index;          // in kf2
   };
   std::vector<Candidate> c2;
+  std::vector<double> c2_x, c2_y, c2_line_th;  // c2_line_th: 3.84 sigma^2 of its level, squared px to the line
   c2.reserve(f2.size());
+  c2_x.reserve(f2.size());
+  c2_y.reserve(f2.size());
+  c2_line_th.reserve(f2.size());
   std::vector<int> cell_start(FeatureGrid::kCols * FeatureGrid::kRows + 1, 0);
   for (int cell = 0; cell < FeatureGrid::kCols * FeatureGrid::kRows; ++cell) {
     cell_start[cell] = static_cast<int>(c2.size());
     for (const int *it = f2.grid.cellBegin(cell), *end = f2.grid.cellEnd(cell); it != end; ++it) {
       if (kf2->points[*it]) continue;
       const cv::KeyPoint& kp2 = f2.keypoints[*it];
-      c2.push_back({kp2.pt.x, kp2.pt.y, 3.84 * pyr.sigma2[kp2.octave], 100.0 * pyr.scale[kp2.octave], *it});
+      c2.push_back({kp2.pt.x, kp2.pt.y, 100.0 * pyr.scale[kp2.octave], *it});
+      c2_x.push_back(kp2.pt.x);
+      c2_y.push_back(kp2.pt.y);
+      c2_line_th.push_back(3.84 * pyr.sigma2[kp2.octave]);
     }
   }
   cell_start.back() = static_cast<int>(c2.size());
-  // The line test's operands again, apart: a cell range is screened in one branch-free pass.
-  std::vector<double> c2_x(c2.size()), c2_y(c2.size()), c2_line_th(c2.size());
-  for (size_t k = 0; k < c2.size(); ++k) c2_x[k] = c2[k].x, c2_y[k] = c2[k].y, c2_line_th[k] = c2[k].line_th;
   // Each keypoint of kf1 finds its nearest two along its line independently of the others: in parallel
   // (OpenCV's thread pool, a few stripes, each with its own visit stamps), into its own slot. Which one
   // keeps a contested keypoint of kf2 is decided afterwards in index order, as in one sequential pass, so

@@ -15,6 +15,13 @@ constexpr double kFunctionTolerance = 1e-6, kParameterTolerance = 1e-8, kMinRela
 
 inline double clampDiagonal(double d) { return std::min(std::max(d, kMinDiagonal), kMaxDiagonal); }
 
+// Ceres' convergence tests on a candidate, before it is accepted (when true it is dropped and the solve
+// ends): the step's norm against the parameters' norm, or a cost change too small to matter.
+inline bool converged(double step_norm, double x_norm, double cost, double new_cost) {
+  if (step_norm <= kParameterTolerance * (x_norm + kParameterTolerance)) return true;
+  return std::isfinite(new_cost) && std::abs(cost - new_cost) <= kFunctionTolerance * std::abs(cost);
+}
+
 struct Damping {
   double mu = 1e-4, nu = 2;  // Ceres' initial trust region radius 1e4
 

@@ -90,8 +90,7 @@ void solve(const PoseProblem& problem, double* pose, int iterations) {
       // Ceres' convergence tests on the candidate before it is accepted: it is dropped and the solve ends.
       double x_sq = 0;
       for (int i = 0; i < 7; ++i) x_sq += pose[i] * pose[i];
-      if (dp.norm() <= lm::kParameterTolerance * (std::sqrt(x_sq) + lm::kParameterTolerance)) break;
-      if (std::isfinite(new_cost) && std::abs(cost - new_cost) <= lm::kFunctionTolerance * std::abs(cost)) break;
+      if (lm::converged(dp.norm(), std::sqrt(x_sq), cost, new_cost)) break;
     }
     const double rho = solved && predicted > 0 ? (cost - new_cost) / predicted : -1;
     if (std::isfinite(new_cost) && rho > lm::kMinRelativeDecrease) {

@@ -354,8 +354,7 @@ SchurLevenbergMarquardt::Summary SchurLevenbergMarquardt::solve(int max_iteratio
         if (res_begin[v] < res_begin[v + 1]) step_sq += dx[v].squaredNorm();
       for (double x : pose_now) x_sq += x * x;
       for (double x : vec_now) x_sq += x * x;
-      if (std::sqrt(step_sq) <= lm::kParameterTolerance * (std::sqrt(x_sq) + lm::kParameterTolerance)) break;
-      if (std::isfinite(new_cost) && std::abs(cost - new_cost) <= lm::kFunctionTolerance * std::abs(cost)) break;
+      if (lm::converged(std::sqrt(step_sq), std::sqrt(x_sq), cost, new_cost)) break;
     }
     const double rho = solved && predicted > 0 ? (cost - new_cost) / predicted : -1;
     if (std::isfinite(new_cost) && rho > lm::kMinRelativeDecrease) {
