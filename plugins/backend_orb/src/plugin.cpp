@@ -43,13 +43,6 @@ beslam::orb::Options readOptions(const beslam::sdk::Config& config, const beslam
   if (!o.validate(&error)) throw beslam::sdk::ConfigError(error);
   if (o.localisation_only && o.load_map.empty())
     throw beslam::sdk::ConfigError("localisation_only needs a map to localise in (load_map)");
-  // Measured (docs/object-ba.md): with the parked-car anchors the object nodes let the scale drift by up to
-  // 8 % and APE grows to 1.3-1.9 m on both synthetic sequences; with range priors they are neutral.
-  if (o.metric_scale && o.object_landmarks == beslam::orb::ObjectLandmarkMode::BA &&
-      o.object_scale_hold == beslam::orb::ObjectScaleHold::Anchors)
-    throw beslam::sdk::ConfigError(
-        "object_landmarks: ba needs object_scale_hold: ranges (with anchors the map's scale drifts; "
-        "docs/object-ba.md)");
   // A map that cannot be saved should fail the run now, not after it.
   if (!o.save_map.empty()) {
     const std::filesystem::path folder = std::filesystem::absolute(o.save_map).parent_path();

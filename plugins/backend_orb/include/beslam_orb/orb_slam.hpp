@@ -134,12 +134,13 @@ struct Options {
   ObjectScaleHold object_scale_hold = ObjectScaleHold::Anchors;
   double object_range_sigma = 0.15;
   double object_range_sigma_per_m = 0.02;
-  // Object landmarks in local BA (objects/object_factors.hpp, docs/object-ba.md). Off by default until measured.
+  // Object landmarks in local BA (objects/object_factors.hpp, docs/object-ba.md). Off by default: a gain is
+  // shown only with LiDAR-fitted cars on dynamic_street.
   ObjectLandmarkMode object_landmarks = ObjectLandmarkMode::Off;
   double object_pose_weight = 1.0;       // information multiplier of the camera-object (box) factors
   double object_surface_weight = 1.0;    // information multiplier of the map-point-on-surface factors
-  double object_box_sigma = 0.2;         // box centre std-dev (m) ...
-  double object_box_sigma_per_m = 0.05;  // ... plus this per metre of range
+  double object_box_sigma = 0.15;        // box centre std-dev (m) (the anchors' object_range_sigma) ...
+  double object_box_sigma_per_m = 0.02;  // ... plus this per metre of range
   double object_yaw_sigma_deg = 10.0;    // box heading std-dev
   double object_surface_sigma = 0.1;     // map point to nearest surface sample std-dev (m)
   double object_surface_gate = 0.5;      // points farther than this (m) from every sample get no factor

@@ -79,7 +79,11 @@ std::unique_ptr<ObjectProblem> buildObjectProblem(ObjectStore& store,
     for (int k = 0; k < 3; ++k) x[1 + k] = e.landmark.T_world_object.translation()[k];
     const double confidence = std::min(1.0, e.landmark.confidence);
     const double box_scale = std::sqrt(options.pose_weight * confidence);
-    const double surface_scale = std::sqrt(options.surface_weight * confidence);
+    // The shape's own error (a fitted prior, decimetres) is common to every point on the car, so the car's
+    // points together count as one observation of the surface, as the paper's 1/|P| writes E_surf; each
+    // point its own would let 100 points outweigh every box and pull the map (docs/object-ba.md).
+    const size_t n_points = std::max<size_t>(1, pending[i].points.size());
+    const double surface_scale = std::sqrt(options.surface_weight * confidence / static_cast<double>(n_points));
     for (const auto& [kf, T_cam_object] : pending[i].boxes) {
       const double range = T_cam_object.translation().norm();
       const double sigma = options.box_sigma + options.box_sigma_per_m * range;

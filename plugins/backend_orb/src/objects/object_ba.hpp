@@ -23,12 +23,12 @@ namespace beslam::orb::objects {
 
 struct ObjectFactorOptions {
   bool enabled = false;
-  bool use_boxes = true;  // camera-object factors (the boxes are metric: only once the map is)
-  double pose_weight = 1.0, surface_weight = 1.0;
-  double box_sigma = 0.2, box_sigma_per_m = 0.05;  // m, m per m of range
-  double yaw_sigma = 10.0 * M_PI / 180.0;          // rad
-  double surface_sigma = 0.1, surface_gate = 0.5;  // m
-  int min_surface_factors = 3;                     // a node without a box needs this many surface factors
+  bool use_boxes = true;                           // camera-object factors (the boxes are metric: only once the map is)
+  double pose_weight = 1.0, surface_weight = 1.0;  // surface_weight: of all of a car's points together
+  double box_sigma = 0.15, box_sigma_per_m = 0.02;  // m, m per m of range (the anchors' box noise)
+  double yaw_sigma = 10.0 * M_PI / 180.0;           // rad
+  double surface_sigma = 0.1, surface_gate = 0.5;   // m
+  int min_surface_factors = 3;                      // a node without a box needs this many surface factors
 };
 
 struct ObjectProblem {

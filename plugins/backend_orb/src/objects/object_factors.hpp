@@ -13,7 +13,8 @@
 // frame, minus its nearest surface sample (associated anew at each BA call), projected on the sample's
 // surface normal (point-to-plane: the point may slide along the surface, so the samples' spacing does not
 // hold the object in place), over surface_sigma; point-to-point where the sample has no normal.
-// Both scaled by sqrt(weight * confidence); the caller adds a Huber loss. Camera poses use the left
+// Both scaled by sqrt(weight * confidence), a surface factor's weight divided by its car's point count
+// (object_ba.cpp: the car's points are one observation); the caller adds a Huber loss. Camera poses use the left
 // tangent of optimize/se3.hpp (Jacobian in the first six of seven columns); derivatives come from Jets.
 #pragma once
 
