@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <random>
 #include <set>
 
@@ -452,6 +453,32 @@ TEST(ObjectLandmarks, DropObjectRemovesTheLandmarkInEveryMappingMode) {
     ASSERT_EQ(last.size(), 1u) << mode;
     EXPECT_EQ(last[0].id, 8) << mode;
   }
+}
+
+// A loop correction moves each landmark rigidly with the keyframe it was last added at; one whose
+// keyframe has no motion (or a non-finite one) stays.
+TEST(ObjectLandmarks, FollowTheKeyframeTheyWereAddedAt) {
+  objects::ObjectStore store;
+  store.add(carLandmark(1), 3);
+  store.add(carLandmark(2), 7);
+  store.add(carLandmark(3), 9);
+  const std::vector<ObjectLandmark> before = store.landmarks();
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  motion.linear() = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  motion.translation() = Eigen::Vector3d(1.5, 0, -2.0);
+  Eigen::Isometry3d broken = motion;
+  broken.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  store.followKeyFrames([&](long kf_id) -> std::optional<Eigen::Isometry3d> {
+    if (kf_id == 3) return motion;
+    if (kf_id == 9) return broken;
+    return std::nullopt;
+  });
+  const std::vector<ObjectLandmark> after = store.landmarks();
+  EXPECT_TRUE(after[0].T_world_object.isApprox(motion * before[0].T_world_object, 1e-12));
+  EXPECT_TRUE(after[1].T_world_object.isApprox(before[1].T_world_object, 1e-12));
+  EXPECT_TRUE(after[2].T_world_object.isApprox(before[2].T_world_object, 1e-12));
+  EXPECT_EQ(after[0].dimensions, before[0].dimensions) << "a rigid motion: the car keeps its size";
+  EXPECT_EQ(after[0].points_object, before[0].points_object);
 }
 
 TEST(ObjectLandmarks, NonFiniteInputIsLeftOut) {

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <optional>
 
 #include "loop/pose_graph.hpp"
 #include "map/frame.hpp"
@@ -426,6 +427,14 @@ bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, 
   }
   if (options_.global_ba_iterations > 0)
     optimize::globalBundleAdjustment(map_, options_.global_ba_iterations, options_.global_ba_solver);
+  // Object landmarks follow the keyframe they were last fitted at (a culled one: its next keyframe), as map
+  // points follow theirs; left where they were, local BA would pull the corrected keyframes back to them.
+  map_.objects().followKeyFrames([&](long kf_id) -> std::optional<Eigen::Isometry3d> {
+    const KeyFrame* k = map_.keyFrameFrom(kf_id);
+    const auto before = k ? poses_before_.find(k->id) : poses_before_.end();
+    if (before == poses_before_.end()) return std::nullopt;
+    return k->T_cw.inverse() * before->second;
+  });
 
   LoopClosureEvent event;
   event.keyframe_id = kf->id;

@@ -68,6 +68,14 @@ void ObjectStore::rescale(double s, const Eigen::Vector3d& c, long first_kf_id) 
   }
 }
 
+void ObjectStore::followKeyFrames(const std::function<std::optional<Eigen::Isometry3d>(long)>& keyframe_motion) {
+  for (ObjectEntry& e : entries_)
+    if (const auto motion = keyframe_motion(e.since_kf_id)) {
+      const Eigen::Isometry3d T = *motion * e.landmark.T_world_object;
+      if (T.matrix().allFinite()) e.landmark.T_world_object = T;
+    }
+}
+
 void ObjectStore::clear() {
   entries_.clear();
   dropped_at_kf_.clear();

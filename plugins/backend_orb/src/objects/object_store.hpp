@@ -2,8 +2,11 @@
 // voxel index of its surface samples that local BA associates map points with.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
+#include <functional>
 #include <map>
+#include <optional>
 #include <vector>
 
 #include "beslam_orb/orb_slam.hpp"
@@ -38,6 +41,10 @@ class ObjectStore {
 
   // Map::rescale / rescaleFrom: object lengths follow the world's unit (X -> c + s (X - c) for positions).
   void rescale(double s, const Eigen::Vector3d& c, long first_kf_id);
+  // A loop correction moved the keyframes: each landmark moves rigidly with the keyframe it was last added
+  // at, as a map point moves with its reference keyframe. keyframe_motion(since_kf_id) gives that
+  // keyframe's T_world_after * T_before_world, or nothing (the landmark stays where it is).
+  void followKeyFrames(const std::function<std::optional<Eigen::Isometry3d>(long)>& keyframe_motion);
   void clear();
 
  private:
