@@ -23,14 +23,14 @@ for s in $seeds; do
   for seq in urban_loop dynamic_street; do
     run "$out/mono/$seq/seed$s" configs/reconstruction/mono.yaml --set dataset.sequence="$seq" --set backend.seed="$s"
     run "$out/mono_objects_in_ba/$seq/seed$s" configs/reconstruction/mono.yaml --set dataset.sequence="$seq" \
-      --set backend.seed="$s" --set backend.object_landmarks=ba --set backend.object_scale_hold=ranges
+      --set backend.seed="$s" --set backend.object_landmarks=ba
     run "$out/mono_true_states/$seq/seed$s" configs/reconstruction/mono.yaml --set dataset.sequence="$seq" \
       --set backend.seed="$s" --set motion_checker.plugin=none --set detector.true_motion=true \
       --set detector.pass_track_ids=true
   done
   run "$out/lidar/dynamic_street/seed$s" configs/reconstruction/lidar.yaml --set backend.seed="$s"
   run "$out/lidar_objects_in_ba/dynamic_street/seed$s" configs/reconstruction/lidar.yaml --set backend.seed="$s" \
-    --set backend.object_landmarks=ba --set backend.object_scale_hold=ranges
+    --set backend.object_landmarks=ba
 done
 
 python3 - "$out" <<'PY'
