@@ -28,9 +28,11 @@ for s in $seeds; do
       --set backend.seed="$s" --set motion_checker.plugin=none --set detector.true_motion=true \
       --set detector.pass_track_ids=true
   done
-  run "$out/lidar/dynamic_street/seed$s" configs/reconstruction/lidar.yaml --set backend.seed="$s"
-  run "$out/lidar_objects_in_ba/dynamic_street/seed$s" configs/reconstruction/lidar.yaml --set backend.seed="$s" \
-    --set backend.object_landmarks=ba
+  for seq in dynamic_street urban_loop; do
+    run "$out/lidar/$seq/seed$s" configs/reconstruction/lidar.yaml --set dataset.sequence="$seq" --set backend.seed="$s"
+    run "$out/lidar_objects_in_ba/$seq/seed$s" configs/reconstruction/lidar.yaml --set dataset.sequence="$seq" \
+      --set backend.seed="$s" --set backend.object_landmarks=ba
+  done
 done
 
 python3 - "$out" <<'PY'
