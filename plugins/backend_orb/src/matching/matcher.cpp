@@ -313,11 +313,10 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
   std::vector<int> matched2(f2.size(), -1), dist2(f2.size(), 256);
   std::vector<int> match12(f1.size(), -1);
   // kf2's keypoints without a point, copied once into grid order (a cell's keypoints are contiguous) with
-  // their tests' thresholds: the line test's operands in arrays of their own (a cell range is screened in
-  // one branch-free pass), the rest per candidate. The candidates are visited as before (cell by cell,
-  // increasing index within a cell), so the matches are the same.
+  // their tests' thresholds: positions and line thresholds in arrays of their own (a cell range is screened
+  // in one branch-free pass), the epipole threshold and kf2 index per candidate. The candidates are visited
+  // as before (cell by cell, increasing index within a cell), so the matches are the same.
   struct Candidate {
-    double x, y;
     double epipole_th;  // 100 x its level's scale: squared distance to the epipole, px^2
     int index;          // in kf2
   };
@@ -333,7 +332,7 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
     for (const int *it = f2.grid.cellBegin(cell), *end = f2.grid.cellEnd(cell); it != end; ++it) {
       if (kf2->points[*it]) continue;
       const cv::KeyPoint& kp2 = f2.keypoints[*it];
-      c2.push_back({kp2.pt.x, kp2.pt.y, 100.0 * pyr.scale[kp2.octave], *it});
+      c2.push_back({100.0 * pyr.scale[kp2.octave], *it});
       c2_x.push_back(kp2.pt.x);
       c2_y.push_back(kp2.pt.y);
       c2_line_th.push_back(3.84 * pyr.sigma2[kp2.octave]);
@@ -405,7 +404,7 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
           if (stamp[k] == static_cast<int>(i1)) continue;
           stamp[k] = static_cast<int>(i1);
           const Candidate& c = c2[k];
-          const double ex = epipole.x() - c.x, ey = epipole.y() - c.y;
+          const double ex = epipole.x() - c2_x[k], ey = epipole.y() - c2_y[k];
           if (ex * ex + ey * ey < c.epipole_th) continue;
           const int i2 = c.index;
           if (!node2.empty() && node2[i2] != node1[i1]) continue;  // triangulation_bow
