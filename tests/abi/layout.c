@@ -33,7 +33,8 @@ _Static_assert(offsetof(beslam_backend_v1, prepare) == 56, "ABI 1.4 appends prep
 _Static_assert(sizeof(beslam_object_landmark) == 208, "beslam_object_landmark");
 _Static_assert(offsetof(beslam_object_landmark, flags) == 168, "ABI 1.3 appends flags and mesh to 1.2's 168 bytes");
 _Static_assert(offsetof(beslam_keyframe, points) == 136, "ABI 1.3 appends points to 1.2's 136 bytes");
-_Static_assert(sizeof(beslam_keyframe) == 152, "beslam_keyframe");
+_Static_assert(offsetof(beslam_keyframe, keyframe_poses) == 152, "ABI 1.6 appends keyframe poses to 1.5's 152 bytes");
+_Static_assert(sizeof(beslam_keyframe) == 168, "beslam_keyframe");
 _Static_assert(sizeof(beslam_keyframe_point) == 48, "beslam_keyframe_point");
 _Static_assert(offsetof(beslam_reconstructor_v1, finish) == 16, "ABI 1.3 appends finish to 1.2's 16 bytes");
 

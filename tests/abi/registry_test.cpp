@@ -220,6 +220,23 @@ TEST(Registry, LandmarksCrossTheAbiWithMeshesPointsAndRemovals) {
   EXPECT_EQ(made[0].mesh_vertices.size(), 24u);
   EXPECT_EQ(made[0].mesh_faces.size(), 36u);
   EXPECT_FALSE(made[0].removed);
+  EXPECT_EQ(made[0].cost, 0.0) << "no keyframe poses given, none seen";
+  {
+    // ABI 1.6: the backend's keyframe poses reach the plugin, read at the host's element size; a keyframe
+    // struct of an ABI 1.5 host (152 bytes) ends before them and the plugin sees none.
+    std::vector<beslam_trajectory_entry> poses(2);
+    for (beslam_trajectory_entry& e : poses)
+      for (int i = 0; i < 3; ++i) e.T_world_cam.m[i * 5] = 1;
+    poses[0].frame_index = 3, poses[0].T_world_cam.m[3] = 7;
+    poses[1].frame_index = 9;
+    beslam_keyframe with_poses = kf;
+    with_poses.keyframe_poses = poses.data();
+    with_poses.keyframe_pose_count = 2;
+    with_poses.keyframe_pose_size = sizeof(beslam_trajectory_entry);
+    EXPECT_DOUBLE_EQ(reconstructor.reconstruct(with_poses, frame, {box}, no_mask)[0].cost, 2.007);
+    with_poses.struct_size = 152;
+    EXPECT_EQ(reconstructor.reconstruct(with_poses, frame, {box}, no_mask)[0].cost, 0.0);
+  }
   // The host's copy owns its arrays: it outlives the plugin's next call.
   const beslam::registry::Landmarks first = made;
   box.motion_state = BESLAM_MOTION_DYNAMIC;

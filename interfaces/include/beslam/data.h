@@ -182,6 +182,13 @@ typedef struct beslam_keyframe_point {
   int32_t observations; /* keyframes that observe the point */
 } beslam_keyframe_point;
 
+/* One pose of a trajectory: a backend's trajectories, and the keyframe poses a reconstructor is given. */
+typedef struct beslam_trajectory_entry {
+  int64_t frame_index;
+  double timestamp;
+  beslam_pose T_world_cam;
+} beslam_trajectory_entry;
+
 typedef struct beslam_keyframe {
   uint32_t struct_size;
   uint32_t reserved;
@@ -196,6 +203,13 @@ typedef struct beslam_keyframe {
   const beslam_keyframe_point* points;
   uint32_t point_count;
   uint32_t point_size;
+  /* ABI 1.6: every keyframe of the backend as it is now (after local and global optimisation, loop
+   * corrections and rescaling), this one included, by frame index (NULL from an older host). Whatever the
+   * reconstructor keeps relative to a keyframe it places with these, so its objects follow the map.
+   * keyframe_pose_size is sizeof(beslam_trajectory_entry) as the host was built. */
+  const beslam_trajectory_entry* keyframe_poses;
+  uint32_t keyframe_pose_count;
+  uint32_t keyframe_pose_size;
 } beslam_keyframe;
 
 typedef struct beslam_keyframe_list {

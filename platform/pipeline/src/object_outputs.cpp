@@ -62,6 +62,19 @@ void anchorLandmarkUpdates(ObjectAnchors& anchors, const registry::Landmarks& up
   }
 }
 
+void anchorFinalUpdates(ObjectAnchors& anchors, const registry::Landmarks& updates,
+                        const std::map<int64_t, Eigen::Isometry3d>& T_world_cam_by_frame) {
+  for (const registry::ObjectLandmark& l : updates) {
+    const auto a = anchors.find(l.track_id);
+    if (a == anchors.end()) continue;
+    const auto then = T_world_cam_by_frame.find(a->second.frame_index);
+    if (l.removed || then == T_world_cam_by_frame.end())
+      anchors.erase(a);
+    else
+      a->second.T_world_cam_then = then->second;
+  }
+}
+
 void followFinalPoses(ObjectMap& objects, const ObjectAnchors& anchors,
                       const std::vector<registry::PoseEntry>& final_poses) {
   std::map<int64_t, const Eigen::Isometry3d*> final_by_frame;

@@ -21,9 +21,10 @@ using ObjectMap = std::map<int32_t, registry::ObjectLandmark>;
 // Applies a reconstructor's updates: a landmark replaces the one with its track id, a removed one erases it.
 void applyLandmarkUpdates(ObjectMap& objects, const registry::Landmarks& updates);
 
-// The keyframe an object was last fitted from, and that keyframe's pose then. A later loop correction
-// moves the keyframe; the object, fitted in the world as it was then, moves with it (as a map point
-// follows its reference keyframe), so that objects.json is in the final trajectory's world.
+// The keyframe an object was last fitted from, and that keyframe's pose then (as the reconstructor was
+// given it). A later loop correction moves the keyframe; the object, fitted in the world as it was then,
+// moves with it (as a map point follows its reference keyframe), so that objects.json is in the final
+// trajectory's world.
 struct ObjectAnchor {
   int64_t frame_index = -1;
   Eigen::Isometry3d T_world_cam_then = Eigen::Isometry3d::Identity();
@@ -32,6 +33,12 @@ using ObjectAnchors = std::map<int32_t, ObjectAnchor>;
 
 // Records the keyframe behind each updated (not removed) landmark.
 void anchorLandmarkUpdates(ObjectAnchors& anchors, const registry::Landmarks& updates, const ObjectAnchor& keyframe);
+
+// The reconstructor's finish() updates are in the world of its last reconstruct() call: each keeps the
+// keyframe it hangs on, whose pose then is the one that call was given (T_world_cam_by_frame); an anchor
+// whose keyframe that call did not list is dropped (the object stays as fitted).
+void anchorFinalUpdates(ObjectAnchors& anchors, const registry::Landmarks& updates,
+                        const std::map<int64_t, Eigen::Isometry3d>& T_world_cam_by_frame);
 
 // Every object moved by how much the final trajectory moved the keyframe it hangs on:
 // T_world_obj <- T_final(kf) T_then(kf)^-1 T_world_obj. Objects whose keyframe is not in `final_poses`

@@ -279,6 +279,7 @@ class Run {
     if (reconstructor_) {  // its last updates go to the backend before the backend's final optimisation
       const registry::Landmarks last = reconstructor_->finish();
       detail::applyLandmarkUpdates(record_.objects, last);
+      detail::anchorFinalUpdates(record_.anchors, last, keyframe_poses_given_);
       if (!last.empty()) backend_->addLandmarks(last);
     }
     backend_->finish();
@@ -503,8 +504,8 @@ class Run {
     summary_.motion_replayed_frames += static_cast<int64_t>(unposed_.size());
   }
 
-  // reconstruct: objects on new keyframes, in metres only (nothing before the world is metric); the
-  // landmarks go back to the backend.
+  // reconstruct: objects on new keyframes, in metres only (nothing before the world is metric), with the
+  // backend's keyframe poses as they are now; the landmarks go back to the backend.
   void reconstruct(FrameState& f) {
     if (!reconstructor_ || !f.tracked.result.is_keyframe || !world_metric_) return;
     StageTimer timer(f.timing, "reconstructor");
@@ -518,11 +519,25 @@ class Run {
     kf.points = f.tracked.keyframe_points.empty() ? nullptr : f.tracked.keyframe_points.data();
     kf.point_count = static_cast<uint32_t>(f.tracked.keyframe_points.size());
     kf.point_size = sizeof(beslam_keyframe_point);
+    // The backend's keyframes as they are now, so what the reconstructor keeps follows the map.
+    std::vector<beslam_trajectory_entry> keyframe_poses;
+    keyframe_poses_given_.clear();
+    for (const registry::PoseEntry& p : backend_->trajectory(BESLAM_TRAJECTORY_KEYFRAMES)) {
+      keyframe_poses.push_back({p.frame_index, p.timestamp, sdk::toPose(p.T_world_cam)});
+      keyframe_poses_given_[p.frame_index] = p.T_world_cam;
+    }
+    kf.keyframe_poses = keyframe_poses.empty() ? nullptr : keyframe_poses.data();
+    kf.keyframe_pose_count = static_cast<uint32_t>(keyframe_poses.size());
+    kf.keyframe_pose_size = sizeof(beslam_trajectory_entry);
     const registry::Landmarks landmarks =
         reconstructor_->reconstruct(kf, f.view, f.boxes, sdk::toView(f.mask, BESLAM_PIXEL_LABEL16));
     detail::applyLandmarkUpdates(record_.objects, landmarks);
-    detail::anchorLandmarkUpdates(record_.anchors, landmarks,
-                                  {f.frame.index, formats::toIsometry(f.tracked.result.T_world_cam)});
+    // The landmarks are in the world the call was given: the keyframe's pose there is their anchor's.
+    const auto given = keyframe_poses_given_.find(f.frame.index);
+    detail::anchorLandmarkUpdates(
+        record_.anchors, landmarks,
+        {f.frame.index,
+         given != keyframe_poses_given_.end() ? given->second : formats::toIsometry(f.tracked.result.T_world_cam)});
     if (!landmarks.empty()) backend_->addLandmarks(landmarks);
   }
 
@@ -566,6 +581,7 @@ class Run {
   std::unique_ptr<registry::MotionCheckerInstance> motion_;
   std::unique_ptr<registry::MaskGeneratorInstance> masker_;
   std::unique_ptr<registry::ReconstructorInstance> reconstructor_;
+  std::map<int64_t, Eigen::Isometry3d> keyframe_poses_given_;  // to the reconstructor's last call, by frame
   std::unique_ptr<registry::BackendInstance> backend_;
   beslam_create_info base_info_{};    // what every instance is created with, before its slot's settings
   bool world_metric_ = false;         // the backend's world unit, as its last track() said (data.h)

@@ -52,5 +52,33 @@ TEST(ObjectAnchors, AnObjectMovesWithTheKeyFrameItWasFittedFrom) {
   EXPECT_EQ(objects.count(6), 0u);
 }
 
+// The reconstructor's finish() refits objects in the world of its last call: they keep their keyframe, now
+// with the pose that call gave it, so a correction made before that call is not applied twice.
+TEST(ObjectAnchors, FinalUpdatesHangOnTheirKeyframeAsTheLastCallSawIt) {
+  ObjectMap objects;
+  ObjectAnchors anchors;
+  const Eigen::Isometry3d then10 = camera(0, 10, 0);
+  registry::Landmarks first = {car(3, {2, 0, 15}), car(4, {-2, 0, 25}), car(5, {0, 0, 40})};
+  applyLandmarkUpdates(objects, first);
+  anchorLandmarkUpdates(anchors, first, {10, then10});
+  // By the last call the keyframe of frame 10 had moved 1.5 m; finish() refits cars 3 and 5 there (car 5's
+  // keyframe missing from that call) and removes car 4.
+  const Eigen::Isometry3d last10 = camera(1.5, 10, 0);
+  registry::ObjectLandmark gone = car(4, Eigen::Vector3d::Zero());
+  gone.removed = true;
+  const registry::Landmarks last = {car(3, {3.5, 0, 15}), car(5, {0, 0, 40}), gone};
+  applyLandmarkUpdates(objects, last);
+  const std::map<int64_t, Eigen::Isometry3d> given = {{20, camera(0, 20, 0)}};
+  anchorFinalUpdates(anchors, {car(5, {0, 0, 40})}, given);
+  EXPECT_EQ(anchors.count(5), 0u) << "its keyframe was not in the last call: no anchor";
+  anchorFinalUpdates(anchors, last, {{10, last10}});
+  EXPECT_EQ(anchors.count(4), 0u);
+  ASSERT_EQ(anchors.count(3), 1u);
+  // The final trajectory has frame 10 where the last call saw it: car 3 stays (not moved by 1.5 m again).
+  followFinalPoses(objects, anchors, {{10, 1.0, last10}});
+  EXPECT_LT((objects.at(3).T_world_object.translation() - Eigen::Vector3d(3.5, 0, 15)).norm(), 1e-12);
+  EXPECT_LT((objects.at(5).T_world_object.translation() - Eigen::Vector3d(0, 0, 40)).norm(), 1e-12);
+}
+
 }  // namespace
 }  // namespace beslam::pipeline::detail

@@ -1,7 +1,8 @@
 // reconstructor_sdf: the paper's Algorithm 2 with a shape prior the project learns itself. On each
 // keyframe of a metric world: parked cars (boxes the motion checker calls static, by track id) collect
 // observations (objects/object_store.hpp: LiDAR returns in the box when the frame has a scan, else the
-// backend's map points labelled on the car); each car seen again is refitted (fit/object_fit.hpp: pose,
+// backend's map points labelled on the car), kept with their keyframes and moved as the backend moves
+// those (ABI 1.6 keyframe poses); each car seen again is refitted (fit/object_fit.hpp: pose,
 // shape code, optionally size, from the box consensus or the last fit) and returned as a landmark with
 // surface samples and a mesh; a car called dynamic is returned as removed. finish() refits every object
 // once with all it gathered. docs/reconstruction.md describes the prior, the energy and the settings.
@@ -46,6 +47,13 @@ std::string resolvePrior(const std::string& setting) {
                                  "); set reconstructor.prior");
 }
 
+// An object's last fit and where its boxes' consensus was then (a later refit starts from the fit shifted as
+// the consensus moved with its keyframes).
+struct LastFit {
+  recon::fit::FitResult result;
+  Eigen::Isometry3d T_world_boxes;
+};
+
 class SdfReconstructor : public beslam::sdk::Reconstructor {
  public:
   SdfReconstructor(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
@@ -58,7 +66,10 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
                                                  const std::vector<beslam_box3d>& boxes, const cv::Mat&) override {
     recon::KeyframeInput input;
     input.keyframe_id = keyframe.id;
-    input.T_world_cam = keyframe.T_world_cam;
+    input.frame_index = keyframe.frame_index;
+    // The keyframe as the backend has it now (its tracked pose from an older host).
+    const auto now = keyframe.T_world_cam_by_frame.find(keyframe.frame_index);
+    input.T_world_cam = now != keyframe.T_world_cam_by_frame.end() ? now->second : keyframe.T_world_cam;
     input.boxes = &boxes;
     for (const beslam::sdk::KeyframePoint& p : keyframe.points) input.points.push_back({p.id, p.p_world, p.label});
     if (frame.hasLidar() && context_.T_cam_lidar()) {
@@ -69,6 +80,7 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
         if (p_cam.allFinite()) input.lidar_cam.push_back(p_cam);
       }
     }
+    store_.followKeyframes(keyframe.T_world_cam_by_frame);
     std::vector<int32_t> ended;
     const std::set<int32_t> updated = store_.observe(input, ended);
     std::vector<beslam::sdk::Landmark> out;
@@ -85,8 +97,8 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
       if (std::getenv("BESLAM_RECON_DEBUG"))
         std::fprintf(stderr, "kf %ld frame %ld: object %d boxes %zu points %zu lidar %zu (kf points %zu)\n",
                      static_cast<long>(keyframe.id), static_cast<long>(keyframe.frame_index), id,
-                     records.back()->boxes.size(), records.back()->map_points.size(),
-                     records.back()->lidar_points.size(), keyframe.points.size());
+                     records.back()->boxes.size(), records.back()->map_points.size(), records.back()->lidarPointCount(),
+                     keyframe.points.size());
     }
     refitAll(records, out);
     return out;
@@ -104,7 +116,7 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
   // Refits the objects on OpenCV's thread pool (each fit reads only its own record and last fit), then
   // keeps the results in the objects' order: the same landmarks whatever the threads.
   void refitAll(const std::vector<const recon::ObjectRecord*>& records, std::vector<beslam::sdk::Landmark>& out) {
-    std::vector<std::optional<std::pair<recon::fit::FitResult, beslam::sdk::Landmark>>> fitted(records.size());
+    std::vector<std::optional<std::pair<LastFit, beslam::sdk::Landmark>>> fitted(records.size());
     std::vector<std::string> why(records.size());
     cv::parallel_for_(cv::Range(0, static_cast<int>(records.size())), [&](const cv::Range& range) {
       for (int i = range.start; i < range.end; ++i) fitted[i] = refit(*records[i], why[i]);
@@ -121,21 +133,29 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
   // Fits one object from its observations (starting from its last fit, else from its boxes); nothing
   // when it has too few observations or the fit fails (why: the fit's reason; the object waits for more
   // keyframes).
-  std::optional<std::pair<recon::fit::FitResult, beslam::sdk::Landmark>> refit(const recon::ObjectRecord& record,
-                                                                               std::string& why) const {
+  std::optional<std::pair<LastFit, beslam::sdk::Landmark>> refit(const recon::ObjectRecord& record,
+                                                                 std::string& why) const {
     recon::fit::FitObservations obs;
     obs.p_world = record.surfaceObservations(options_.store.map_point_margin);
-    obs.T_world_obj_boxes = record.boxPose();
-    const bool lidar = !record.lidar_points.empty();
+    const Eigen::Isometry3d T_world_boxes = record.boxPose();
+    obs.T_world_obj_boxes = T_world_boxes;
+    const bool lidar = record.lidarPointCount() > 0;
     if (static_cast<int>(obs.p_world.size()) < (lidar ? options_.min_lidar_points : options_.min_map_points))
       return std::nullopt;
     recon::fit::FitOptions fit = options_.fit;
     if (!lidar)
       fit.sigma_m = options_.map_sigma_m, fit.huber_m = options_.map_huber_m, fit.inlier_m = options_.map_huber_m;
+    // From the last fit, shifted as its boxes' consensus moved since (keyframes corrected, new boxes); the
+    // heading stays the fit's (a consensus may flip front and back).
     const auto last = fits_.find(record.track_id);
-    const Eigen::Isometry3d T_init = last != fits_.end() ? last->second.T_world_obj : record.boxPose();
-    const Eigen::Vector3d size = last != fits_.end() ? last->second.size : record.boxSize();
-    const Eigen::VectorXd code = last != fits_.end() ? last->second.code : Eigen::VectorXd::Zero(prior_.dimensions());
+    Eigen::Isometry3d T_init = T_world_boxes;
+    if (last != fits_.end()) {
+      T_init = last->second.result.T_world_obj;
+      T_init.translation() += T_world_boxes.translation() - last->second.T_world_boxes.translation();
+    }
+    const Eigen::Vector3d size = last != fits_.end() ? last->second.result.size : record.boxSize();
+    const Eigen::VectorXd code =
+        last != fits_.end() ? last->second.result.code : Eigen::VectorXd::Zero(prior_.dimensions());
     recon::fit::FitResult r = recon::fit::fitObject(prior_, T_init, size, code, obs, fit);
     if (!r.ok) {
       why = r.why.empty() ? "fit failed" : r.why;
@@ -162,14 +182,14 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
       for (const auto& f : mesh.faces)
         l.mesh_faces.insert(l.mesh_faces.end(), {uint32_t(f[0]), uint32_t(f[1]), uint32_t(f[2])});
     }
-    return std::make_pair(std::move(r), std::move(l));
+    return std::make_pair(LastFit{std::move(r), T_world_boxes}, std::move(l));
   }
 
   const beslam::sdk::Context& context_;
   Options options_;
   recon::shape::ShapePrior prior_;
   recon::ObjectStore store_;
-  std::map<int32_t, recon::fit::FitResult> fits_;
+  std::map<int32_t, LastFit> fits_;
 };
 
 }  // namespace

@@ -1,5 +1,6 @@
 // ObjectStore: association by track id, what each keyframe adds (boxes, labelled map points, LiDAR returns
-// inside the box above the road), objects ended by a dynamic call, bounded LiDAR memory, the box consensus.
+// inside the box above the road), objects ended by a dynamic call, bounded LiDAR memory, the box consensus,
+// observations that follow their keyframes.
 #include "objects/object_store.hpp"
 
 #include <gtest/gtest.h>
@@ -26,6 +27,7 @@ beslam_box3d carBox(int32_t track, int32_t state, double z = 10.0, double yaw = 
 KeyframeInput keyframe(int64_t id, const std::vector<beslam_box3d>& boxes) {
   KeyframeInput in;
   in.keyframe_id = id;
+  in.frame_index = 10 * id;
   in.T_world_cam.translation() = Eigen::Vector3d(0, 0, double(id));  // 1 m forward a keyframe
   in.boxes = &boxes;
   return in;
@@ -51,7 +53,7 @@ TEST(ObjectStore, AssociatesByTrackIdAndCollectsLabelledPoints) {
   ASSERT_NE(o, nullptr);
   EXPECT_EQ(o->boxes.size(), 2u);
   ASSERT_EQ(o->map_points.size(), 3u);  // point 11 once, at its latest position
-  EXPECT_DOUBLE_EQ(o->map_points.at(11).z(), 10.5);
+  EXPECT_NEAR(o->map_points.at(11).p_world().z(), 10.5, 1e-12);
   EXPECT_EQ(o->surfaceObservations(0.5).size(), 2u);  // no LiDAR: the map points in the box, not 15
   EXPECT_EQ(o->surfaceObservations(5.0).size(), 3u);
   EXPECT_TRUE(ended.empty());
@@ -96,14 +98,14 @@ TEST(ObjectStore, LidarReturnsInsideTheBoxAboveTheRoadInTheWorldFrame) {
   store.observe(in, ended);
   const ObjectRecord* o = store.find(2);
   ASSERT_NE(o, nullptr);
-  ASSERT_EQ(o->lidar_points.size(), 2u);
-  EXPECT_NEAR(o->lidar_points[0].z(), 12.2, 1e-9);  // camera 3 m along world z
+  ASSERT_EQ(o->lidarPointCount(), 2u);
+  EXPECT_NEAR(o->lidarPoints()[0].z(), 12.2, 1e-9);  // camera 3 m along world z
   EXPECT_EQ(o->surfaceObservations(0.5).size(), 2u);
   // Over the cap, every k-th return is kept.
   for (int i = 0; i < 300; ++i) in.lidar_cam.push_back({2.0 + 0.001 * i, 0.5, 9.2});
   store.observe(in, ended);
-  EXPECT_LE(static_cast<int>(store.find(2)->lidar_points.size()), options.max_lidar_points);
-  EXPECT_GT(static_cast<int>(store.find(2)->lidar_points.size()), options.max_lidar_points / 2);
+  EXPECT_LE(static_cast<int>(store.find(2)->lidarPointCount()), options.max_lidar_points);
+  EXPECT_GT(static_cast<int>(store.find(2)->lidarPointCount()), options.max_lidar_points / 2);
 }
 
 TEST(ObjectStore, BoxConsensusIsRobustToOneBadBoxAndToAFlippedHeading) {
@@ -124,6 +126,47 @@ TEST(ObjectStore, BoxConsensusIsRobustToOneBadBoxAndToAFlippedHeading) {
   EXPECT_GT(std::abs(T.linear().col(0).x()), 0.99);
   EXPECT_NEAR(T.linear().col(2).y(), -1.0, 1e-9);
   EXPECT_NEAR(o->boxSize().x(), 4.4, 1e-9);
+}
+
+// Boxes and LiDAR returns stay with the keyframe that made them: when the backend moves its keyframes (a
+// loop correction, local BA), the next fit sees them where the keyframes are now; a keyframe the backend
+// no longer lists keeps its last pose.
+TEST(ObjectStore, ObservationsFollowTheirKeyframes) {
+  ObjectStore store(StoreOptions{});
+  std::vector<int32_t> ended;
+  const std::vector<beslam_box3d> boxes = {carBox(1, BESLAM_MOTION_STATIC)};
+  for (int k = 0; k < 3; ++k) {
+    KeyframeInput in = keyframe(k, boxes);
+    in.lidar_cam = {{2, 0.5, 9.2}};
+    in.points = {{20 + k, {2, 1, 10}, BESLAM_LABEL_STATIC_BASE + 1}};  // one map point each
+    store.observe(in, ended);
+  }
+  // Keyframes 0 and 1 (frames 0 and 10) shifted 0.5 m along world x; keyframe 2 (frame 20) is gone.
+  std::map<int64_t, Eigen::Isometry3d> now;
+  for (int64_t frame : {0, 10}) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(0.5, 0, double(frame / 10));
+    now[frame] = T;
+  }
+  store.followKeyframes(now);
+  const ObjectRecord* o = store.find(1);
+  ASSERT_NE(o, nullptr);
+  ASSERT_EQ(o->boxes.size(), 3u);
+  EXPECT_NEAR(o->boxes[0].T_world_obj().translation().x(), 2.5, 1e-12);
+  EXPECT_NEAR(o->boxes[1].T_world_obj().translation().x(), 2.5, 1e-12);
+  EXPECT_NEAR(o->boxes[2].T_world_obj().translation().x(), 2.0, 1e-12);  // its last known pose
+  EXPECT_NEAR(o->boxPose().translation().x(), 2.5, 1e-12);               // the median of 2.5, 2.5, 2.0
+  const std::vector<Eigen::Vector3d> lidar = o->lidarPoints();
+  ASSERT_EQ(lidar.size(), 3u);
+  EXPECT_NEAR(lidar[0].x(), 2.5, 1e-12);
+  EXPECT_NEAR(lidar[2].x(), 2.0, 1e-12);
+  EXPECT_NEAR(lidar[1].z(), 10.2, 1e-12);  // keyframe 1: 1 m along world z, the return 9.2 m ahead
+  ASSERT_EQ(o->map_points.size(), 3u);
+  EXPECT_NEAR(o->map_points.at(21).p_world().x(), 2.5, 1e-12);
+  EXPECT_NEAR(o->map_points.at(22).p_world().x(), 2.0, 1e-12);
+  EXPECT_EQ(o->surfaceObservations(0.5).size(), 3u);  // LiDAR first
+  store.followKeyframes({});                          // nothing given (an older host): nothing moves
+  EXPECT_NEAR(store.find(1)->boxPose().translation().x(), 2.5, 1e-12);
 }
 
 }  // namespace

@@ -66,11 +66,7 @@ typedef struct beslam_track_result {
 #define BESLAM_TRAJECTORY_ONLINE 1    /* the pose each frame got when it was tracked */
 #define BESLAM_TRAJECTORY_KEYFRAMES 2 /* keyframes only */
 
-typedef struct beslam_trajectory_entry {
-  int64_t frame_index;
-  double timestamp;
-  beslam_pose T_world_cam;
-} beslam_trajectory_entry;
+/* beslam_trajectory_entry: data.h (since ABI 1.6 keyframes carry them to the reconstructor). */
 
 typedef struct beslam_trajectory_list {
   const beslam_trajectory_entry* entries;

@@ -3,7 +3,9 @@
  * calls it only once the backend's world is metric (keyframe->world_scale == BESLAM_WORLD_SCALE_METRIC).
  * A landmark returned again (same track_id) replaces the earlier one; BESLAM_LANDMARK_REMOVED drops it.
  * Since ABI 1.3 the keyframe carries the map points it observes, and finish() ends the run; the host
- * keeps each object's latest landmark and writes objects.json and objects/ meshes from them. */
+ * keeps each object's latest landmark and writes objects.json and objects/ meshes from them. Since ABI 1.6
+ * it also carries every keyframe's pose as the backend has it now, so what a reconstructor keeps relative
+ * to earlier keyframes can follow the map's corrections. */
 #ifndef BESLAM_KINDS_RECONSTRUCTOR_H
 #define BESLAM_KINDS_RECONSTRUCTOR_H
 

@@ -10,8 +10,13 @@
 //   track id is returned in `ended` (a parked car that drives away stops being a landmark).
 // - Association is by track id: a new id is a new object, a known id adds to it. Boxes without a track
 //   id, of other classes or unknown motion are ignored.
-// - Memory is bounded: map points are kept by id (their latest position), LiDAR points per object up to
-//   max_lidar_points (a deterministic thinning keeps every k-th point when over).
+// - Observations follow the map: boxes, LiDAR returns and map points are kept in the frame of the keyframe
+//   that made (or last reported) them, with that keyframe's pose; followKeyframes() takes the backend's keyframe poses
+//   as they are now (after local BA, loop corrections, rescaling), so a refit sees them where the map has them. A
+//   keyframe the backend no longer has keeps its last known pose. Map points are kept by id, at their latest reported
+//   position, relative to the keyframe that reported it.
+// - Memory is bounded: LiDAR returns per object up to max_lidar_points (a deterministic thinning keeps every
+//   k-th return of each keyframe when over).
 // - Fits see LiDAR returns when the object has any, else its map points inside the boxes' consensus box
 //   grown by map_point_margin.
 #pragma once
@@ -35,21 +40,42 @@ struct StoreOptions {
   double map_point_margin = 0.5;  // m: map points farther outside the consensus box are not the car's
 };
 
-// One keyframe's box of an object, in the world frame (landmark frame: x heading, y left, z up, centre).
+// One keyframe's box of an object (landmark frame: x heading, y left, z up, centre), in that keyframe's
+// camera frame, with the keyframe's pose as last known.
 struct BoxObservation {
   int64_t keyframe_id = -1;
-  Eigen::Isometry3d T_world_obj = Eigen::Isometry3d::Identity();
+  int64_t frame_index = -1;
+  Eigen::Isometry3d T_cam_obj = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
   Eigen::Vector3d size = Eigen::Vector3d::Zero();  // length, width, height
   double range = 0;                                // m from the camera
+  Eigen::Isometry3d T_world_obj() const { return T_world_cam * T_cam_obj; }
+};
+
+// A map point on an object where the keyframe that last reported it put it, in that keyframe's camera frame.
+struct MapPointObservation {
+  int64_t frame_index = -1;
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d p_cam = Eigen::Vector3d::Zero();
+  Eigen::Vector3d p_world() const { return T_world_cam * p_cam; }
+};
+
+// One keyframe's LiDAR returns on an object, in that keyframe's camera frame.
+struct LidarObservation {
+  int64_t frame_index = -1;
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
+  std::vector<Eigen::Vector3d> p_cam;
 };
 
 struct ObjectRecord {
   int32_t track_id = -1;
   int32_t class_id = BESLAM_CLASS_CAR;
   std::vector<BoxObservation> boxes;
-  std::map<int64_t, Eigen::Vector3d> map_points;  // backend id -> p_world
-  std::vector<Eigen::Vector3d> lidar_points;      // p_world
+  std::map<int64_t, MapPointObservation> map_points;  // by the backend's id
+  std::vector<LidarObservation> lidar;
   int64_t last_keyframe = -1;
+  size_t lidarPointCount() const;
+  std::vector<Eigen::Vector3d> lidarPoints() const;  // p_world, where their keyframes are now
   // The box observations' consensus: median centre, heading by circular mean, mean size.
   Eigen::Isometry3d boxPose() const;
   Eigen::Vector3d boxSize() const;
@@ -60,6 +86,7 @@ struct ObjectRecord {
 
 struct KeyframeInput {
   int64_t keyframe_id = -1;
+  int64_t frame_index = -1;
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
   const std::vector<beslam_box3d>* boxes = nullptr;
   struct Point {
@@ -76,6 +103,9 @@ class ObjectStore {
   explicit ObjectStore(const StoreOptions& options) : options_(options) {}
   // Adds a keyframe; returns the track ids of objects it updated and fills `ended` with objects it ended.
   std::set<int32_t> observe(const KeyframeInput& input, std::vector<int32_t>& ended);
+  // Moves every observation to its keyframe's pose as given (frame index -> T_world_cam); keyframes not
+  // given keep their last known pose.
+  void followKeyframes(const std::map<int64_t, Eigen::Isometry3d>& T_world_cam_by_frame);
   const ObjectRecord* find(int32_t track_id) const;
   const std::map<int32_t, ObjectRecord>& objects() const { return objects_; }
 

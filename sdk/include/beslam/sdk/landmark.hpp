@@ -2,6 +2,8 @@
 // detail/landmark.hpp.
 #pragma once
 
+#include <map>
+
 #include "beslam/sdk/views.hpp"
 
 namespace beslam::sdk {
@@ -22,6 +24,9 @@ struct Keyframe {
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
   bool world_is_metric = false;       // T_world_cam in metres (BESLAM_WORLD_SCALE_METRIC)
   std::vector<KeyframePoint> points;  // what it observes (empty from a backend older than ABI 1.3)
+  // ABI 1.6: every keyframe of the backend as it is now, this one included: frame index -> T_world_cam
+  // (empty from an older host). Observations kept relative to a keyframe are placed with these.
+  std::map<int64_t, Eigen::Isometry3d> T_world_cam_by_frame;
 };
 
 struct Landmark {

@@ -10,12 +10,15 @@ namespace beslam::sdk {
 inline Keyframe toKeyframe(const beslam_keyframe& kf) {
   beslam_keyframe k{};
   std::memcpy(&k, &kf, std::min<size_t>(kf.struct_size, sizeof(k)));
-  Keyframe out{k.id, k.frame_index, k.timestamp, toIsometry(k.T_world_cam), k.world_scale == BESLAM_WORLD_SCALE_METRIC,
-               {}};
+  Keyframe out{
+      k.id, k.frame_index, k.timestamp, toIsometry(k.T_world_cam), k.world_scale == BESLAM_WORLD_SCALE_METRIC, {}, {}};
   if (k.points && k.point_size >= sizeof(beslam_keyframe_point))
     for (const beslam_keyframe_point& p : copyArray(k.points, k.point_count, k.point_size))
       out.points.push_back({p.id, Eigen::Vector3d(p.p_world[0], p.p_world[1], p.p_world[2]), Eigen::Vector2f(p.x, p.y),
                             p.label, p.observations});
+  if (k.keyframe_poses && k.keyframe_pose_size >= sizeof(beslam_trajectory_entry))
+    for (const beslam_trajectory_entry& e : copyArray(k.keyframe_poses, k.keyframe_pose_count, k.keyframe_pose_size))
+      out.T_world_cam_by_frame[e.frame_index] = toIsometry(e.T_world_cam);
   return out;
 }
 
