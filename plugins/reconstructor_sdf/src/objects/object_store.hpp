@@ -10,13 +10,13 @@
 //   track id is returned in `ended` (a parked car that drives away stops being a landmark).
 // - Association is by track id: a new id is a new object, a known id adds to it. Boxes without a track
 //   id, of other classes or unknown motion are ignored.
-// - Observations follow the map: boxes, LiDAR returns and map points are kept in the frame of the keyframe
-//   that made (or last reported) them, with that keyframe's pose; followKeyframes() takes the backend's keyframe poses
-//   as they are now (after local BA, loop corrections, rescaling), so a refit sees them where the map has them. A
-//   keyframe the backend no longer has keeps its last known pose. Map points are kept by id, at their latest reported
-//   position, relative to the keyframe that reported it.
+// - Observations follow the map: boxes, LiDAR returns and map points are kept in the camera frame of the
+//   keyframe that made (or last reported) them, with that keyframe's pose; followKeyframes() takes the
+//   backend's keyframe poses as they are now (after local BA, loop corrections, rescaling), so a refit sees
+//   them where the map has them. A keyframe the backend no longer has keeps its last known pose. Map points
+//   are kept by id, at the position the latest keyframe to report them gave.
 // - Memory is bounded: LiDAR returns per object up to max_lidar_points (a deterministic thinning keeps every
-//   k-th return of each keyframe when over).
+//   k-th return, counted over the object's keyframes in order, when over).
 // - Fits see LiDAR returns when the object has any, else its map points inside the boxes' consensus box
 //   grown by map_point_margin.
 #pragma once
