@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "beslam/sdk/views.hpp"
 
@@ -166,6 +167,10 @@ TEST(ObjectStore, ObservationsFollowTheirKeyframes) {
   EXPECT_NEAR(o->map_points.at(22).p_world().x(), 2.0, 1e-12);
   EXPECT_EQ(o->surfaceObservations(0.5).size(), 3u);  // LiDAR first
   store.followKeyframes({});                          // nothing given (an older host): nothing moves
+  EXPECT_NEAR(store.find(1)->boxPose().translation().x(), 2.5, 1e-12);
+  Eigen::Isometry3d broken = Eigen::Isometry3d::Identity();
+  broken.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  store.followKeyframes({{0, broken}, {10, broken}});  // a non-finite pose moves nothing
   EXPECT_NEAR(store.find(1)->boxPose().translation().x(), 2.5, 1e-12);
 }
 

@@ -133,7 +133,7 @@ void ObjectStore::followKeyframes(const std::map<int64_t, Eigen::Isometry3d>& T_
   if (T_world_cam_by_frame.empty()) return;
   const auto follow = [&](int64_t frame, Eigen::Isometry3d& T_world_cam) {
     const auto it = T_world_cam_by_frame.find(frame);
-    if (it != T_world_cam_by_frame.end()) T_world_cam = it->second;
+    if (it != T_world_cam_by_frame.end() && it->second.matrix().allFinite()) T_world_cam = it->second;
   };
   for (auto& [id, o] : objects_) {
     for (BoxObservation& b : o.boxes) follow(b.frame_index, b.T_world_cam);

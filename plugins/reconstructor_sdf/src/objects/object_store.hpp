@@ -104,7 +104,7 @@ class ObjectStore {
   // Adds a keyframe; returns the track ids of objects it updated and fills `ended` with objects it ended.
   std::set<int32_t> observe(const KeyframeInput& input, std::vector<int32_t>& ended);
   // Moves every observation to its keyframe's pose as given (frame index -> T_world_cam); keyframes not
-  // given keep their last known pose.
+  // given, or given a non-finite pose, keep their last known pose.
   void followKeyframes(const std::map<int64_t, Eigen::Isometry3d>& T_world_cam_by_frame);
   const ObjectRecord* find(int32_t track_id) const;
   const std::map<int32_t, ObjectRecord>& objects() const { return objects_; }
