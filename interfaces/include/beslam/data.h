@@ -205,7 +205,8 @@ typedef struct beslam_keyframe {
   uint32_t point_size;
   /* ABI 1.6: every keyframe of the backend as it is now (after local and global optimisation, loop
    * corrections and rescaling), this one included, by frame index (NULL from an older host). Whatever the
-   * reconstructor keeps relative to a keyframe it places with these, so its objects follow the map.
+   * reconstructor keeps relative to a keyframe it places with these, so its objects follow the map. A 1.6
+   * host gives T_world_cam above as the same keyframe's pose among these.
    * keyframe_pose_size is sizeof(beslam_trajectory_entry) as the host was built. */
   const beslam_trajectory_entry* keyframe_poses;
   uint32_t keyframe_pose_count;

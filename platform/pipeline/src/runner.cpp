@@ -519,12 +519,14 @@ class Run {
     kf.points = f.tracked.keyframe_points.empty() ? nullptr : f.tracked.keyframe_points.data();
     kf.point_count = static_cast<uint32_t>(f.tracked.keyframe_points.size());
     kf.point_size = sizeof(beslam_keyframe_point);
-    // The backend's keyframes as they are now, so what the reconstructor keeps follows the map.
+    // The backend's keyframes as they are now, so what the reconstructor keeps follows the map; the new
+    // keyframe's own pose is its pose among them (its local BA may already have moved it).
     std::vector<beslam_trajectory_entry> keyframe_poses;
     keyframe_poses_given_.clear();
     for (const registry::PoseEntry& p : backend_->trajectory(BESLAM_TRAJECTORY_KEYFRAMES)) {
       keyframe_poses.push_back({p.frame_index, p.timestamp, sdk::toPose(p.T_world_cam)});
       keyframe_poses_given_[p.frame_index] = p.T_world_cam;
+      if (p.frame_index == f.frame.index) kf.T_world_cam = keyframe_poses.back().T_world_cam;
     }
     kf.keyframe_poses = keyframe_poses.empty() ? nullptr : keyframe_poses.data();
     kf.keyframe_pose_count = static_cast<uint32_t>(keyframe_poses.size());
@@ -533,11 +535,7 @@ class Run {
         reconstructor_->reconstruct(kf, f.view, f.boxes, sdk::toView(f.mask, BESLAM_PIXEL_LABEL16));
     detail::applyLandmarkUpdates(record_.objects, landmarks);
     // The landmarks are in the world the call was given: the keyframe's pose there is their anchor's.
-    const auto given = keyframe_poses_given_.find(f.frame.index);
-    detail::anchorLandmarkUpdates(
-        record_.anchors, landmarks,
-        {f.frame.index,
-         given != keyframe_poses_given_.end() ? given->second : formats::toIsometry(f.tracked.result.T_world_cam)});
+    detail::anchorLandmarkUpdates(record_.anchors, landmarks, {f.frame.index, formats::toIsometry(kf.T_world_cam)});
     if (!landmarks.empty()) backend_->addLandmarks(landmarks);
   }
 

@@ -67,9 +67,7 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
     recon::KeyframeInput input;
     input.keyframe_id = keyframe.id;
     input.frame_index = keyframe.frame_index;
-    // The keyframe as the backend has it now (its tracked pose from an older host).
-    const auto now = keyframe.T_world_cam_by_frame.find(keyframe.frame_index);
-    input.T_world_cam = now != keyframe.T_world_cam_by_frame.end() ? now->second : keyframe.T_world_cam;
+    input.T_world_cam = keyframe.T_world_cam;
     input.boxes = &boxes;
     for (const beslam::sdk::KeyframePoint& p : keyframe.points) input.points.push_back({p.id, p.p_world, p.label});
     if (frame.hasLidar() && context_.T_cam_lidar()) {
