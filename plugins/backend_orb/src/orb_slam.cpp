@@ -25,6 +25,7 @@
 #include "optimize/bundle_adjustment.hpp"
 #include "place/keyframe_database.hpp"
 #include "place/vocabulary.hpp"
+#include "scale/lidar_range.hpp"
 #include "scale/object_range.hpp"
 #include "scale/parked_car_scale.hpp"
 #include "stage_clock.hpp"
@@ -67,6 +68,10 @@ LocalMapperOptions mapperOptions(const Options& o) {
   m.metric_correction_min = o.metric_correction_min;
   m.object_range_sigma = o.metric_scale && o.object_scale ? o.object_range_sigma : 0;
   m.object_range_sigma_per_m = o.object_range_sigma_per_m;
+  m.lidar_range_sigma = o.metric_scale && o.lidar_scale ? o.lidar_range_sigma : 0;
+  m.lidar_range_sigma_per_m = o.lidar_range_sigma_per_m;
+  m.lidar_reference_keyframes = o.lidar_reference_keyframes;
+  m.lidar_min_points = o.lidar_min_points;
   m.ba.object_anchors = o.object_scale_hold == ObjectScaleHold::Anchors;
   m.ba.object_range_priors = o.object_scale_hold == ObjectScaleHold::Ranges;
   m.ground.sigma_ratio = o.ground_prior_sigma;
@@ -110,6 +115,10 @@ bool Options::validate(std::string* error) const {
   if (!(metric_max_spread > 0)) return fail("metric_max_spread must be > 0");
   if (!(object_range_sigma > 0) || !(object_range_sigma_per_m >= 0))
     return fail("object_range_sigma must be > 0 and object_range_sigma_per_m >= 0");
+  if (!(lidar_range_sigma > 0) || !(lidar_range_sigma_per_m >= 0))
+    return fail("lidar_range_sigma must be > 0 and lidar_range_sigma_per_m >= 0");
+  if (lidar_reference_keyframes < 1 || lidar_min_points < 3)
+    return fail("lidar_reference_keyframes must be >= 1 and lidar_min_points >= 3");
   if (!(object_pose_weight >= 0) || !(object_surface_weight >= 0))
     return fail("object_pose_weight and object_surface_weight must be >= 0");
   if (!(object_box_sigma > 0) || !(object_box_sigma_per_m >= 0) || !(object_yaw_sigma_deg > 0) ||
@@ -354,7 +363,7 @@ struct OrbSlam::Impl {
   };
 
   TrackResult track(const cv::Mat& image, const cv::Mat& labels, double timestamp, int64_t index,
-                    const std::vector<ObjectBox>& boxes) {
+                    const std::vector<ObjectBox>& boxes, const Eigen::Matrix3Xf* lidar_cam) {
     const auto t_start = Clock::now();
     auto t0 = Clock::now();
     const int budget =
@@ -362,6 +371,7 @@ struct OrbSlam::Impl {
     const std::shared_ptr<const PreparedImage> prepared_image = takePrepared(index, image.size());
     auto features = extractor.extract(image, labels, budget, prepared_image.get());
     if (options.object_scale && options.metric_scale && !boxes.empty()) setObjectRanges(*features, boxes);
+    if (options.lidar_scale && options.metric_scale && lidar_cam) setLidarRanges(*features, *lidar_cam, camera);
     // Kept with a keyframe for the parked cars' anchors and the object landmarks' camera-object factors.
     if (options.object_landmarks != ObjectLandmarkMode::Off ||
         (options.metric_scale && options.object_scale && options.object_scale_hold == ObjectScaleHold::Anchors))
@@ -386,6 +396,14 @@ struct OrbSlam::Impl {
     // Mapping is idle here in both modes: a metric scale the mapper found is applied to everything at
     // once, before this frame is tracked (the same frame in the threaded and the inline mode).
     if (const auto s = mapper.takePendingScale()) becomeMetric(*s, index);
+    if (mapper.lidarScaled() && !stats.lidar_scaled) {
+      // The scan measures the unit directly and holds it in local BA: the parked cars' fit is not needed.
+      stats.lidar_scaled = true;
+      object_scale_done = true;
+      pending_object_scale.reset();
+      if (std::getenv("BESLAM_ORB_DEBUG"))
+        std::fprintf(stderr, "frame %ld: the LiDAR ranges give the scale and hold it\n", static_cast<long>(index));
+    }
     if (pending_object_scale) {  // the parked cars' boxes: a direct metric measurement, preferred to the road
       const double s = *pending_object_scale;
       pending_object_scale.reset();
@@ -439,8 +457,11 @@ struct OrbSlam::Impl {
       last_mapping_ms = 0;
     }
 
-    int features_static = 0;
-    for (size_t i = 0; i < features->size(); ++i) features_static += features->onStaticObject(i) ? 1 : 0;
+    int features_static = 0, features_lidar = 0;
+    for (size_t i = 0; i < features->size(); ++i) {
+      features_static += features->onStaticObject(i) ? 1 : 0;
+      features_lidar += features->lidarRange(i) > 0 ? 1 : 0;
+    }
     const int feature_count = static_cast<int>(features->size());
     TrackResult result = tracker.track(features, timestamp, index);
     result.world_is_metric = mapper.metric();
@@ -452,6 +473,7 @@ struct OrbSlam::Impl {
     }
     result.features = feature_count;
     result.features_static = features_static;
+    result.features_lidar = features_lidar;
     result.tracked_static = tracker.trackedOnStaticObjects();
     result.object_landmarks = static_cast<int>(map.objects().size());
     result.object_factors = object_factors;
@@ -617,8 +639,8 @@ std::optional<Eigen::Isometry3d> OrbSlam::predictPose(double) const { return imp
 void OrbSlam::prepare(const cv::Mat& gray, int64_t frame_index) { impl_->prepare(gray, frame_index); }
 
 TrackResult OrbSlam::track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index,
-                           const std::vector<ObjectBox>& car_boxes) {
-  return impl_->track(gray, label_mask, timestamp, frame_index, car_boxes);
+                           const std::vector<ObjectBox>& car_boxes, const Eigen::Matrix3Xf* lidar_cam) {
+  return impl_->track(gray, label_mask, timestamp, frame_index, car_boxes, lidar_cam);
 }
 
 void OrbSlam::finish() {

@@ -76,7 +76,7 @@ int32_t toState(beslam::orb::TrackingState s) {
 class OrbBackend : public beslam::sdk::Backend {
  public:
   OrbBackend(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
-      : slam_(readCamera(context), readOptions(config, context)) {
+      : slam_(readCamera(context), readOptions(config, context)), T_cam_lidar_(context.T_cam_lidar()) {
     if (!slam_.options().load_map.empty()) {
       const beslam::orb::Statistics s = slam_.statistics();
       context.info("map '" + slam_.options().load_map + "' loaded: " + std::to_string(s.keyframes) + " keyframes, " +
@@ -120,7 +120,14 @@ class OrbBackend : public beslam::sdk::Backend {
           (b.class_id == BESLAM_CLASS_CAR || b.class_id == BESLAM_CLASS_VAN || b.class_id == BESLAM_CLASS_TRUCK))
         car_boxes.push_back({b.track_id, b.motion_state == BESLAM_MOTION_STATIC, beslam::sdk::boxPose(b),
                              Eigen::Vector3d(b.size[0], b.size[2], b.size[1])});
-    const beslam::orb::TrackResult r = slam_.track(image, mask, frame.timestamp, frame.index, car_boxes);
+    // The frame's LiDAR scan in the camera frame: a metric scale source (Options::lidar_scale).
+    std::optional<Eigen::Matrix3Xf> lidar_cam;
+    if (frame.hasLidar() && T_cam_lidar_ && slam_.options().metric_scale && slam_.options().lidar_scale) {
+      const Eigen::Isometry3f T = T_cam_lidar_->cast<float>();
+      lidar_cam = (T.linear() * frame.lidarPoints().topRows<3>()).colwise() + T.translation();
+    }
+    const beslam::orb::TrackResult r =
+        slam_.track(image, mask, frame.timestamp, frame.index, car_boxes, lidar_cam ? &*lidar_cam : nullptr);
     beslam::sdk::TrackResult out;
     out.state = toState(r.state);
     out.is_keyframe = r.is_keyframe;
@@ -131,6 +138,7 @@ class OrbBackend : public beslam::sdk::Backend {
     out.world_is_metric = r.world_is_metric;
     out.counters = {{"features", r.features},
                     {"features_static", r.features_static},
+                    {"features_lidar", r.features_lidar},
                     {"tracked_static", r.tracked_static},
                     {"relocalisations", r.relocalised ? 1 : 0},
                     {"loop_closures", r.loop_closed ? 1 : 0},
@@ -203,7 +211,8 @@ class OrbBackend : public beslam::sdk::Backend {
 
  private:
   OrbSlam slam_;
-  std::set<int32_t> static_tracks_;  // track ids the motion checker has called static
+  std::optional<Eigen::Isometry3d> T_cam_lidar_;  // the rig's LiDAR extrinsics, if it has a LiDAR
+  std::set<int32_t> static_tracks_;               // track ids the motion checker has called static
 };
 
 }  // namespace

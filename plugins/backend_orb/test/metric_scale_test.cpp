@@ -1,13 +1,16 @@
-// Metric scale from static objects: the ray-box entry that gives a keypoint its metric range, the range
-// prior's and the box-centre anchor's Jacobians against numeric ones, and that a rescaled map keeps every reprojection.
+// Metric scale from static objects and LiDAR: the ray-box entry that gives a keypoint its metric range,
+// the LiDAR range under a keypoint (one surface, never across an edge), the range prior's and the box-centre
+// anchor's Jacobians against numeric ones, and that a rescaled map keeps every reprojection.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 #include <vector>
 
+#include "features/feature_set.hpp"
 #include "optimize/cost_functions.hpp"
 #include "optimize/se3.hpp"
+#include "scale/lidar_range.hpp"
 #include "scale/object_range.hpp"
 #include "scale/parked_car_scale.hpp"
 
@@ -82,6 +85,63 @@ void expectJacobiansMatchNumericOnes(const ceres::CostFunction& cost, int rows, 
     for (int i = 0; i < rows; ++i)
       EXPECT_NEAR(J_point[i * 3 + k], (rp[i] - rm[i]) / (2 * eps), 1e-5) << "residual " << i << ", point " << k;
   }
+}
+
+// Keypoints at the given pixels, level 0.
+FeatureSet keypointsAt(const std::vector<cv::Point2f>& pixels) {
+  FeatureSet f;
+  for (const cv::Point2f& p : pixels) f.keypoints.emplace_back(p, 8.0f);
+  f.labels.assign(pixels.size(), 0);
+  return f;
+}
+
+// A 64-beam-like scan of a scene in the camera frame: returns every 0.2 degrees across and 0.4 degrees
+// up (from -10 to 10 degrees), of a wall at depth `wall_z` and, where x < 0 (the left half of the image),
+// of a box face at depth `near_z` in front of it.
+Eigen::Matrix3Xf scanOfWallAndBox(double wall_z, double near_z) {
+  std::vector<Eigen::Vector3f> points;
+  for (double az = -40; az <= 40; az += 0.2)
+    for (double el = -10; el <= 10; el += 0.4) {
+      const Eigen::Vector3d ray(std::tan(az * M_PI / 180), std::tan(el * M_PI / 180), 1.0);
+      const double z = ray.x() < 0 ? near_z : wall_z;
+      points.push_back((ray * z).cast<float>());
+    }
+  Eigen::Matrix3Xf p(3, static_cast<Eigen::Index>(points.size()));
+  for (size_t j = 0; j < points.size(); ++j) p.col(static_cast<Eigen::Index>(j)) = points[j];
+  return p;
+}
+
+TEST(LidarRange, AKeypointOnOneSurfaceTakesItsRangeAlongItsOwnRay) {
+  const Camera camera{1241, 376, 718.856, 718.856, 607.19, 185.22};
+  FeatureSet f = keypointsAt({{900, 150}, {900, 300}, {300, 200}, {20, 5}});
+  setLidarRanges(f, scanOfWallAndBox(12.0, 6.0), camera);
+  ASSERT_EQ(f.lidar_range.size(), 4u);
+  for (size_t i : {0u, 1u}) {  // on the wall (x > 0): depth 12 m, range along the keypoint's ray
+    const cv::Point2f& pt = f.keypoints[i].pt;
+    const double x = (pt.x - camera.cx) / camera.fx, y = (pt.y - camera.cy) / camera.fy;
+    EXPECT_NEAR(f.lidar_range[i], 12.0 * std::sqrt(1 + x * x + y * y), 1e-3) << i;
+  }
+  const cv::Point2f& pt = f.keypoints[2].pt;  // on the box (x < 0): 6 m
+  const double x = (pt.x - camera.cx) / camera.fx, y = (pt.y - camera.cy) / camera.fy;
+  EXPECT_NEAR(f.lidar_range[2], 6.0 * std::sqrt(1 + x * x + y * y), 1e-3);
+  EXPECT_EQ(f.lidar_range[3], 0.0f);  // above the scan's highest beam: no return near it
+}
+
+TEST(LidarRange, NoRangeAcrossAnEdgeNorFromReturnsBehindOrAtTheCamera) {
+  const Camera camera{1241, 376, 718.856, 718.856, 607.19, 185.22};
+  // On the box's edge (x = 0, u = cx): the window sees the box at 6 m and the wall at 12 m.
+  FeatureSet f = keypointsAt({{607.19f, 185.22f}, {500, 185}});
+  setLidarRanges(f, scanOfWallAndBox(12.0, 6.0), camera);
+  EXPECT_EQ(f.lidar_range[0], 0.0f);
+  EXPECT_GT(f.lidar_range[1], 0.0f);
+  // Returns behind the camera or within min_depth of it (the ego car's own body) are no surface.
+  setLidarRanges(f, -scanOfWallAndBox(12.0, 6.0), camera);
+  EXPECT_EQ(f.lidar_range[1], 0.0f);
+  setLidarRanges(f, scanOfWallAndBox(0.5, 0.5), camera);
+  EXPECT_EQ(f.lidar_range[1], 0.0f);
+  // No scan: a range of 0 for every keypoint.
+  setLidarRanges(f, Eigen::Matrix3Xf(3, 0), camera);
+  EXPECT_EQ(f.lidar_range, std::vector<float>(2, 0.0f));
 }
 
 Eigen::Isometry3d someCameraPose() {

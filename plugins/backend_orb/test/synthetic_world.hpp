@@ -35,6 +35,24 @@ class CorridorWorld {
     return T;
   }
 
+  // A LiDAR scan of frame i in its camera frame: the faces sampled every `spacing` metres from 1 to
+  // `max_ahead` metres ahead of the camera (seen from inside a convex box, every sample is visible).
+  Eigen::Matrix3Xf lidarScan(int i, double spacing = 0.08, double max_ahead = 30.0) const {
+    const Eigen::Isometry3d T_cw = pose(i).inverse();
+    std::vector<Eigen::Vector3f> points;
+    for (const Face& f : faces_) {
+      const double la = f.texture.cols / kPxPerMetre, lb = f.texture.rows / kPxPerMetre;
+      for (double a = 0; a <= la; a += spacing)
+        for (double b = 0; b <= lb; b += spacing) {
+          const Eigen::Vector3d p_cam = T_cw * (f.origin + a * f.a + b * f.b);
+          if (p_cam.z() >= 1.0 && p_cam.z() <= max_ahead) points.push_back(p_cam.cast<float>());
+        }
+    }
+    Eigen::Matrix3Xf scan(3, static_cast<Eigen::Index>(points.size()));
+    for (size_t j = 0; j < points.size(); ++j) scan.col(static_cast<Eigen::Index>(j)) = points[j];
+    return scan;
+  }
+
   cv::Mat render(int i) const {
     const Camera c = camera();
     const Eigen::Isometry3d T_cw = pose(i).inverse();

@@ -134,6 +134,16 @@ struct Options {
   ObjectScaleHold object_scale_hold = ObjectScaleHold::Anchors;
   double object_range_sigma = 0.15;
   double object_range_sigma_per_m = 0.02;
+  // LiDAR ranges as a metric source (scale/lidar_range.hpp), where frames carry a scan: once
+  // lidar_reference_keyframes keyframes each measure the map's unit from their keypoints' LiDAR ranges (at
+  // least lidar_min_points each) and agree within metric_max_spread, the map is rescaled; from then on each
+  // keypoint's LiDAR range holds its map point in local BA with this std-dev (metres, plus per metre), and
+  // neither the road fits nor the parked cars' boxes rescale it.
+  bool lidar_scale = true;
+  int lidar_reference_keyframes = 2;
+  int lidar_min_points = 20;
+  double lidar_range_sigma = 0.05;
+  double lidar_range_sigma_per_m = 0.005;
   // Object landmarks in local BA (objects/object_factors.hpp, docs/object-ba.md). Off by default: a gain is
   // shown only with LiDAR-fitted cars on dynamic_street.
   ObjectLandmarkMode object_landmarks = ObjectLandmarkMode::Off;
@@ -187,6 +197,7 @@ struct TrackResult {
   int tracked_points = 0;                                         // pose inliers
   bool world_is_metric = false;                                   // T_world_cam (and the map) in metres
   int features = 0, features_static = 0;                          // keypoints; on static-object labels
+  int features_lidar = 0;                                         // keypoints with a LiDAR range
   int tracked_static = 0;                                         // inliers on static-object map points
   std::vector<std::pair<std::string, double>> stage_ms;           // extract, track, local_map, mapping...
   bool relocalised = false;                                       // this frame recovered from Lost
@@ -252,6 +263,7 @@ struct Statistics {
   int64_t object_scale_frame = -1;  // frame at which the parked cars' boxes set the scale (-1: never)
   double object_scale_factor = 0;   // the factor they applied
   int object_scale_tracks = 0;      // cars in the agreeing cluster
+  bool lidar_scaled = false;        // the LiDAR ranges set the scale (metric_from_frame) and hold it
 };
 
 class OrbSlam {
@@ -272,9 +284,10 @@ class OrbSlam {
   void prepare(const cv::Mat& gray, int64_t frame_index);
 
   // gray: CV_8UC1 (or CV_8UC3 BGR, converted; colour kept for map points); label_mask: CV_16UC1 or empty;
-  // car_boxes: the frame's tracked cars (ObjectBox), used with metric_scale.
+  // car_boxes: the frame's tracked cars (ObjectBox), used with metric_scale. lidar_cam: the frame's LiDAR
+  // scan in the camera frame (metres), if it has one; used with metric_scale and lidar_scale.
   TrackResult track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index,
-                    const std::vector<ObjectBox>& car_boxes = {});
+                    const std::vector<ObjectBox>& car_boxes = {}, const Eigen::Matrix3Xf* lidar_cam = nullptr);
 
   // Waits for the mapping thread and runs a last local bundle adjustment (not in localisation-only mode),
   // then saves the map to Options::save_map if set (throws std::runtime_error naming the file on failure).

@@ -60,6 +60,9 @@ struct FeatureSet {
   // Metres from the camera to where the keypoint's ray enters the metric 3D box of the static object it
   // lies on (OrbSlam::ObjectBox), 0 where there is none. Empty when the frame had no boxes.
   std::vector<float> object_range;
+  // Metres from the camera to the surface a LiDAR scan of the frame saw under the keypoint
+  // (scale/lidar_range.hpp), 0 where the scan says nothing clear. Empty when the frame had no scan.
+  std::vector<float> lidar_range;
   // The frame's boxes of parked (static) tracked cars, kept with the keyframe for local BA: the parked cars'
   // anchors (metric scale) and the object landmarks' camera-object factors (objects/object_factors.hpp).
   // Filled only when one of them is on.
@@ -70,6 +73,7 @@ struct FeatureSet {
   const uint8_t* descriptor(size_t i) const { return descriptors.ptr<uint8_t>(static_cast<int>(i)); }
   bool onStaticObject(size_t i) const { return labels[i] >= 1000; }
   float objectRange(size_t i) const { return i < object_range.size() ? object_range[i] : 0.0f; }
+  float lidarRange(size_t i) const { return i < lidar_range.size() ? lidar_range[i] : 0.0f; }
   int32_t objectId(size_t i) const { return labels[i] >= 1000 ? static_cast<int32_t>(labels[i]) - 1000 : -1; }
   void buildGrid() { grid = FeatureGrid(keypoints, width, height); }
   std::vector<int> query(float u, float v, float r, int min_level = -1, int max_level = -1) const {

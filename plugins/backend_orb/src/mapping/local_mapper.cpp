@@ -32,7 +32,8 @@ LocalMapper::LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyr
       pyramid_(pyramid),
       options_(options),
       ground_reference_(makeGroundReference()),
-      object_reference_(options.ground.reference_keyframes, options.metric_max_spread) {}
+      object_reference_(options.ground.reference_keyframes, options.metric_max_spread),
+      lidar_reference_(options.lidar_reference_keyframes, options.metric_max_spread) {}
 
 void LocalMapper::yieldPoint() {
   if (gate_) gate_->yieldToTracker();
@@ -64,14 +65,20 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
       ba.object_range_sigma = options_.object_range_sigma;
       ba.object_range_sigma_per_m = options_.object_range_sigma_per_m;
     }
+    if (metric_ && lidar_scaled_) {  // and the scan's ranges, once they agree with the map's unit
+      ba.lidar_range_sigma = options_.lidar_range_sigma;
+      ba.lidar_range_sigma_per_m = options_.lidar_range_sigma_per_m;
+    }
     // Object landmarks are metric (boxes, shapes): they enter only a metric map.
     ba.objects.enabled = options_.ba.objects.enabled && metric_;
     // Once the parked cars' boxes gave the scale, their range priors hold it; the ground prior would pull it
     // towards the road fits, whose biases (bare roads, kerbs) fight the direct measurement.
-    const bool ground_prior = options_.ground.enabled && !object_scaled_;
+    const bool ground_prior = options_.ground.enabled && !object_scaled_ && !lidar_scaled_;
     if (gate_) ba.between_passes = [this] { yieldPoint(); };
     if (stop_ba_) ba.stop_early = stop_ba_;
     last_ba_ = optimize::localBundleAdjustment(kf, map_, ba, ground_prior ? &ground : nullptr);
+    if (options_.lidar_range_sigma > 0 && options_.metric_camera_height > 0 && !lidar_scaled_ && !pending_scale_)
+      measureScaleByLidar(kf);
     if (options_.object_range_sigma > 0 && options_.metric_camera_height > 0 && !metric_ && !pending_scale_) {
       if (const auto s = objectScale(*kf)) object_reference_.add(*s);
       if (object_reference_.ready()) pending_scale_ = currentObjectScale(kf).value_or(object_reference_.height());
@@ -84,7 +91,7 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
       if (ground_reference_.ready() && options_.metric_camera_height > 0 && !metric_ && !pending_scale_)
         pending_scale_ = options_.metric_camera_height / currentGroundHeight(kf);
     }
-    if (metric_ && !object_scaled_ && options_.metric_correction_min > 0) keepScale(kf);
+    if (metric_ && !object_scaled_ && !lidar_scaled_ && options_.metric_correction_min > 0) keepScale(kf);
   }
   timings_.emplace_back("map_local_ba", msSince(t0));
   yieldPoint();
@@ -100,11 +107,12 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
     for (MapPoint* mp : kf->validPoints()) ++obs_hist[std::min(mp->numObservations(), 5)];
     std::fprintf(stderr,
                  "  kf %ld frame %ld: points %zu (obs 2:%d 3:%d 4:%d 5+:%d) new %d covis %zu recent %zu culled %d "
-                 "map %zu/%zu ground %d kfs %d res (h_ref %.4f) ba outliers %d anchors %d\n",
+                 "map %zu/%zu ground %d kfs %d res (h_ref %.4f) ba outliers %d anchors %d lidar %d (unit %.4f)\n",
                  kf->id, static_cast<long>(kf->frame_index), kf->validPoints().size(), obs_hist[2], obs_hist[3],
                  obs_hist[4], obs_hist[5], last_new_points_, kf->covisibles().size(), recent_.size(), culled,
                  map_.numKeyFrames(), map_.points().size(), last_ba_.ground_keyframes, last_ba_.ground_residuals,
-                 groundReferenceHeight(), last_ba_.outliers_removed, last_ba_.object_anchor_residuals);
+                 groundReferenceHeight(), last_ba_.outliers_removed, last_ba_.object_anchor_residuals,
+                 last_ba_.lidar_range_residuals, lidarScale(*kf).value_or(0.0));
   }
 }
 
@@ -157,6 +165,43 @@ std::optional<double> LocalMapper::currentObjectScale(KeyFrame* kf) const {
       if (const auto s = objectScale(*k)) scales.push_back(*s);
   if (static_cast<int>(scales.size()) < options_.ground.reference_keyframes) return std::nullopt;
   return median(std::move(scales));
+}
+
+std::optional<double> LocalMapper::lidarScale(const KeyFrame& kf) const {
+  std::vector<double> ratios;
+  for (size_t i = 0; i < kf.points.size(); ++i) {
+    const MapPoint* mp = kf.points[i];
+    const float range = kf.features->lidarRange(i);
+    if (!mp || mp->bad || !(range > 0)) continue;
+    const double d = (kf.T_cw * mp->position).norm();
+    if (d > 0) ratios.push_back(range / d);
+  }
+  if (static_cast<int>(ratios.size()) < options_.lidar_min_points) return std::nullopt;
+  return median(std::move(ratios));
+}
+
+void LocalMapper::measureScaleByLidar(KeyFrame* kf) {
+  // The two-view map's first keyframes are where the map's unit is set: no settling time is needed here,
+  // since the scan measures each keyframe's unit directly (a median over its keypoints: edges, returns the
+  // camera does not see and moving points are outvoted).
+  const auto s_kf = lidarScale(*kf);
+  if (!s_kf) return;
+  lidar_reference_.add(*s_kf);
+  if (!lidar_reference_.ready()) return;
+  // As for the road and the boxes: the factor of the map as it is now, over the keyframe and its best
+  // covisible keyframes (the reference's own samples were taken before later local BAs moved the map).
+  std::vector<double> scales{*s_kf};
+  for (KeyFrame* k : kf->bestCovisibles(options_.lidar_reference_keyframes * 2))
+    if (!k->bad)
+      if (const auto s = lidarScale(*k)) scales.push_back(*s);
+  const double s = median(std::move(scales));
+  if (!metric_) {
+    pending_scale_ = s;
+  } else if (std::abs(s - 1.0) > 1e-3) {  // metric by the road or the boxes already: the whole map follows
+    pending_correction_ = ScaleCorrection{0, s};
+  }
+  lidar_scaled_ = true;
+  scale_fits_.clear();
 }
 
 std::vector<std::pair<KeyFrame*, double>> LocalMapper::keyFrameGroundHeights() const {

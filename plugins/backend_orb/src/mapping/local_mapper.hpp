@@ -46,6 +46,14 @@ struct LocalMapperOptions {
   // (m, plus per metre). 0: not used.
   double object_range_sigma = 0;
   double object_range_sigma_per_m = 0.02;
+  // LiDAR ranges of keypoints (FeatureSet::lidar_range): once lidar_reference_keyframes keyframes, each with
+  // lidar_min_points of them on its map points, agree on the map's unit, the map is rescaled (or, already
+  // metric by the road or the boxes, corrected); from then on they hold the scale in local BA with this
+  // std-dev (m, plus per metre), and the road fits neither hold nor correct it. 0: not used.
+  double lidar_range_sigma = 0;
+  double lidar_range_sigma_per_m = 0.005;
+  int lidar_reference_keyframes = 2;
+  int lidar_min_points = 20;
 };
 
 // A scale correction the mapper asks for: the map from keyframe first_kf_id on times factor.
@@ -78,6 +86,8 @@ class LocalMapper {
     pending_correction_.reset();
     object_reference_ = GroundReference(options_.ground.reference_keyframes, options_.metric_max_spread);
     object_scaled_ = false;
+    lidar_reference_ = GroundReference(options_.lidar_reference_keyframes, options_.metric_max_spread);
+    lidar_scaled_ = false;
   }
   // Culled map points are about to be freed (Map::releaseCulled): drop them from the recent points.
   void forgetCulled();
@@ -112,6 +122,8 @@ class LocalMapper {
     pending_correction_.reset();
   }
   bool metric() const { return metric_; }
+  // The LiDAR ranges gave the scale and hold it (see options).
+  bool lidarScaled() const { return lidar_scaled_; }
   // Each live keyframe's camera height over its own ground fit, in the map's unit as it is now (keyframes
   // without a fit left out), oldest first.
   std::vector<std::pair<KeyFrame*, double>> keyFrameGroundHeights() const;
@@ -144,6 +156,8 @@ class LocalMapper {
   double currentGroundHeight(KeyFrame* kf) const;
   std::optional<double> objectScale(const KeyFrame& kf) const;
   std::optional<double> currentObjectScale(KeyFrame* kf) const;
+  std::optional<double> lidarScale(const KeyFrame& kf) const;
+  void measureScaleByLidar(KeyFrame* kf);
   void keepScale(KeyFrame* kf);
   GroundReference makeGroundReference() const {
     return GroundReference(options_.ground.reference_keyframes,
@@ -158,6 +172,8 @@ class LocalMapper {
   std::optional<ScaleCorrection> pending_correction_;
   long metric_since_kf_ = 0;
   bool object_scaled_ = false;
+  GroundReference lidar_reference_;  // per-keyframe LiDAR scale observations until the scale is set
+  bool lidar_scaled_ = false;
 };
 
 }  // namespace beslam::orb

@@ -257,18 +257,22 @@ void addGroundEdges(Problem& P, const GroundPrior& ground, BundleAdjustmentRepor
   }
 }
 
-void addObjectRangeEdges(Problem& P, const BundleAdjustmentOptions& options, BundleAdjustmentReport* report) {
+// A metric range per observation, where `range_of` gives one: the point is held at it from the keyframe.
+// A range far from the point's now (more than 3 sigma) measures something else (a box's footprint holds
+// road and walls behind the car; a LiDAR return beside a keypoint may lie on another surface): no prior.
+template <class RangeOf>
+int addRangeEdges(Problem& P, RangeOf range_of, double sigma_0, double sigma_per_m) {
+  int n = 0;
   for (const Edge& e : P.edges) {
-    const float range = e.kf->features->objectRange(e.idx);
+    const float range = range_of(*e.kf->features, e.idx);
     if (!(range > 0)) continue;
-    const double sigma = options.object_range_sigma + options.object_range_sigma_per_m * range;
-    // A box's 2D footprint holds background too (road, walls behind the car): a point whose range is far
-    // from the box's now is not on the object, and gets no prior.
+    const double sigma = sigma_0 + sigma_per_m * range;
     const Eigen::Vector3d p_cam = e.kf->T_cw * e.mp->position;
     if (std::abs(p_cam.norm() - range) > 3 * sigma) continue;
     P.range_edges.push_back({e.pose, e.point, std::make_unique<ObjectRangeCost>(range, sigma)});
-    ++report->object_range_residuals;
+    ++n;
   }
+  return n;
 }
 
 // One anchor per parked car that a keyframe of the problem saw, if one that moves did and at least two did:
@@ -348,7 +352,14 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   P.allocate();
   addEdges(P, options.chi2_threshold, options.trusted_weight);
   if (ground && ground->reference && ground->reference->ready()) addGroundEdges(P, *ground, &report);
-  if (options.object_range_sigma > 0 && options.object_range_priors) addObjectRangeEdges(P, options, &report);
+  if (options.object_range_sigma > 0 && options.object_range_priors)
+    report.object_range_residuals = addRangeEdges(
+        P, [](const FeatureSet& f, size_t i) { return f.objectRange(i); }, options.object_range_sigma,
+        options.object_range_sigma_per_m);
+  if (options.lidar_range_sigma > 0)
+    report.lidar_range_residuals = addRangeEdges(
+        P, [](const FeatureSet& f, size_t i) { return f.lidarRange(i); }, options.lidar_range_sigma,
+        options.lidar_range_sigma_per_m);
   if (options.objects.enabled && map.objects().size() > 0) {
     const std::set<const KeyFrame*> moving(P.moving.begin(), P.moving.end());
     P.objects = objects::buildObjectProblem(map.objects(), P.poses, moving, P.positions, options.objects);

@@ -40,6 +40,10 @@ struct BundleAdjustmentOptions {
   double object_range_sigma_per_m = 0.02;
   bool object_anchors = true;
   bool object_range_priors = false;
+  // LiDAR ranges (FeatureSet::lidar_range): each keypoint with one holds its map point at that range from
+  // its keyframe (ObjectRangeCost), sigma = lidar_range_sigma + lidar_range_sigma_per_m * range; 0: off.
+  double lidar_range_sigma = 0;
+  double lidar_range_sigma_per_m = 0.005;
   // Object landmarks of the map (Map::objects()) as 4-DoF nodes with box and surface factors (off by default).
   objects::ObjectFactorOptions objects;
   // Concurrent mapping (local BA only): called after each pass (the robust one, the refining one), where
@@ -53,6 +57,7 @@ struct BundleAdjustmentOptions {
 struct BundleAdjustmentReport {
   int keyframes = 0, fixed_keyframes = 0, points = 0, observations = 0, outliers_removed = 0;
   int ground_keyframes = 0, ground_residuals = 0, object_range_residuals = 0, object_anchor_residuals = 0;
+  int lidar_range_residuals = 0;
   int object_nodes = 0, object_box_factors = 0, object_surface_factors = 0;
   double initial_cost = 0, final_cost = 0;
   bool stopped_early = false;  // the refining pass was skipped (BundleAdjustmentOptions::stop_early)
