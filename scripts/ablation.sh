@@ -7,21 +7,27 @@
 # Every run is an ordinary `beslam run` into OUT/<pipeline>/<sequence>/seed<N> (a finished run is skipped
 # when the script is run again); the table (medians over seeds, min-max) goes to OUT/table.md and stdout.
 #   scripts/ablation.sh [OUT (default out/ablation)] [SEEDS (default "42 1 2 3 4")] [SEQUENCES]
-# BESLAM_BUILD_DIR picks the build (default build); BESLAM_ABLATION_REAL=0 skips the KITTI rows.
+# BESLAM_BUILD_DIR picks the build (default build); BESLAM_ABLATION_REAL=0 skips the KITTI rows;
+# BESLAM_ABLATION_LIDAR=1 renders the synthetic sequences with their LiDAR scans, which backend_orb then
+# uses for the metric scale (lidar_scale; the boxes stay the oracle's), so the rows compare on a map whose
+# scale does not drift (docs/metric-scale.md "With a LiDAR").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out="${1:-out/ablation}"
 seeds="${2:-42 1 2 3 4}"
 sequences="${3:-urban_loop dynamic_street}"
 source scripts/lib/run-matrix.sh  # bin, run_once
+lidar_args=()
+[ "${BESLAM_ABLATION_LIDAR:-0}" = 1 ] && lidar_args=(--set dataset.synth_set=camera.colour=false --set dataset.lidar=true)
 run() { run_once "$@"; }
+synth() { run_once "$@" "${lidar_args[@]}"; }
 
 mkdir -p "$out"
 for s in $seeds; do  # seeds outermost: a partial sweep still compares every pipeline
   for seq in $sequences; do
     for p in synth_no_semantics synth_mask_all_cars synth_beslam synth_beslam_true_states; do
       mkdir -p "$out/$p/$seq"
-      run "$out/$p/$seq/seed$s" "configs/ablation/$p.yaml" --set dataset.sequence="$seq" --set backend.seed="$s"
+      synth "$out/$p/$seq/seed$s" "configs/ablation/$p.yaml" --set dataset.sequence="$seq" --set backend.seed="$s"
       [ "$p" = synth_no_semantics ] || "$bin" eval-motion --run "$out/$p/$seq/seed$s" --json "$out/$p/$seq/seed$s/motion.json" > /dev/null
     done
     # The paper's whole loop: BE-SLAM with parked cars reconstructed from the map points on them
@@ -29,7 +35,7 @@ for s in $seeds; do  # seeds outermost: a partial sweep still compares every pip
     # plus the reconstructor).
     p=synth_beslam_objects_in_ba
     mkdir -p "$out/$p/$seq"
-    run "$out/$p/$seq/seed$s" configs/reconstruction/mono.yaml --set dataset.sequence="$seq" --set backend.seed="$s" \
+    synth "$out/$p/$seq/seed$s" configs/reconstruction/mono.yaml --set dataset.sequence="$seq" --set backend.seed="$s" \
       --set backend.object_landmarks=ba
     "$bin" eval-motion --run "$out/$p/$seq/seed$s" --json "$out/$p/$seq/seed$s/motion.json" > /dev/null
     if [ "$seq" = dynamic_street ]; then  # the LiDAR detector instead of the oracle (the scans are there)
