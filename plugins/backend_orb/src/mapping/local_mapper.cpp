@@ -143,17 +143,30 @@ void LocalMapper::keepScale(KeyFrame* kf) {
   scale_fits_.clear();
 }
 
-std::optional<double> LocalMapper::objectScale(const KeyFrame& kf) const {
+namespace {
+
+// A keyframe's metres per map unit from metric ranges of its keypoints (`range_of`: 0 where there is none):
+// the median of range over the matched map point's distance, from at least min_points of them.
+template <class RangeOf>
+std::optional<double> rangeScale(const KeyFrame& kf, RangeOf range_of, int min_points) {
   std::vector<double> ratios;
   for (size_t i = 0; i < kf.points.size(); ++i) {
     const MapPoint* mp = kf.points[i];
-    const float range = kf.features->objectRange(i);
+    const float range = range_of(*kf.features, i);
     if (!mp || mp->bad || !(range > 0)) continue;
     const double d = (kf.T_cw * mp->position).norm();
     if (d > 0) ratios.push_back(range / d);
   }
-  if (ratios.size() < 8) return std::nullopt;  // a few points on a car say little
+  if (static_cast<int>(ratios.size()) < min_points) return std::nullopt;
   return median(std::move(ratios));
+}
+
+}  // namespace
+
+std::optional<double> LocalMapper::objectScale(const KeyFrame& kf) const {
+  // A few points on a car say little: 8 at least.
+  return rangeScale(
+      kf, [](const FeatureSet& f, size_t i) { return f.objectRange(i); }, 8);
 }
 
 std::optional<double> LocalMapper::currentObjectScale(KeyFrame* kf) const {
@@ -168,16 +181,8 @@ std::optional<double> LocalMapper::currentObjectScale(KeyFrame* kf) const {
 }
 
 std::optional<double> LocalMapper::lidarScale(const KeyFrame& kf) const {
-  std::vector<double> ratios;
-  for (size_t i = 0; i < kf.points.size(); ++i) {
-    const MapPoint* mp = kf.points[i];
-    const float range = kf.features->lidarRange(i);
-    if (!mp || mp->bad || !(range > 0)) continue;
-    const double d = (kf.T_cw * mp->position).norm();
-    if (d > 0) ratios.push_back(range / d);
-  }
-  if (static_cast<int>(ratios.size()) < options_.lidar_min_points) return std::nullopt;
-  return median(std::move(ratios));
+  return rangeScale(
+      kf, [](const FeatureSet& f, size_t i) { return f.lidarRange(i); }, options_.lidar_min_points);
 }
 
 void LocalMapper::measureScaleByLidar(KeyFrame* kf) {

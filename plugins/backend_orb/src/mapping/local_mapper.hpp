@@ -172,8 +172,8 @@ class LocalMapper {
   std::optional<ScaleCorrection> pending_correction_;
   long metric_since_kf_ = 0;
   bool object_scaled_ = false;
-  GroundReference lidar_reference_;  // per-keyframe LiDAR scale observations until the scale is set
-  bool lidar_scaled_ = false;
+  GroundReference lidar_reference_;        // per-keyframe LiDAR scale observations until the scale is set
+  std::atomic<bool> lidar_scaled_{false};  // read by the tracker while a concurrent mapper may set it
 };
 
 }  // namespace beslam::orb
