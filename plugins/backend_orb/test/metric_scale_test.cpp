@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -139,6 +140,12 @@ TEST(LidarRange, NoRangeAcrossAnEdgeNorFromReturnsBehindOrAtTheCamera) {
   EXPECT_EQ(f.lidar_range[1], 0.0f);
   setLidarRanges(f, scanOfWallAndBox(0.5, 0.5), camera);
   EXPECT_EQ(f.lidar_range[1], 0.0f);
+  // Non-finite returns are no surface either; the others still give their range.
+  Eigen::Matrix3Xf scan = scanOfWallAndBox(12.0, 6.0);
+  for (Eigen::Index j = 0; j < scan.cols(); j += 2) scan.col(j).setConstant(std::numeric_limits<float>::quiet_NaN());
+  setLidarRanges(f, scan, camera);
+  EXPECT_GT(f.lidar_range[1], 0.0f);
+  EXPECT_TRUE(std::isfinite(f.lidar_range[1]));
   // No scan: a range of 0 for every keypoint.
   setLidarRanges(f, Eigen::Matrix3Xf(3, 0), camera);
   EXPECT_EQ(f.lidar_range, std::vector<float>(2, 0.0f));

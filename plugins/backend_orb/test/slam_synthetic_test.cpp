@@ -215,6 +215,14 @@ TEST(Options, ValidationNamesTheConstraint) {
   EXPECT_NE(error.find("scale_factor"), std::string::npos);
   EXPECT_THROW(OrbSlam(Camera{640, 480, 500, 500, 320, 240}, o), std::invalid_argument);
   EXPECT_THROW(OrbSlam(Camera{0, 480, 500, 500, 320, 240}, Options{}), std::invalid_argument);
+  Options lidar;
+  lidar.lidar_range_sigma = 0;
+  EXPECT_FALSE(lidar.validate(&error));
+  EXPECT_NE(error.find("lidar_range_sigma"), std::string::npos);
+  lidar = Options{};
+  lidar.lidar_reference_keyframes = 0;
+  EXPECT_FALSE(lidar.validate(&error));
+  EXPECT_NE(error.find("lidar_reference_keyframes"), std::string::npos);
 }
 
 }  // namespace
