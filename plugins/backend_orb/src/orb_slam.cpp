@@ -72,6 +72,8 @@ LocalMapperOptions mapperOptions(const Options& o) {
   m.lidar_range_sigma_per_m = o.lidar_range_sigma_per_m;
   m.lidar_reference_keyframes = o.lidar_reference_keyframes;
   m.lidar_min_points = o.lidar_min_points;
+  m.lidar_points = o.lidar_points;
+  m.lidar_points_per_keyframe = o.lidar_points_per_keyframe;
   m.ba.object_anchors = o.object_scale_hold == ObjectScaleHold::Anchors;
   m.ba.object_range_priors = o.object_scale_hold == ObjectScaleHold::Ranges;
   m.ground.sigma_ratio = o.ground_prior_sigma;
@@ -119,6 +121,7 @@ bool Options::validate(std::string* error) const {
     return fail("lidar_range_sigma must be > 0 and lidar_range_sigma_per_m >= 0");
   if (lidar_reference_keyframes < 1 || lidar_min_points < 3)
     return fail("lidar_reference_keyframes must be >= 1 and lidar_min_points >= 3");
+  if (lidar_points_per_keyframe < 1) return fail("lidar_points_per_keyframe must be >= 1");
   if (!(object_pose_weight >= 0) || !(object_surface_weight >= 0))
     return fail("object_pose_weight and object_surface_weight must be >= 0");
   if (!(object_box_sigma > 0) || !(object_box_sigma_per_m >= 0) || !(object_yaw_sigma_deg > 0) ||
@@ -148,6 +151,7 @@ struct OrbSlam::Impl {
   bool loop_pending = false;                // closed on the mapping side, not yet followed by the tracker
   std::vector<std::pair<std::string, double>> process_timings;  // the last process() call's stage times
   int reported_object_rejections = 0;
+  int reported_lidar_points = 0;
   Statistics stats;
   ParkedCarScale parked_scale;
   bool object_scale_done = false;
@@ -463,6 +467,7 @@ struct OrbSlam::Impl {
       features_lidar += features->lidarRange(i) > 0 ? 1 : 0;
     }
     const int feature_count = static_cast<int>(features->size());
+    tracker.useLidarPoints(options.lidar_points && mapper.lidarScaled());
     TrackResult result = tracker.track(features, timestamp, index);
     result.world_is_metric = mapper.metric();
     result.loop_closed = loop_correction_m >= 0;
@@ -474,6 +479,8 @@ struct OrbSlam::Impl {
     result.features = feature_count;
     result.features_static = features_static;
     result.features_lidar = features_lidar;
+    result.lidar_points = mapper.rangedPoints() - reported_lidar_points;  // since the last frame
+    reported_lidar_points = mapper.rangedPoints();
     result.tracked_static = tracker.trackedOnStaticObjects();
     result.object_landmarks = static_cast<int>(map.objects().size());
     result.object_factors = object_factors;
@@ -724,6 +731,7 @@ Statistics OrbSlam::statistics() const {
   s.map_points = static_cast<int>(impl_->map.points().size());
   s.resets = impl_->tracker.resets();
   s.relocalisations = impl_->tracker.relocalisations();
+  s.lidar_points = impl_->mapper.rangedPoints();
   if (impl_->loop_closer) {
     const LoopStats& l = impl_->loop_closer->stats();
     s.loop_closures = static_cast<int>(l.closures.size());

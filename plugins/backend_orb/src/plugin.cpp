@@ -139,6 +139,7 @@ class OrbBackend : public beslam::sdk::Backend {
     out.counters = {{"features", r.features},
                     {"features_static", r.features_static},
                     {"features_lidar", r.features_lidar},
+                    {"lidar_points", r.lidar_points},
                     {"tracked_static", r.tracked_static},
                     {"relocalisations", r.relocalised ? 1 : 0},
                     {"loop_closures", r.loop_closed ? 1 : 0},

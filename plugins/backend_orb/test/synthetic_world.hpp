@@ -53,6 +53,13 @@ class CorridorWorld {
     return scan;
   }
 
+  // Distance (metres) of a world point inside the corridor to its nearest face.
+  double distanceToSurface(const Eigen::Vector3d& p_world) const {
+    double d = 1e9;
+    for (const Face& f : faces_) d = std::min(d, std::abs(f.a.cross(f.b).normalized().dot(p_world - f.origin)));
+    return d;
+  }
+
   cv::Mat render(int i) const {
     const Camera c = camera();
     const Eigen::Isometry3d T_cw = pose(i).inverse();

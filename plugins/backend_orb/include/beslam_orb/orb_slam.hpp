@@ -144,6 +144,12 @@ struct Options {
   int lidar_min_points = 20;
   double lidar_range_sigma = 0.05;
   double lidar_range_sigma_per_m = 0.005;
+  // Once the scan holds the scale, ORB-SLAM2's stereo / RGB-D rules: after triangulation, local mapping makes
+  // map points of a keyframe's keypoints that have a LiDAR range and still no point (the nearest
+  // lidar_points_per_keyframe, ORB-SLAM2's 100 nearest), and a frame that tracks fewer than 100 of its
+  // ranged keypoints while more than 70 are untracked asks for a keyframe (thin stretches get points in time).
+  bool lidar_points = true;
+  int lidar_points_per_keyframe = 100;
   // Object landmarks in local BA (objects/object_factors.hpp, docs/object-ba.md). Off by default: a gain is
   // shown only with LiDAR-fitted cars on dynamic_street.
   ObjectLandmarkMode object_landmarks = ObjectLandmarkMode::Off;
@@ -198,9 +204,10 @@ struct TrackResult {
   bool world_is_metric = false;                                   // T_world_cam (and the map) in metres
   int features = 0, features_static = 0;                          // keypoints; on static-object labels
   int features_lidar = 0;                                         // keypoints with a LiDAR range
-  int tracked_static = 0;                                         // inliers on static-object map points
-  std::vector<std::pair<std::string, double>> stage_ms;           // extract, track, local_map, mapping...
-  bool relocalised = false;                                       // this frame recovered from Lost
+  int lidar_points = 0;    // map points made from keyframes' LiDAR ranges since the last frame (Options::lidar_points)
+  int tracked_static = 0;  // inliers on static-object map points
+  std::vector<std::pair<std::string, double>> stage_ms;  // extract, track, local_map, mapping...
+  bool relocalised = false;                              // this frame recovered from Lost
   bool loop_closed = false;        // a loop was closed before this frame was tracked (the map moved)
   double loop_correction_m = 0;    // then: how far the loop keyframe's centre moved
   int loop_object_rejections = 0;  // loop candidates the BEV object check refused since the last frame
@@ -264,6 +271,7 @@ struct Statistics {
   double object_scale_factor = 0;   // the factor they applied
   int object_scale_tracks = 0;      // cars in the agreeing cluster
   bool lidar_scaled = false;        // the LiDAR ranges set the scale (metric_from_frame) and hold it
+  int lidar_points = 0;             // map points made from keyframes' LiDAR ranges (Options::lidar_points)
 };
 
 class OrbSlam {

@@ -37,7 +37,10 @@ class MapPoint {
   int visible = 1, found = 1;  // frames where predicted visible / actually matched
   bool bad = false;
   MapPoint* replaced_by = nullptr;
-  bool trusted = false;    // created on a static object
+  bool trusted = false;  // created on a static object
+  // Made from one keyframe's LiDAR range (LocalMapper::createRangedPoints, Options::lidar_points), not
+  // triangulated: its one observation already fixes it, as a stereo or RGB-D observation does in ORB-SLAM2.
+  bool from_range = false;
   int32_t object_id = -1;  // that object's track id (mask label - 1000), -1 if none
   uint8_t grey = 0, r = 0, g = 0, b = 0;
 

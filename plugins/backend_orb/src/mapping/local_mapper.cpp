@@ -1,5 +1,6 @@
 #include "mapping/local_mapper.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -52,6 +53,13 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   t0 = Clock::now();
   last_new_points_ = createNewPoints(kf);
   timings_.emplace_back("map_triangulate", msSince(t0));
+  last_ranged_points_ = 0;
+  if (options_.lidar_points && lidar_scaled_) {
+    t0 = Clock::now();
+    last_ranged_points_ = createRangedPoints(kf);
+    ranged_points_ += last_ranged_points_;
+    timings_.emplace_back("map_lidar_points", msSince(t0));
+  }
   yieldPoint();
   t0 = Clock::now();
   fuseWithNeighbours(kf);
@@ -107,12 +115,13 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
     for (MapPoint* mp : kf->validPoints()) ++obs_hist[std::min(mp->numObservations(), 5)];
     std::fprintf(stderr,
                  "  kf %ld frame %ld: points %zu (obs 2:%d 3:%d 4:%d 5+:%d) new %d covis %zu recent %zu culled %d "
-                 "map %zu/%zu ground %d kfs %d res (h_ref %.4f) ba outliers %d anchors %d lidar %d (unit %.4f)\n",
+                 "map %zu/%zu ground %d kfs %d res (h_ref %.4f) ba outliers %d anchors %d lidar %d (unit %.4f) "
+                 "lidar points %d\n",
                  kf->id, static_cast<long>(kf->frame_index), kf->validPoints().size(), obs_hist[2], obs_hist[3],
                  obs_hist[4], obs_hist[5], last_new_points_, kf->covisibles().size(), recent_.size(), culled,
                  map_.numKeyFrames(), map_.points().size(), last_ba_.ground_keyframes, last_ba_.ground_residuals,
                  groundReferenceHeight(), last_ba_.outliers_removed, last_ba_.object_anchor_residuals,
-                 last_ba_.lidar_range_residuals, lidarScale(*kf).value_or(0.0));
+                 last_ba_.lidar_range_residuals, lidarScale(*kf).value_or(0.0), last_ranged_points_);
   }
 }
 
@@ -257,9 +266,10 @@ void LocalMapper::forgetCulled() {
 }
 
 void LocalMapper::cullRecentPoints(KeyFrame* kf) {
-  const int th_obs = 2;
   for (auto it = recent_.begin(); it != recent_.end();) {
     MapPoint* mp = *it;
+    // ORB-SLAM2 counts an observation with a depth twice: a point made from a LiDAR range starts with one.
+    const int th_obs = mp->from_range ? 1 : 2;
     const long age = kf->id - mp->first_keyframe_id;
     if (mp->bad) {
       it = recent_.erase(it);
@@ -336,6 +346,38 @@ int LocalMapper::createNewPoints(KeyFrame* kf) {
       recent_.push_back(mp);
       ++created;
     }
+  }
+  return created;
+}
+
+int LocalMapper::createRangedPoints(KeyFrame* kf) {
+  // As ORB-SLAM2's stereo and RGB-D keyframes make points from their depths, after triangulation here so
+  // that the points two views agree on come first: the scan fills in what triangulation left (too little
+  // parallax, a thin stretch). Each point sits at its keypoint's LiDAR range along the keypoint's own ray
+  // (scale/lidar_range.hpp: none across an edge); the range holds it in local BA from its first
+  // observation on, and it is culled like a triangulated point.
+  const Eigen::Isometry3d T_world_cam = kf->T_cw.inverse();
+  const FeatureSet& f = *kf->features;
+  std::vector<std::pair<float, size_t>> by_range;
+  for (size_t i = 0; i < kf->points.size(); ++i)
+    if (f.lidarRange(i) > 0 && !kf->points[i]) by_range.emplace_back(f.lidarRange(i), i);
+  const size_t n = std::min(by_range.size(), static_cast<size_t>(options_.lidar_points_per_keyframe));
+  std::partial_sort(by_range.begin(), by_range.begin() + static_cast<std::ptrdiff_t>(n), by_range.end());
+  int created = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const auto [range, i] = by_range[k];
+    const cv::KeyPoint& kp = f.keypoints[i];
+    const Eigen::Vector3d p_cam = unproject(camera_, kp.pt.x, kp.pt.y).normalized() * static_cast<double>(range);
+    MapPoint* mp = map_.createMapPoint(T_world_cam * p_cam, kf);
+    mp->addObservation(kf, i);
+    kf->addPoint(mp, i);
+    mp->from_range = true;
+    mp->trusted = f.onStaticObject(i);
+    mp->object_id = f.objectId(i);
+    const cv::Vec3b c = f.colours[i];
+    mp->completeNewPoint({c[0], c[1], c[2]});
+    recent_.push_back(mp);
+    ++created;
   }
   return created;
 }

@@ -54,6 +54,10 @@ struct LocalMapperOptions {
   double lidar_range_sigma_per_m = 0.005;
   int lidar_reference_keyframes = 2;
   int lidar_min_points = 20;
+  // Once the ranges hold the scale: after triangulation, the nearest lidar_points_per_keyframe keypoints of a
+  // new keyframe that have a LiDAR range and no map point each become one, at that range along their ray.
+  bool lidar_points = false;
+  int lidar_points_per_keyframe = 100;
 };
 
 // A scale correction the mapper asks for: the map from keyframe first_kf_id on times factor.
@@ -139,6 +143,8 @@ class LocalMapper {
   void registerKeyFrame(KeyFrame* kf);
   void cullRecentPoints(KeyFrame* kf);
   int createNewPoints(KeyFrame* kf);
+  int createRangedPoints(KeyFrame* kf);
+  int rangedPoints() const { return ranged_points_; }  // made by createRangedPoints, in all
   void fuseWithNeighbours(KeyFrame* kf);
   int cullKeyFrames(KeyFrame* kf);
 
@@ -152,7 +158,7 @@ class LocalMapper {
   MapGate* gate_ = nullptr;
   const std::atomic<bool>* stop_ba_ = nullptr;
   void yieldPoint();  // a safe point (see setConcurrency)
-  int last_new_points_ = 0;
+  int last_new_points_ = 0, last_ranged_points_ = 0, ranged_points_ = 0;
   double currentGroundHeight(KeyFrame* kf) const;
   std::optional<double> objectScale(const KeyFrame& kf) const;
   std::optional<double> currentObjectScale(KeyFrame* kf) const;

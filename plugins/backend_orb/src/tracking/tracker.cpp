@@ -756,7 +756,29 @@ bool Tracker::needNewKeyFrame() const {
   // mapping accepts_keyframe_ asks the mapper itself.
   const int64_t since = current_.index - last_kf_frame_;
   const bool c1 = since >= max_frames || since >= options_.keyframe_min_gap;
-  const bool c2 = inliers_ < ref_matches * options_.keyframe_ref_ratio && inliers_ > 15;
+  // ORB-SLAM2's rule for a camera with depth: few of the keypoints with a depth tracked and many more to
+  // map. In a thin stretch the reference's count is small, so the ratio alone asks too late (the frame is
+  // near the inlier floor by then); this asks while the keypoints the scan measured can still become points.
+  // The ratio compares like with like: points that one keyframe's scan made and no other keyframe has seen
+  // yet are not in the reference's count (seen 3 times or more), so they are not counted here either;
+  // counting them would hold back every keyframe until the scan's points run out.
+  bool need_close = false;
+  int settled_inliers = inliers_;
+  if (lidar_points_) {
+    int tracked = 0, untracked = 0;
+    for (size_t i = 0; i < current_.size(); ++i) {
+      const MapPoint* mp = current_.points[i];
+      const bool matched = mp && !current_.outlier[i] && !mp->bad;
+      if (matched && mp->from_range && mp->numObservations() < 2) --settled_inliers;
+      if (!(current_.features->lidarRange(i) > 0)) continue;
+      if (matched)
+        ++tracked;
+      else
+        ++untracked;
+    }
+    need_close = tracked < 100 && untracked > 70;
+  }
+  const bool c2 = (settled_inliers < ref_matches * options_.keyframe_ref_ratio || need_close) && inliers_ > 15;
   return c1 && c2 && (!accepts_keyframe_ || accepts_keyframe_());
 }
 

@@ -48,6 +48,10 @@ class Tracker {
   // Concurrent mapping: a keyframe that the rules ask for is made only if `accepts()` says local mapping
   // can take it now (ORB-SLAM2's monocular rule: none while mapping is busy). Unset: always.
   void setKeyFrameAcceptance(std::function<bool()> accepts) { accepts_keyframe_ = std::move(accepts); }
+  // The map is metric by the scan and holds it (Options::lidar_points; local mapping makes map points from
+  // keyframes' LiDAR ranges): ask for a keyframe when few of the frame's ranged keypoints are tracked. Set
+  // per frame.
+  void useLidarPoints(bool on) { lidar_points_ = on; }
   bool initialising() const { return state_ == TrackingState::NotInitialized; }
   TrackingState state() const { return state_; }
   std::optional<Eigen::Isometry3d> predictPose() const;  // T_world_cam
@@ -134,6 +138,7 @@ class Tracker {
   std::vector<FrameRecord> records_;
   int resets_ = 0, relocalisations_ = 0;
   int64_t initialised_at_ = -1;
+  bool lidar_points_ = false;
   bool map_loaded_ = false;     // never reset a loaded map
   size_t localise_offset_ = 0;  // next block of keyframes to try (localiseInLoadedMap)
 };
