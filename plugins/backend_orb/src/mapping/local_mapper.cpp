@@ -53,11 +53,11 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   t0 = Clock::now();
   last_new_points_ = createNewPoints(kf);
   timings_.emplace_back("map_triangulate", msSince(t0));
-  last_ranged_points_ = 0;
+  int ranged_points = 0;
   if (options_.lidar_points && lidar_scaled_) {
     t0 = Clock::now();
-    last_ranged_points_ = createRangedPoints(kf);
-    ranged_points_ += last_ranged_points_;
+    ranged_points = createRangedPoints(kf);
+    ranged_points_ += ranged_points;
     timings_.emplace_back("map_lidar_points", msSince(t0));
   }
   yieldPoint();
@@ -121,7 +121,7 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
                  obs_hist[4], obs_hist[5], last_new_points_, kf->covisibles().size(), recent_.size(), culled,
                  map_.numKeyFrames(), map_.points().size(), last_ba_.ground_keyframes, last_ba_.ground_residuals,
                  groundReferenceHeight(), last_ba_.outliers_removed, last_ba_.object_anchor_residuals,
-                 last_ba_.lidar_range_residuals, lidarScale(*kf).value_or(0.0), last_ranged_points_);
+                 last_ba_.lidar_range_residuals, lidarScale(*kf).value_or(0.0), ranged_points);
   }
 }
 

@@ -158,7 +158,7 @@ class LocalMapper {
   MapGate* gate_ = nullptr;
   const std::atomic<bool>* stop_ba_ = nullptr;
   void yieldPoint();  // a safe point (see setConcurrency)
-  int last_new_points_ = 0, last_ranged_points_ = 0, ranged_points_ = 0;
+  int last_new_points_ = 0, ranged_points_ = 0;
   double currentGroundHeight(KeyFrame* kf) const;
   std::optional<double> objectScale(const KeyFrame& kf) const;
   std::optional<double> currentObjectScale(KeyFrame* kf) const;
