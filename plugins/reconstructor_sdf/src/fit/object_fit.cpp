@@ -8,6 +8,7 @@
 #include <type_traits>
 
 #include "fit/render_depth.hpp"
+#include "fit/silhouette.hpp"
 
 namespace beslam::recon::fit {
 namespace {
@@ -82,6 +83,38 @@ ceres::CostFunction* depthCostFor(int k, const shape::ShapePrior& prior, const E
   return withDims(k, [&](auto dims) { return depthCost<decltype(dims)::value>(prior, o0, u0, size0, depth, scale); });
 }
 
+template <int K>
+struct SilhouetteResidual {
+  const shape::ShapePrior* prior;
+  Eigen::Vector3d o0, u0, size0;  // ray in the initial object frame
+  bool inside;
+  double scale;  // 1 / sigma times the metres per level unit at the start
+
+  template <typename T>
+  bool operator()(const T* pose, const T* code, const T* log_size, T* r) const {
+    const T d[3] = {T(o0.x()) - pose[3], T(o0.y()) - pose[4], T(o0.z()) - pose[5]};
+    const T u[3] = {T(u0.x()), T(u0.y()), T(u0.z())};
+    const T minus_aa[3] = {-pose[0], -pose[1], -pose[2]};
+    T o_obj[3], u_obj[3];
+    ceres::AngleAxisRotatePoint(minus_aa, d, o_obj);
+    ceres::AngleAxisRotatePoint(minus_aa, u, u_obj);
+    using std::exp;
+    const T size[3] = {size0.x() * exp(log_size[0]), size0.y() * exp(log_size[1]), size0.z() * exp(log_size[2])};
+    r[0] = scale * silhouetteViolation(*prior, o_obj, u_obj, size, code, inside);  // 0 on the right side
+    return true;
+  }
+};
+
+ceres::CostFunction* silhouetteCostFor(int k, const shape::ShapePrior& prior, const Eigen::Vector3d& o0,
+                                       const Eigen::Vector3d& u0, const Eigen::Vector3d& size0, bool inside,
+                                       double scale) {
+  return withDims(k, [&](auto dims) -> ceres::CostFunction* {
+    constexpr int D = decltype(dims)::value;
+    return new ceres::AutoDiffCostFunction<SilhouetteResidual<D>, 1, 6, D, 3>(
+        new SilhouetteResidual<D>{&prior, o0, u0, size0, inside, scale});
+  });
+}
+
 class DiagonalPrior : public ceres::CostFunction {  // r_k = w_k * x_k
  public:
   explicit DiagonalPrior(Eigen::VectorXd w) : w_(std::move(w)) {
@@ -130,6 +163,15 @@ ceres::CostFunction* surfaceCostFor(int k, const shape::ShapePrior& prior, const
   return withDims(k, [&](auto dims) { return surfaceCost<decltype(dims)::value>(prior, p0, size0, scale); });
 }
 
+// The update D of the pose block (angle-axis, translation).
+Eigen::Isometry3d poseUpdate(const double pose[6]) {
+  Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d aa(pose[0], pose[1], pose[2]);
+  if (aa.norm() > 0) D.linear() = Eigen::AngleAxisd(aa.norm(), aa.normalized()).toRotationMatrix();
+  D.translation() = Eigen::Vector3d(pose[3], pose[4], pose[5]);
+  return D;
+}
+
 FitResult failed(const Eigen::Isometry3d& T, const Eigen::Vector3d& size, const Eigen::VectorXd& code,
                  const std::string& why) {
   FitResult r;
@@ -158,6 +200,8 @@ bool FitOptions::validate(std::string* why) const {
   if (!(box_sigma_m > 0 && box_sigma_yaw > 0)) return bad("box_sigma_m and box_sigma_yaw must be positive");
   if (!(lambda_render >= 0 && sigma_depth_m > 0 && huber_depth_m > 0))
     return bad("lambda_render must be 0 or more, sigma_depth_m and huber_depth_m positive");
+  if (!(lambda_silhouette >= 0 && sigma_silhouette_m > 0 && huber_silhouette_m > 0))
+    return bad("lambda_silhouette must be 0 or more, sigma_silhouette_m and huber_silhouette_m positive");
   return true;
 }
 
@@ -180,7 +224,8 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
   if (obs.T_world_obj_boxes && !obs.T_world_obj_boxes->matrix().allFinite())
     return failed(T_world_obj_init, size, code0, "the boxes' pose is not finite");
   const size_t n = obs.p_world.size();
-  if (n == 0 && obs.rays.empty()) return failed(T_world_obj_init, size, code0, "no surface observations");
+  if (n == 0 && obs.rays.empty() && obs.silhouette.empty())
+    return failed(T_world_obj_init, size, code0, "no surface observations");
   if (!obs.weight.empty() && obs.weight.size() != n)
     return failed(T_world_obj_init, size, code0,
                   std::to_string(obs.weight.size()) + " weights for " + std::to_string(n) + " observations");
@@ -199,7 +244,17 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
     if (!(ray.weight > 0 && ray.weight <= 1))
       return failed(T_world_obj_init, size, code0, "ray " + std::to_string(j) + " weight is outside (0, 1]");
   }
-  if (n + obs.rays.size() < 4) return failed(T_world_obj_init, size, code0, "fewer than 4 surface observations");
+  for (size_t k = 0; k < obs.silhouette.size(); ++k) {
+    const SilhouetteRay& ray = obs.silhouette[k];
+    if (!(ray.origin_world.allFinite() && ray.direction_world.allFinite() &&
+          std::abs(ray.direction_world.norm() - 1) < 1e-6))
+      return failed(T_world_obj_init, size, code0,
+                    "silhouette ray " + std::to_string(k) + " is not finite or has no unit direction");
+    if (!(ray.weight > 0 && ray.weight <= 1))
+      return failed(T_world_obj_init, size, code0, "silhouette ray " + std::to_string(k) + " weight is outside (0, 1]");
+  }
+  if (n + obs.rays.size() + obs.silhouette.size() < 4)
+    return failed(T_world_obj_init, size, code0, "fewer than 4 surface observations");
 
   const Eigen::Isometry3d T_obj_world_init = T_world_obj_init.inverse();
   std::vector<Eigen::Vector3d> p0(n);
@@ -235,6 +290,24 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
                            T_obj_world_init.linear() * ray.direction_world, size, ray.depth_m, scale),
               new ceres::HuberLoss((stage == 0 ? 4 : 1) * options.huber_depth_m * scale), pose, code.data(), log_size);
         }
+      if (options.lambda_silhouette > 0) {
+        // The estimate at the start of this solve: the level's metres per unit is taken there.
+        const Eigen::Isometry3d T_obj_world_now = poseUpdate(pose).inverse() * T_obj_world_init;
+        const double size_now[3] = {size.x() * std::exp(log_size[0]), size.y() * std::exp(log_size[1]),
+                                    size.z() * std::exp(log_size[2])};
+        for (const SilhouetteRay& ray : obs.silhouette) {
+          const Eigen::Vector3d o = T_obj_world_now * ray.origin_world,
+                                u = T_obj_world_now.linear() * ray.direction_world;
+          const double ov[3] = {o.x(), o.y(), o.z()}, uv[3] = {u.x(), u.y(), u.z()};
+          const double scale = std::sqrt(options.lambda_silhouette * ray.weight) / options.sigma_silhouette_m;
+          const double metres = metresPerLevel(prior, ov, uv, size_now, code.data());
+          problem.AddResidualBlock(
+              silhouetteCostFor(K, prior, T_obj_world_init * ray.origin_world,
+                                T_obj_world_init.linear() * ray.direction_world, size, ray.inside, scale * metres),
+              new ceres::HuberLoss((stage == 0 ? 4 : 1) * options.huber_silhouette_m * scale), pose, code.data(),
+              log_size);
+        }
+      }
       if (options.lambda_code > 0)
         problem.AddResidualBlock(new DiagonalPrior(std::sqrt(options.lambda_code) * prior.codeStd().cwiseInverse()),
                                  nullptr, code.data());
@@ -265,11 +338,7 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
   }
 
   FitResult r;
-  Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
-  const Eigen::Vector3d aa(pose[0], pose[1], pose[2]);
-  if (aa.norm() > 0) D.linear() = Eigen::AngleAxisd(aa.norm(), aa.normalized()).toRotationMatrix();
-  D.translation() = Eigen::Vector3d(pose[3], pose[4], pose[5]);
-  r.T_world_obj = T_world_obj_init * D;
+  r.T_world_obj = T_world_obj_init * poseUpdate(pose);
   r.size = size.cwiseProduct(Eigen::Vector3d(std::exp(log_size[0]), std::exp(log_size[1]), std::exp(log_size[2])));
   r.code = code;
   r.cost = 2 * cost;  // Ceres reports half the sum of squares
@@ -282,6 +351,14 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
     if (std::abs(d) < options.inlier_m) ++r.inliers;
   }
   r.rms_m = n ? std::sqrt(sum2 / n) : 0.0;
+  for (const SilhouetteRay& ray : obs.silhouette) {
+    const Eigen::Vector3d o = T_obj_world * ray.origin_world, u = T_obj_world.linear() * ray.direction_world;
+    const double ov[3] = {o.x(), o.y(), o.z()}, uv[3] = {u.x(), u.y(), u.z()};
+    const double s[3] = {r.size.x(), r.size.y(), r.size.z()};
+    const double level = leastLevel(prior, ov, uv, s, r.code.data(), nullptr);
+    const double violation = (ray.inside ? level : -level) * metresPerLevel(prior, ov, uv, s, r.code.data());
+    if (violation < options.inlier_m) ++r.silhouette_agree;
+  }
   if (!(r.T_world_obj.matrix().allFinite() && r.code.allFinite() && r.size.allFinite()))
     return failed(T_world_obj_init, size, code0, "solver returned a non-finite result");
   r.ok = true;

@@ -86,7 +86,16 @@ class ShapePrior {
   }
   // The same with the size as a variable (size refinement).
   template <typename T>
-  T distanceSized(const T p_obj[3], const T size[3], const T* code) const;
+  T distanceSized(const T p_obj[3], const T size[3], const T* code) const {
+    return field(p_obj, size, code, true);
+  }
+  // The normalised level phi (trilinear, outside the grid plus the normalised distance to it): same sign
+  // and zero set as distanceSized and continuous everywhere, but not in metres. The metric distance
+  // divides by a gradient that jumps between grid cells; searches along a ray use this instead.
+  template <typename T>
+  T levelSized(const T p_obj[3], const T size[3], const T* code) const {
+    return field(p_obj, size, code, false);
+  }
 
   double distance(const Eigen::Vector3d& p_obj, const Eigen::Vector3d& size, const Eigen::VectorXd& code) const {
     const double p[3] = {p_obj.x(), p_obj.y(), p_obj.z()};
@@ -118,6 +127,8 @@ class ShapePrior {
   std::vector<float> values_;  // per node: mean, basis_1 .. basis_K (node-major)
 
   void setGrid(const std::array<int, 3>& n, double margin);
+  template <typename T>
+  T field(const T p_obj[3], const T size[3], const T* code, bool metric) const;
   std::size_t node(int i, int j, int k) const { return (static_cast<std::size_t>(k) * n_[1] + j) * n_[0] + i; }
 };
 
@@ -125,7 +136,7 @@ class ShapePrior {
 ShapePrior trainShapePrior(const std::vector<TrainingShape>& shapes, const TrainOptions& options);
 
 template <typename T>
-T ShapePrior::distanceSized(const T p_obj[3], const T size[3], const T* code) const {
+T ShapePrior::field(const T p_obj[3], const T size[3], const T* code, bool metric) const {
   using std::sqrt;
   T q[3], qc[3];
   bool outside = false;
@@ -168,6 +179,14 @@ T ShapePrior::distanceSized(const T p_obj[3], const T size[3], const T* code) co
     dx += v[c] * sx * gy[iy] * gz[iz];
     dy += v[c] * gx[ix] * sy * gz[iz];
     dz += v[c] * gx[ix] * gy[iy] * sz;
+  }
+  if (!metric) {
+    if (outside) {
+      T o2(0.0);
+      for (int a = 0; a < 3; ++a) o2 += (q[a] - qc[a]) * (q[a] - qc[a]);
+      if (scalarPart(o2) > 0) phi += sqrt(o2);
+    }
+    return phi;
   }
   // Gradient in metres: d phi / d p = (d phi / d q) / s.
   const T Gx = dx / (cell_[0] * size[0]), Gy = dy / (cell_[1] * size[1]), Gz = dz / (cell_[2] * size[2]);
