@@ -1,11 +1,12 @@
 // reconstructor_sdf: the paper's Algorithm 2 with a shape prior the project learns itself. On each
 // keyframe of a metric world: parked cars (boxes the motion checker calls static, by track id) collect
 // observations (objects/object_store.hpp: LiDAR returns in the box when the frame has a scan, else the
-// backend's map points labelled on the car), kept with their keyframes and moved as the backend moves
-// those (ABI 1.6 keyframe poses); each car seen again is refitted (fit/object_fit.hpp: pose,
-// shape code, optionally size, from the box consensus or the last fit) and returned as a landmark with
-// surface samples and a mesh; a car called dynamic is returned as removed. finish() refits every object
-// once with all it gathered. docs/reconstruction.md describes the prior, the energy and the settings.
+// backend's map points labelled on the car; and rays through the car's mask and the background beside
+// it, objects/mask_silhouettes.hpp), kept with their keyframes and moved as the backend moves those (ABI
+// 1.6 keyframe poses); each car seen again is refitted (fit/object_fit.hpp: pose, shape code, optionally
+// size, from the box consensus or the last fit) and returned as a landmark with surface samples and a
+// mesh; a car called dynamic is returned as removed. finish() refits every object once with all it
+// gathered. docs/reconstruction.md describes the prior, the energy and the settings.
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -16,6 +17,7 @@
 
 #include "beslam/sdk/sdk.hpp"
 #include "fit/object_fit.hpp"
+#include "objects/mask_silhouettes.hpp"
 #include "objects/object_store.hpp"
 #include "reconstructor_sdf_settings.hpp"  // Options and kSettings, from settings.json
 #include "shape/mesh.hpp"
@@ -63,7 +65,7 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
         store_(options_.store) {}
 
   std::vector<beslam::sdk::Landmark> reconstruct(const beslam::sdk::Keyframe& keyframe, const beslam::sdk::Frame& frame,
-                                                 const std::vector<beslam_box3d>& boxes, const cv::Mat&) override {
+                                                 const std::vector<beslam_box3d>& boxes, const cv::Mat& mask) override {
     recon::KeyframeInput input;
     input.keyframe_id = keyframe.id;
     input.frame_index = keyframe.frame_index;
@@ -78,6 +80,8 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
         if (p_cam.allFinite()) input.lidar_cam.push_back(p_cam);
       }
     }
+    if (options_.silhouette_grid > 0)
+      input.silhouettes = recon::sampleSilhouettes(mask, context_.camera(), boxes, options_.silhouette_grid);
     store_.followKeyframes(keyframe.T_world_cam_by_frame);
     std::vector<int32_t> ended;
     const std::set<int32_t> updated = store_.observe(input, ended);
@@ -137,9 +141,16 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
     obs.p_world = record.surfaceObservations(options_.store.map_point_margin);
     const Eigen::Isometry3d T_world_boxes = record.boxPose();
     obs.T_world_obj_boxes = T_world_boxes;
+    for (const recon::WorldSilhouetteRay& ray : record.silhouetteRays())
+      obs.silhouette.push_back({ray.origin_world, ray.direction_world, ray.inside, 1.0});
     const bool lidar = record.lidarPointCount() > 0;
-    if (static_cast<int>(obs.p_world.size()) < (lidar ? options_.min_lidar_points : options_.min_map_points))
-      return std::nullopt;
+    // Enough surface observations, or (with the silhouette term) silhouettes from enough keyframes: a car
+    // the map has too few points on is still placed and shaped by its outline in several views.
+    const bool enough_points =
+        static_cast<int>(obs.p_world.size()) >= (lidar ? options_.min_lidar_points : options_.min_map_points);
+    const bool enough_silhouettes = options_.silhouette_grid > 0 && options_.min_silhouette_keyframes > 0 &&
+                                    static_cast<int>(record.silhouettes.size()) >= options_.min_silhouette_keyframes;
+    if (!enough_points && !enough_silhouettes) return std::nullopt;
     recon::fit::FitOptions fit = options_.fit;
     if (!lidar)
       fit.sigma_m = options_.map_sigma_m, fit.huber_m = options_.map_huber_m, fit.inlier_m = options_.map_huber_m;
@@ -167,8 +178,12 @@ class SdfReconstructor : public beslam::sdk::Reconstructor {
     l.shape_code.assign(r.code.data(), r.code.data() + r.code.size());
     l.keyframes = static_cast<int32_t>(record.boxes.size());
     l.cost = r.cost;
-    // Confidence: the share of observations on the fitted surface.
-    l.confidence = obs.p_world.empty() ? 0.0f : static_cast<float>(double(r.inliers) / double(obs.p_world.size()));
+    // Confidence: the share of observations on the fitted surface (without any, of silhouette rays on their
+    // side of it).
+    if (!obs.p_world.empty())
+      l.confidence = static_cast<float>(double(r.inliers) / double(obs.p_world.size()));
+    else if (!obs.silhouette.empty())
+      l.confidence = static_cast<float>(double(r.silhouette_agree) / double(obs.silhouette.size()));
     // One mesh for both: the surface samples are drawn from it (as ShapePrior::surfaceSamples does).
     const recon::shape::Mesh mesh = prior_.mesh(r.code, r.size);
     for (const Eigen::Vector3d& p :

@@ -1,6 +1,6 @@
 // ObjectStore: association by track id, what each keyframe adds (boxes, labelled map points, LiDAR returns
 // inside the box above the road), objects ended by a dynamic call, bounded LiDAR memory, the box consensus,
-// observations that follow their keyframes.
+// observations that follow their keyframes; silhouettes sampled from a label mask and kept per object.
 #include "objects/object_store.hpp"
 
 #include <gtest/gtest.h>
@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "beslam/sdk/views.hpp"
+#include "objects/mask_silhouettes.hpp"
 
 namespace beslam::recon {
 namespace {
@@ -172,6 +173,78 @@ TEST(ObjectStore, ObservationsFollowTheirKeyframes) {
   broken.translation().x() = std::numeric_limits<double>::quiet_NaN();
   store.followKeyframes({{0, broken}, {10, broken}});  // a non-finite pose moves nothing
   EXPECT_NEAR(store.find(1)->boxPose().translation().x(), 2.5, 1e-12);
+}
+
+TEST(MaskSilhouettes, MaskPixelsMeetTheCarBackgroundBesideItPassesItOthersAreLeftOut) {
+  beslam_camera camera{};
+  camera.width = 200, camera.height = 100, camera.fx = camera.fy = 100, camera.cx = 100, camera.cy = 50;
+  cv::Mat mask(100, 200, CV_16UC1, cv::Scalar(BESLAM_LABEL_BACKGROUND));
+  mask(cv::Rect(80, 40, 40, 20)).setTo(BESLAM_LABEL_STATIC_BASE + 7);  // the car
+  mask(cv::Rect(115, 40, 30, 20)).setTo(BESLAM_LABEL_DYNAMIC);         // a moving car in front of its right end
+  const std::vector<beslam_box3d> boxes = {carBox(7, BESLAM_MOTION_STATIC), carBox(9, BESLAM_MOTION_STATIC)};
+  const auto samples = sampleSilhouettes(mask, camera, boxes, 8);
+  ASSERT_EQ(samples.size(), 1u);  // track 9 has no pixel in the mask
+  const SilhouetteSample& s = samples.at(7);
+  ASSERT_EQ(s.u_cam.size(), s.inside.size());
+  int inside = 0, outside = 0;
+  for (size_t i = 0; i < s.u_cam.size(); ++i) {
+    EXPECT_NEAR(s.u_cam[i].norm(), 1.0, 1e-12);
+    const double x = camera.fx * s.u_cam[i].x() / s.u_cam[i].z() + camera.cx;
+    const double y = camera.fy * s.u_cam[i].y() / s.u_cam[i].z() + camera.cy;
+    const int xi = static_cast<int>(std::lround(x)), yi = static_cast<int>(std::lround(y));
+    // The lattice spans the car's pixels (35 x 20: the moving car owns the rest) grown by a quarter a side.
+    EXPECT_GE(xi, 80 - 9);
+    EXPECT_LT(xi, 115 + 9);
+    EXPECT_GE(yi, 40 - 5);
+    EXPECT_LT(yi, 60 + 5);
+    const uint16_t label = mask.at<uint16_t>(yi, xi);
+    EXPECT_NE(label, BESLAM_LABEL_DYNAMIC);  // another object's pixels give no ray
+    EXPECT_EQ(s.inside[i] != 0, label == BESLAM_LABEL_STATIC_BASE + 7);
+    (s.inside[i] ? inside : outside) += 1;
+  }
+  EXPECT_GE(inside, 16);
+  EXPECT_GE(outside, 16);
+  EXPECT_LT(s.u_cam.size(), 64u);  // the moving car's pixels were left out
+  // A mask of another size or type, or a lattice under 2, samples nothing.
+  EXPECT_TRUE(sampleSilhouettes(cv::Mat(50, 100, CV_16UC1, cv::Scalar(0)), camera, boxes, 8).empty());
+  EXPECT_TRUE(sampleSilhouettes(cv::Mat(100, 200, CV_8UC1, cv::Scalar(0)), camera, boxes, 8).empty());
+  EXPECT_TRUE(sampleSilhouettes(mask, camera, boxes, 1).empty());
+}
+
+TEST(ObjectStore, KeepsTheNewestSilhouettesOfAStaticCarWhereTheirKeyframesAre) {
+  StoreOptions options;
+  options.silhouette_keyframes = 2;
+  ObjectStore store(options);
+  std::vector<int32_t> ended;
+  const std::vector<beslam_box3d> boxes = {carBox(3, BESLAM_MOTION_STATIC), carBox(4, BESLAM_MOTION_UNKNOWN)};
+  for (int k = 0; k < 3; ++k) {
+    KeyframeInput in = keyframe(k, boxes);
+    SilhouetteSample sample;
+    sample.u_cam = {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.6, 0, 0.8)};
+    sample.inside = {1, 0};
+    in.silhouettes[3] = sample;
+    in.silhouettes[4] = sample;  // unknown motion: not kept
+    store.observe(in, ended);
+  }
+  ASSERT_EQ(store.find(4), nullptr);
+  const ObjectRecord* o = store.find(3);
+  ASSERT_NE(o, nullptr);
+  ASSERT_EQ(o->silhouettes.size(), 2u);  // the newest two keyframes
+  EXPECT_EQ(o->silhouettes.front().frame_index, 10);
+  std::vector<WorldSilhouetteRay> rays = o->silhouetteRays();
+  ASSERT_EQ(rays.size(), 4u);
+  EXPECT_TRUE(rays[0].inside);
+  EXPECT_FALSE(rays[1].inside);
+  EXPECT_NEAR((rays[0].origin_world - Eigen::Vector3d(0, 0, 1)).norm(), 0, 1e-12);
+  // The keyframe at frame 10 moves 0.5 m left and turns 90 degrees: its rays go with it.
+  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+  moved.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  moved.translation() = Eigen::Vector3d(-0.5, 0, 1);
+  store.followKeyframes({{10, moved}});
+  rays = store.find(3)->silhouetteRays();
+  EXPECT_NEAR((rays[0].origin_world - Eigen::Vector3d(-0.5, 0, 1)).norm(), 0, 1e-12);
+  EXPECT_NEAR((rays[0].direction_world - Eigen::Vector3d(1, 0, 0)).norm(), 0, 1e-12);
+  EXPECT_NEAR((rays[2].origin_world - Eigen::Vector3d(0, 0, 2)).norm(), 0, 1e-12);  // frame 20 unchanged
 }
 
 }  // namespace

@@ -71,6 +71,14 @@ std::vector<Eigen::Vector3d> ObjectRecord::surfaceObservations(double map_point_
   return out;
 }
 
+std::vector<WorldSilhouetteRay> ObjectRecord::silhouetteRays() const {
+  std::vector<WorldSilhouetteRay> out;
+  for (const SilhouetteObservation& s : silhouettes)
+    for (size_t i = 0; i < s.sample.u_cam.size(); ++i)
+      out.push_back({s.T_world_cam.translation(), s.T_world_cam.linear() * s.sample.u_cam[i], s.sample.inside[i] != 0});
+  return out;
+}
+
 std::set<int32_t> ObjectStore::observe(const KeyframeInput& input, std::vector<int32_t>& ended) {
   std::set<int32_t> updated;
   if (input.boxes == nullptr) return updated;
@@ -96,6 +104,12 @@ std::set<int32_t> ObjectStore::observe(const KeyframeInput& input, std::vector<i
     for (const KeyframeInput::Point& p : input.points)
       if (p.label == label && p.p_world.allFinite())
         o.map_points[p.id] = {input.frame_index, input.T_world_cam, T_cam_world * p.p_world};
+    if (const auto sil = input.silhouettes.find(box.track_id);
+        sil != input.silhouettes.end() && !sil->second.u_cam.empty() && options_.silhouette_keyframes > 0) {
+      o.silhouettes.push_back({input.frame_index, input.T_world_cam, sil->second});
+      if (o.silhouettes.size() > static_cast<size_t>(options_.silhouette_keyframes))
+        o.silhouettes.erase(o.silhouettes.begin());
+    }
     if (!input.lidar_cam.empty()) {  // returns inside the grown box, above the road
       const Eigen::Isometry3d T_obj_cam = T_cam_obj.inverse();
       const Eigen::Vector3d half(box.size[0] / 2 + options_.box_margin, box.size[1] / 2 + options_.box_margin,
@@ -139,6 +153,7 @@ void ObjectStore::followKeyframes(const std::map<int64_t, Eigen::Isometry3d>& T_
     for (BoxObservation& b : o.boxes) follow(b.frame_index, b.T_world_cam);
     for (LidarObservation& l : o.lidar) follow(l.frame_index, l.T_world_cam);
     for (auto& [point, m] : o.map_points) follow(m.frame_index, m.T_world_cam);
+    for (SilhouetteObservation& s : o.silhouettes) follow(s.frame_index, s.T_world_cam);
   }
 }
 

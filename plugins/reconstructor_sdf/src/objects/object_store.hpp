@@ -15,6 +15,9 @@
 //   backend's keyframe poses as they are now (after local BA, loop corrections, rescaling), so a refit sees
 //   them where the map has them. A keyframe the backend no longer has keeps its last known pose. Map points
 //   are kept by id, at the position the latest keyframe to report them gave.
+// - Silhouettes: a keyframe may carry, per track id, rays through pixels of the car's mask and of the
+//   background beside it (the plugin samples them from the label mask); a static box keeps its track's,
+//   the newest silhouette_keyframes of them per object.
 // - Memory is bounded: LiDAR returns per object up to max_lidar_points (a deterministic thinning keeps every
 //   k-th return, counted over the object's keyframes in order, when over).
 // - Fits see LiDAR returns when the object has any, else its map points inside the boxes' consensus box
@@ -38,6 +41,7 @@ struct StoreOptions {
   double road_clearance = 0.12;   // m: returns this close to the box bottom are road
   int max_lidar_points = 2000;    // per object
   double map_point_margin = 0.5;  // m: map points farther outside the consensus box are not the car's
+  int silhouette_keyframes = 6;   // newest keyframes whose silhouettes an object keeps
 };
 
 // One keyframe's box of an object (landmark frame: x heading, y left, z up, centre), in that keyframe's
@@ -67,12 +71,32 @@ struct LidarObservation {
   std::vector<Eigen::Vector3d> p_cam;
 };
 
+// One keyframe's silhouette of an object: unit rays in that keyframe's camera frame, each through a pixel
+// of the car's mask (inside) or of the background beside it.
+struct SilhouetteSample {
+  std::vector<Eigen::Vector3d> u_cam;
+  std::vector<uint8_t> inside;  // per ray: 1 mask, 0 background
+};
+
+struct SilhouetteObservation {
+  int64_t frame_index = -1;
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
+  SilhouetteSample sample;
+};
+
+// A silhouette ray where its keyframe is now (world frame).
+struct WorldSilhouetteRay {
+  Eigen::Vector3d origin_world, direction_world;
+  bool inside;
+};
+
 struct ObjectRecord {
   int32_t track_id = -1;
   int32_t class_id = BESLAM_CLASS_CAR;
   std::vector<BoxObservation> boxes;
   std::map<int64_t, MapPointObservation> map_points;  // by the backend's id
   std::vector<LidarObservation> lidar;
+  std::vector<SilhouetteObservation> silhouettes;  // oldest first, at most silhouette_keyframes
   int64_t last_keyframe = -1;
   size_t lidarPointCount() const;
   std::vector<Eigen::Vector3d> lidarPoints() const;  // p_world, where their keyframes are now
@@ -82,6 +106,7 @@ struct ObjectRecord {
   // LiDAR points if any, else the map points inside the boxes' consensus box grown by map_point_margin
   // (a car's surface lies in its box: points labelled on it outside are mask bleed onto the background).
   std::vector<Eigen::Vector3d> surfaceObservations(double map_point_margin) const;
+  std::vector<WorldSilhouetteRay> silhouetteRays() const;
 };
 
 struct KeyframeInput {
@@ -95,7 +120,8 @@ struct KeyframeInput {
     uint16_t label;
   };
   std::vector<Point> points;
-  std::vector<Eigen::Vector3d> lidar_cam;  // the scan in the camera frame (empty: no scan)
+  std::vector<Eigen::Vector3d> lidar_cam;           // the scan in the camera frame (empty: no scan)
+  std::map<int32_t, SilhouetteSample> silhouettes;  // by track id (empty: none sampled)
 };
 
 class ObjectStore {
