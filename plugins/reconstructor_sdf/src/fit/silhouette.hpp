@@ -114,8 +114,8 @@ double leastLevel(const shape::ShapePrior& prior, const T origin[3], const T dir
 
 // The level at a least point t along the ray as a differentiable T (silhouetteLevel below).
 template <typename T>
-T levelAtLeast(const shape::ShapePrior& prior, const T origin[3], const T direction[3], const T size[3],
-               const T* code, double t) {
+T levelAtLeast(const shape::ShapePrior& prior, const T origin[3], const T direction[3], const T size[3], const T* code,
+               double t) {
   using shape::scalarPart;
   // The level is trilinear per grid cell, so along the ray it has a kink at every cell face; its least
   // value often sits on one. There the t-derivative is not 0 and the least point moves with the face:
@@ -138,8 +138,7 @@ T levelAtLeast(const shape::ShapePrior& prior, const T origin[3], const T direct
       t_min = (plane * size[a] - origin[a]) / direction[a];
     }
   }
-  const T p[3] = {origin[0] + t_min * direction[0], origin[1] + t_min * direction[1],
-                  origin[2] + t_min * direction[2]};
+  const T p[3] = {origin[0] + t_min * direction[0], origin[1] + t_min * direction[1], origin[2] + t_min * direction[2]};
   return prior.levelSized(p, size, code);
 }
 

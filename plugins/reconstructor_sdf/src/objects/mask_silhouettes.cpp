@@ -8,8 +8,8 @@ namespace beslam::recon {
 std::map<int32_t, SilhouetteSample> sampleSilhouettes(const cv::Mat& mask, const beslam_camera& camera,
                                                       const std::vector<beslam_box3d>& boxes, int grid) {
   std::map<int32_t, SilhouetteSample> out;
-  if (grid < 2 || mask.empty() || mask.type() != CV_16UC1 || mask.cols != camera.width ||
-      mask.rows != camera.height || !(camera.fx > 0 && camera.fy > 0))
+  if (grid < 2 || mask.empty() || mask.type() != CV_16UC1 || mask.cols != camera.width || mask.rows != camera.height ||
+      !(camera.fx > 0 && camera.fy > 0))
     return out;
   // The bounding rectangle of each wanted label (one pass over the mask).
   std::map<uint16_t, cv::Rect> rects;
@@ -36,11 +36,12 @@ std::map<int32_t, SilhouetteSample> sampleSilhouettes(const cv::Mat& mask, const
     for (int j = 0; j < grid; ++j)
       for (int i = 0; i < grid; ++i) {
         const double px = grown.x + (i + 0.5) * grown.width / grid, py = grown.y + (j + 0.5) * grown.height / grid;
-        const int x = std::clamp(static_cast<int>(px), 0, mask.cols - 1), y = std::clamp(static_cast<int>(py), 0, mask.rows - 1);
+        const int x = std::clamp(static_cast<int>(px), 0, mask.cols - 1),
+                  y = std::clamp(static_cast<int>(py), 0, mask.rows - 1);
         const uint16_t l = mask.at<uint16_t>(y, x);
         if (l != label && l != BESLAM_LABEL_BACKGROUND) continue;
-        sample.u_cam.push_back(Eigen::Vector3d((x - camera.cx) / camera.fx, (y - camera.cy) / camera.fy, 1.0)
-                                   .normalized());
+        sample.u_cam.push_back(
+            Eigen::Vector3d((x - camera.cx) / camera.fx, (y - camera.cy) / camera.fy, 1.0).normalized());
         sample.inside.push_back(l == label ? 1 : 0);
         inside += l == label;
       }

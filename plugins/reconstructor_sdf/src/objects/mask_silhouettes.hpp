@@ -6,7 +6,8 @@
 //   bounding rectangle of that label's pixels grown by a quarter of its size on each side (clipped to the
 //   image). A pixel with the car's own label gives a ray that must meet the car (inside = 1); a background
 //   pixel (label 0) one that must pass it (inside = 0); pixels of other objects give nothing (they may
-//   hide the car). Rays are unit vectors in the camera frame through the pixel (pinhole `camera`; pixel (x, y) is at image coordinates x, y, as OpenCV has it).
+//   hide the car). Rays are unit vectors in the camera frame through the pixel (pinhole `camera`; pixel
+//   (x, y) is at image coordinates x, y, as OpenCV has it).
 // - mask: CV_16UC1 of the camera's size; anything else, or grid < 2, gives no samples. Cars with no
 //   inside ray give none either.
 #pragma once
