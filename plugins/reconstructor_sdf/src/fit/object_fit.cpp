@@ -45,6 +45,19 @@ struct SurfaceResidual {
   }
 };
 
+// A ray given in the initial object frame (o0, u0) in the frame of the updated pose, and the updated size.
+template <typename T>
+void rayInObject(const T* pose, const T* log_size, const Eigen::Vector3d& o0, const Eigen::Vector3d& u0,
+                 const Eigen::Vector3d& size0, T o_obj[3], T u_obj[3], T size[3]) {
+  const T d[3] = {T(o0.x()) - pose[3], T(o0.y()) - pose[4], T(o0.z()) - pose[5]};
+  const T u[3] = {T(u0.x()), T(u0.y()), T(u0.z())};
+  const T minus_aa[3] = {-pose[0], -pose[1], -pose[2]};
+  ceres::AngleAxisRotatePoint(minus_aa, d, o_obj);
+  ceres::AngleAxisRotatePoint(minus_aa, u, u_obj);
+  using std::exp;
+  for (int a = 0; a < 3; ++a) size[a] = size0[a] * exp(log_size[a]);
+}
+
 template <int K>
 struct DepthResidual {
   const shape::ShapePrior* prior;
@@ -53,14 +66,8 @@ struct DepthResidual {
 
   template <typename T>
   bool operator()(const T* pose, const T* code, const T* log_size, T* r) const {
-    const T d[3] = {T(o0.x()) - pose[3], T(o0.y()) - pose[4], T(o0.z()) - pose[5]};
-    const T u[3] = {T(u0.x()), T(u0.y()), T(u0.z())};
-    const T minus_aa[3] = {-pose[0], -pose[1], -pose[2]};
-    T o_obj[3], u_obj[3];
-    ceres::AngleAxisRotatePoint(minus_aa, d, o_obj);
-    ceres::AngleAxisRotatePoint(minus_aa, u, u_obj);
-    using std::exp;
-    const T size[3] = {size0.x() * exp(log_size[0]), size0.y() * exp(log_size[1]), size0.z() * exp(log_size[2])};
+    T o_obj[3], u_obj[3], size[3];
+    rayInObject(pose, log_size, o0, u0, size0, o_obj, u_obj, size);
     T rendered;
     if (!renderDepth(*prior, o_obj, u_obj, size, code, &rendered)) {
       r[0] = T(0.0);  // a miss: no information in this iteration
@@ -92,14 +99,8 @@ struct SilhouetteResidual {
 
   template <typename T>
   bool operator()(const T* pose, const T* code, const T* log_size, T* r) const {
-    const T d[3] = {T(o0.x()) - pose[3], T(o0.y()) - pose[4], T(o0.z()) - pose[5]};
-    const T u[3] = {T(u0.x()), T(u0.y()), T(u0.z())};
-    const T minus_aa[3] = {-pose[0], -pose[1], -pose[2]};
-    T o_obj[3], u_obj[3];
-    ceres::AngleAxisRotatePoint(minus_aa, d, o_obj);
-    ceres::AngleAxisRotatePoint(minus_aa, u, u_obj);
-    using std::exp;
-    const T size[3] = {size0.x() * exp(log_size[0]), size0.y() * exp(log_size[1]), size0.z() * exp(log_size[2])};
+    T o_obj[3], u_obj[3], size[3];
+    rayInObject(pose, log_size, o0, u0, size0, o_obj, u_obj, size);
     r[0] = scale * silhouetteViolation(*prior, o_obj, u_obj, size, code, inside);  // 0 on the right side
     return true;
   }
