@@ -83,9 +83,11 @@ inline Eigen::Isometry3d roadAt(double distance) {
 // n_keyframes cameras `spacing` m apart down the road (roadAt) and points_per_metre points a metre of road
 // (up to 8 m to either side, 2 m up or down), each observed (0.5 px noise) by the cameras it is 4-30 m
 // ahead of and in the image of (26 / spacing cameras). Every camera but the first is moved by about 5 cm
-// and 0.17 degrees, every point by about 5 cm.
+// and 0.17 degrees, every point by about 5 cm. lidar_ranges: each keypoint also carries its point's true
+// range from the camera (FeatureSet::lidar_range), as a scan would give it.
 inline std::vector<KeyFrame*> buildRoad(Map& map, const Camera& cam, const ScalePyramid& pyr, int n_keyframes,
-                                        int points_per_metre, uint64_t seed, double spacing = 1.0) {
+                                        int points_per_metre, uint64_t seed, double spacing = 1.0,
+                                        bool lidar_ranges = false) {
   std::mt19937 rng(static_cast<unsigned>(seed));
   const double length = spacing * (n_keyframes - 1);
   std::uniform_real_distribution<double> ux(-8, 8), uy(-2, 2), ud(5, length + 29);
@@ -101,15 +103,19 @@ inline std::vector<KeyFrame*> buildRoad(Map& map, const Camera& cam, const Scale
   for (int k = 0; k < n_keyframes; ++k) {
     const Eigen::Isometry3d T_cw = roadAt(spacing * k).inverse();
     std::vector<cv::KeyPoint> keypoints;
+    std::vector<float> ranges;
     for (int i = 0; i < static_cast<int>(points.size()); ++i) {
       const double ahead = (T_cw * points[i]).z();
       if (ahead < 4 || ahead > 30) continue;
       const Eigen::Vector2d uv = project(cam, T_cw, points[i]) + Eigen::Vector2d(pixel(rng), pixel(rng));
       if (uv.x() < 0 || uv.y() < 0 || uv.x() >= cam.width || uv.y() >= cam.height) continue;
       keypoints.emplace_back(static_cast<float>(uv.x()), static_cast<float>(uv.y()), 31.f, 0.f, 1.f, 0);
+      ranges.push_back(static_cast<float>((T_cw * points[i]).norm()));
       seen[k].push_back(i);
     }
-    Frame frame(k, 0.1 * k, blankFeatures(cam, std::move(keypoints)));
+    std::shared_ptr<FeatureSet> features = blankFeatures(cam, std::move(keypoints));
+    if (lidar_ranges) features->lidar_range = std::move(ranges);
+    Frame frame(k, 0.1 * k, features);
     frame.T_cw = T_cw;
     if (k > 0) {
       frame.T_cw.translation() += Eigen::Vector3d(perturb(rng), perturb(rng), perturb(rng));

@@ -257,6 +257,37 @@ TEST(BundleAdjustment, GlobalBaSparseSchurLmAndCeresReachTheSameMinimum) {
   for (size_t k = 0; k < results[0].size(); ++k) EXPECT_EQ(results[0][k].matrix(), results[1][k].matrix()) << k;
 }
 
+// A global BA (after a loop correction) on a map the scan holds metric keeps the keypoints' LiDAR ranges: a
+// road map grown 1 % about its first keyframe (a loop correction's scale change; ranges farther off than 3
+// sigma are gated out) comes back to its metric length with them, and stays 1 % long without (the scale is
+// free in a monocular BA).
+TEST(BundleAdjustment, GlobalBaWithLidarRangesHoldsTheMetricScale) {
+  const ScalePyramid pyr(8, 1.2);
+  auto length = [](const std::vector<KeyFrame*>& kfs) {
+    return (kfs.back()->T_cw.inverse().translation() - kfs.front()->T_cw.inverse().translation()).norm();
+  };
+  std::vector<double> ratio;
+  for (const bool ranges : {false, true}) {
+    Map map;
+    const auto kfs = test::buildRoad(map, kCam, pyr, 30, 10, 12, 1.0, true);
+    const double truth = (test::roadAt(29).translation() - test::roadAt(0).translation()).norm();
+    const Eigen::Vector3d origin = kfs[0]->T_cw.inverse().translation();
+    for (KeyFrame* kf : kfs) {  // grow the map by 1 % about the first camera
+      Eigen::Isometry3d T_wc = kf->T_cw.inverse();
+      T_wc.translation() = origin + 1.01 * (T_wc.translation() - origin);
+      kf->T_cw = T_wc.inverse();
+    }
+    for (MapPoint* mp : map.points()) mp->position = origin + 1.01 * (mp->position - origin);
+    const auto report =
+        optimize::globalBundleAdjustment(map, 20, optimize::BaSolver::SchurLm, 5.991, ranges ? 0.05 : 0.0, 0.005);
+    EXPECT_EQ(report.lidar_range_residuals > 0, ranges);
+    ratio.push_back(length(kfs) / truth);
+  }
+  std::printf("length over truth: %.5f without ranges, %.5f with\n", ratio[0], ratio[1]);
+  EXPECT_NEAR(ratio[0], 1.01, 0.002) << "without ranges the scale stays where it was";
+  EXPECT_NEAR(ratio[1], 1.0, 0.002) << "the ranges bring it back";
+}
+
 // Concurrent mapping's hooks: the callback runs after each pass, and a stop request skips the refining
 // pass (ORB-SLAM2's interrupted BA) but still removes the outliers and writes the result back.
 TEST(BundleAdjustment, StopEarlySkipsTheRefiningPassAndKeepsTheResult) {

@@ -425,8 +425,12 @@ bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, 
     mp->position = solved.S_cw[n].inverse() * (graph.S_cw[n] * mp->position);
     mp->updateNormalAndDepth();
   }
-  if (options_.global_ba_iterations > 0)
-    optimize::globalBundleAdjustment(map_, options_.global_ba_iterations, options_.global_ba_solver);
+  if (options_.global_ba_iterations > 0) {
+    const bool ranges = options_.lidar_range_sigma > 0 && options_.lidar_scaled && options_.lidar_scaled();
+    optimize::globalBundleAdjustment(map_, options_.global_ba_iterations, options_.global_ba_solver,
+                                     optimize::BundleAdjustmentOptions{}.chi2_threshold,
+                                     ranges ? options_.lidar_range_sigma : 0, options_.lidar_range_sigma_per_m);
+  }
   // Object landmarks follow the keyframe they were last fitted at (a culled one: its next keyframe), as map
   // points follow theirs; left where they were, local BA would pull the corrected keyframes back to them.
   map_.objects().followKeyFrames([&](long kf_id) -> std::optional<Eigen::Isometry3d> {

@@ -19,6 +19,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <set>
@@ -51,6 +52,10 @@ struct LoopOptions {
   int pose_graph_iterations = 20;
   int global_ba_iterations = 10;  // 0: no global BA after the pose graph
   optimize::BaSolver global_ba_solver = optimize::BaSolver::SchurLm;
+  // The global BA keeps the keypoints' LiDAR ranges (as local BA does) while lidar_scaled() says the scan
+  // holds the map's scale; sigma 0 or no callback: never.
+  double lidar_range_sigma = 0, lidar_range_sigma_per_m = 0.005;
+  std::function<bool()> lidar_scaled;
   uint64_t seed = 1;
 };
 

@@ -401,13 +401,17 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   return report;
 }
 
-BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, BaSolver solver, double chi2_threshold) {
+BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, BaSolver solver, double chi2_threshold,
+                                              double lidar_range_sigma, double lidar_range_sigma_per_m) {
   BundleAdjustmentReport report;
   Problem P;
   for (KeyFrame* kf : map.keyframes()) P.moving.push_back(kf);
   for (MapPoint* mp : map.points()) P.points.push_back(mp);
   P.allocate();
   addEdges(P, chi2_threshold, 1.0);
+  if (lidar_range_sigma > 0)
+    report.lidar_range_residuals = addRangeEdges(
+        P, [](const FeatureSet& f, size_t i) { return f.lidarRange(i); }, lidar_range_sigma, lidar_range_sigma_per_m);
   report.keyframes = static_cast<int>(P.moving.size());
   report.points = static_cast<int>(P.points.size());
   report.observations = static_cast<int>(P.edges.size());

@@ -77,7 +77,10 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
 // Every keyframe and point; the origin keyframe fixed. Used right after initialisation (Ceres) and after a
 // loop correction (LoopOptions::global_ba_solver). SchurLm takes Ceres' steps (the same minimum up to
 // rounding) and solves a map of more than SchurLevenbergMarquardt::kMaxDensePoses keyframes block-sparse.
+// lidar_range_sigma > 0 (a map the scan holds metric): the keypoints' LiDAR ranges hold their points as in
+// local BA (BundleAdjustmentOptions::lidar_range_sigma).
 BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, BaSolver solver = BaSolver::Ceres,
-                                              double chi2_threshold = 5.991);
+                                              double chi2_threshold = 5.991, double lidar_range_sigma = 0,
+                                              double lidar_range_sigma_per_m = 0.005);
 
 }  // namespace beslam::orb::optimize
