@@ -41,7 +41,7 @@ struct StoreOptions {
   double road_clearance = 0.12;   // m: returns this close to the box bottom are road
   int max_lidar_points = 2000;    // per object
   double map_point_margin = 0.5;  // m: map points farther outside the consensus box are not the car's
-  int silhouette_keyframes = 6;   // newest keyframes whose silhouettes an object keeps
+  int silhouette_keyframes = 3;   // newest keyframes whose silhouettes an object keeps
 };
 
 // One keyframe's box of an object (landmark frame: x heading, y left, z up, centre), in that keyframe's
