@@ -356,8 +356,9 @@ FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_w
     const Eigen::Vector3d o = T_obj_world * ray.origin_world, u = T_obj_world.linear() * ray.direction_world;
     const double ov[3] = {o.x(), o.y(), o.z()}, uv[3] = {u.x(), u.y(), u.z()};
     const double s[3] = {r.size.x(), r.size.y(), r.size.z()};
-    const double level = leastLevel(prior, ov, uv, s, r.code.data(), nullptr);
-    const double violation = (ray.inside ? level : -level) * metresPerLevel(prior, ov, uv, s, r.code.data());
+    double level = 0;
+    const double metres = metresPerLevel(prior, ov, uv, s, r.code.data(), &level);  // one search for both
+    const double violation = (ray.inside ? level : -level) * metres;
     if (violation < options.inlier_m) ++r.silhouette_agree;
   }
   if (!(r.T_world_obj.matrix().allFinite() && r.code.allFinite() && r.size.allFinite()))

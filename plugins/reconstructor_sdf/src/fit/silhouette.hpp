@@ -23,7 +23,8 @@
 //   the refinement between two of them dips below (a graze of millimetres): 0 here.
 // - metresPerLevel(...): the metric distance over the level at the closest approach (where the level is
 //   near 0, the cube root of the box's volume): a residual scales the level by it once, at the start of a
-//   solve, so its unit is about a metre and its derivative stays exact.
+//   solve, so its unit is about a metre and its derivative stays exact. least_level (may be null): the
+//   least level it searched, leastLevel's value.
 // - A ray through a pixel of the car's mask should meet the car (level <= 0); a ray through a background
 //   pixel beside it should pass it (level >= 0). object_fit.hpp turns the violations into residuals.
 #pragma once
@@ -162,9 +163,10 @@ T silhouetteViolation(const shape::ShapePrior& prior, const T origin[3], const T
 }
 
 inline double metresPerLevel(const shape::ShapePrior& prior, const double origin[3], const double direction[3],
-                             const double size[3], const double* code) {
+                             const double size[3], const double* code, double* least_level = nullptr) {
   double t = 0;
   const double level = leastLevel(prior, origin, direction, size, code, &t);
+  if (least_level) *least_level = level;
   const double p[3] = {origin[0] + t * direction[0], origin[1] + t * direction[1], origin[2] + t * direction[2]};
   const double d = prior.distanceSized<double>(p, size, code);
   if (std::abs(level) > 1e-3 && d / level > 0) return d / level;
