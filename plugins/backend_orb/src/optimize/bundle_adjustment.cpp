@@ -275,6 +275,9 @@ int addRangeEdges(Problem& P, RangeOf range_of, double sigma_0, double sigma_per
   return n;
 }
 
+// The range addRangeEdges takes from a keypoint's LiDAR return (local and global BA).
+float lidarRangeOf(const FeatureSet& f, size_t i) { return f.lidarRange(i); }
+
 // One anchor per parked car that a keyframe of the problem saw, if one that moves did and at least two did:
 // started at the mean of the boxes' centres in the world, with a BoxCentreCost per box.
 void addObjectAnchors(Problem& P, const Map& map, const BundleAdjustmentOptions& options,
@@ -357,9 +360,8 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
         P, [](const FeatureSet& f, size_t i) { return f.objectRange(i); }, options.object_range_sigma,
         options.object_range_sigma_per_m);
   if (options.lidar_range_sigma > 0)
-    report.lidar_range_residuals = addRangeEdges(
-        P, [](const FeatureSet& f, size_t i) { return f.lidarRange(i); }, options.lidar_range_sigma,
-        options.lidar_range_sigma_per_m);
+    report.lidar_range_residuals =
+        addRangeEdges(P, lidarRangeOf, options.lidar_range_sigma, options.lidar_range_sigma_per_m);
   if (options.objects.enabled && map.objects().size() > 0) {
     const std::set<const KeyFrame*> moving(P.moving.begin(), P.moving.end());
     P.objects = objects::buildObjectProblem(map.objects(), P.poses, moving, P.positions, options.objects);
@@ -410,8 +412,7 @@ BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, BaSolver
   P.allocate();
   addEdges(P, chi2_threshold, 1.0);
   if (lidar_range_sigma > 0)
-    report.lidar_range_residuals = addRangeEdges(
-        P, [](const FeatureSet& f, size_t i) { return f.lidarRange(i); }, lidar_range_sigma, lidar_range_sigma_per_m);
+    report.lidar_range_residuals = addRangeEdges(P, lidarRangeOf, lidar_range_sigma, lidar_range_sigma_per_m);
   report.keyframes = static_cast<int>(P.moving.size());
   report.points = static_cast<int>(P.points.size());
   report.observations = static_cast<int>(P.edges.size());
