@@ -236,6 +236,8 @@ int runCommand(const std::vector<std::string>& args) {
       }
       if (name == "loop_object_rejections" && value > 0)
         std::cout << "loop candidates rejected by the parked-car check: " << value << "\n";
+      if (name == "relocalisation_object_rejections" && value > 0)
+        std::cout << "relocalisation candidates rejected by the parked-car check: " << value << "\n";
     }
     if (features_static > 0 || s.map_points_static > 0)
       std::cout << "static objects: " << features_static << " features, " << tracked_static

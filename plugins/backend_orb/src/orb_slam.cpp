@@ -472,7 +472,13 @@ struct OrbSlam::Impl {
     }
     const int feature_count = static_cast<int>(features->size());
     tracker.useLidarPoints(options.lidar_points && mapper.lidarScaled());
+    std::vector<Eigen::Vector3d> cars_cam;
+    if (mapper.metric())
+      for (const ObjectBox& b : boxes) cars_cam.push_back(b.T_cam_box.translation());
+    tracker.setCarsInView(std::move(cars_cam));
+    const int reloc_rejections_before = tracker.relocalisationObjectRejections();
     TrackResult result = tracker.track(features, timestamp, index);
+    result.relocalisation_object_rejections = tracker.relocalisationObjectRejections() - reloc_rejections_before;
     result.world_is_metric = mapper.metric();
     result.loop_closed = loop_correction_m >= 0;
     result.loop_correction_m = std::max(0.0, loop_correction_m);
@@ -502,7 +508,8 @@ struct OrbSlam::Impl {
     if (options.metric_scale && options.object_scale && !object_scale_done && result.state == TrackingState::Ok &&
         static_cast<int>(map.numKeyFrames()) > options.ground_reference_keyframes) {
       std::vector<std::pair<int32_t, Eigen::Vector3d>> centres;
-      for (const ObjectBox& b : boxes) centres.emplace_back(b.object_id, b.T_cam_box.translation());
+      for (const ObjectBox& b : boxes)
+        if (b.object_id >= 0) centres.emplace_back(b.object_id, b.T_cam_box.translation());
       parked_scale.addFrame(result.T_world_cam, centres);
       if (std::getenv("BESLAM_ORB_DEBUG") && index % 10 == 0) parked_scale.debugPrint(index);
       if (const auto e = parked_scale.estimate()) {
@@ -735,6 +742,7 @@ Statistics OrbSlam::statistics() const {
   s.map_points = static_cast<int>(impl_->map.points().size());
   s.resets = impl_->tracker.resets();
   s.relocalisations = impl_->tracker.relocalisations();
+  s.relocalisation_object_rejections = impl_->tracker.relocalisationObjectRejections();
   s.lidar_points = impl_->mapper.rangedPoints();
   if (impl_->loop_closer) {
     const LoopStats& l = impl_->loop_closer->stats();

@@ -112,13 +112,14 @@ class OrbBackend : public beslam::sdk::Backend {
       }
     }
     const cv::Mat& image = trackingImage(frame);
-    // Tracked cars' metric boxes: the scale source before the map is metric (parked cars agree on it), and
-    // for parked ones range priors in local BA after.
+    // Cars' metric boxes: tracked ones are the scale source before the map is metric (parked cars agree on
+    // it), and for parked ones range priors in local BA after; every one (untracked: id -1, as after a
+    // blackout) is where relocalisation's parked-car check looks for cars.
     std::vector<beslam::orb::ObjectBox> car_boxes;
     for (const beslam_box3d& b : boxes)
-      if (b.track_id >= 0 &&
-          (b.class_id == BESLAM_CLASS_CAR || b.class_id == BESLAM_CLASS_VAN || b.class_id == BESLAM_CLASS_TRUCK))
-        car_boxes.push_back({b.track_id, b.motion_state == BESLAM_MOTION_STATIC, beslam::sdk::boxPose(b),
+      if (b.class_id == BESLAM_CLASS_CAR || b.class_id == BESLAM_CLASS_VAN || b.class_id == BESLAM_CLASS_TRUCK)
+        car_boxes.push_back({b.track_id >= 0 ? b.track_id : -1,
+                             b.track_id >= 0 && b.motion_state == BESLAM_MOTION_STATIC, beslam::sdk::boxPose(b),
                              Eigen::Vector3d(b.size[0], b.size[2], b.size[1])});
     // The frame's LiDAR scan in the camera frame: a metric scale source (Options::lidar_scale).
     std::optional<Eigen::Matrix3Xf> lidar_cam;
@@ -145,6 +146,7 @@ class OrbBackend : public beslam::sdk::Backend {
                     {"loop_closures", r.loop_closed ? 1 : 0},
                     {"loop_correction_m", r.loop_correction_m},
                     {"loop_object_rejections", r.loop_object_rejections},
+                    {"relocalisation_object_rejections", r.relocalisation_object_rejections},
                     {"object_landmarks", r.object_landmarks},
                     {"object_factors", r.object_factors}};
     out.keypoints.reserve(r.keypoints.size());

@@ -83,6 +83,9 @@ struct Options {
   bool bow_matching = false;
   bool relocalisation =
       true;  // when lost: BoW candidates + PnP (with a vocabulary), else a search around the last pose
+  // On a metric map, a BoW candidate's pose is refused when the parked cars its keyframe sees, placed by
+  // that pose, mostly have no car box of the frame near them (objects/object_layout.hpp).
+  bool relocalisation_object_check = true;
   // Loop closing (loop/loop_closer.hpp; needs a vocabulary): detection, Sim3 (SE3 once metric), essential
   // graph and global BA. loop_object_check: BE-SLAM's BEV check, parked cars must agree after the loop.
   // Until a loop is closed the tracker's local map keeps to the last loop_own_stretch_keyframes keyframes
@@ -208,11 +211,12 @@ struct TrackResult {
   int tracked_static = 0;  // inliers on static-object map points
   std::vector<std::pair<std::string, double>> stage_ms;  // extract, track, local_map, mapping...
   bool relocalised = false;                              // this frame recovered from Lost
-  bool loop_closed = false;        // a loop was closed before this frame was tracked (the map moved)
-  double loop_correction_m = 0;    // then: how far the loop keyframe's centre moved
-  int loop_object_rejections = 0;  // loop candidates the BEV object check refused since the last frame
-  int object_landmarks = 0;        // object landmarks in the map
-  int object_factors = 0;          // object factors (box and surface) in the last local BA before this frame
+  bool loop_closed = false;                  // a loop was closed before this frame was tracked (the map moved)
+  double loop_correction_m = 0;              // then: how far the loop keyframe's centre moved
+  int loop_object_rejections = 0;            // loop candidates the BEV object check refused since the last frame
+  int relocalisation_object_rejections = 0;  // relocalisation candidates the parked-car check refused
+  int object_landmarks = 0;                  // object landmarks in the map
+  int object_factors = 0;                    // object factors (box and surface) in the last local BA before this frame
   // The frame's keypoints: pixel, mask label under it, matched to a map point (pose inlier), octave.
   struct Keypoint {
     float x = 0, y = 0;
@@ -261,6 +265,7 @@ struct Statistics {
   int frames = 0, frames_tracked = 0, keyframes = 0, keyframes_culled = 0, map_points = 0;
   int resets = 0, relocalisations = 0;
   int loop_closures = 0, loop_object_rejections = 0, loop_candidates = 0;
+  int relocalisation_object_rejections = 0;
   std::vector<std::pair<int64_t, int64_t>> loop_frames;  // (frame, matched earlier frame) per closure
   int64_t initialised_at_frame = -1;
   int64_t metric_from_frame = -1;   // first frame tracked in metres (-1: never)
@@ -292,7 +297,8 @@ class OrbSlam {
   void prepare(const cv::Mat& gray, int64_t frame_index);
 
   // gray: CV_8UC1 (or CV_8UC3 BGR, converted; colour kept for map points); label_mask: CV_16UC1 or empty;
-  // car_boxes: the frame's tracked cars (ObjectBox), used with metric_scale. lidar_cam: the frame's LiDAR
+  // car_boxes: the frame's cars (ObjectBox; object_id -1 for untracked ones, which only relocalisation's
+  // parked-car check uses), used with metric_scale. lidar_cam: the frame's LiDAR
   // scan in the camera frame (metres), if it has one; used with metric_scale and lidar_scale.
   TrackResult track(const cv::Mat& gray, const cv::Mat& label_mask, double timestamp, int64_t frame_index,
                     const std::vector<ObjectBox>& car_boxes = {}, const Eigen::Matrix3Xf* lidar_cam = nullptr);

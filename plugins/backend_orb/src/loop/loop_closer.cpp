@@ -13,6 +13,8 @@
 #include "map/map.hpp"
 #include "map/map_point.hpp"
 #include "matching/matcher.hpp"
+#include "objects/object_layout.hpp"
+#include "objects/object_store.hpp"
 #include "optimize/bundle_adjustment.hpp"
 #include "optimize/pose_optimizer.hpp"
 #include "place/keyframe_database.hpp"
@@ -28,19 +30,10 @@ constexpr int kCovisibilityEdgeWeight = 100;  // ORB-SLAM2's essential graph thr
 
 loop::PinholeIntrinsics intrinsics(const Camera& c) { return {c.fx, c.fy, c.cx, c.cy}; }
 
-// Centres of the parked cars (static-object map points grouped by object id) a keyframe sees, in the
-// frame that `to_camera` maps the world into.
-std::vector<Eigen::Vector3d> parkedCars(const KeyFrame* kf, const Sim3& to_camera) {
-  std::map<int32_t, std::pair<Eigen::Vector3d, int>> sums;
-  for (const MapPoint* mp : kf->validPoints()) {
-    if (mp->object_id < 0 || !mp->trusted) continue;
-    auto& [sum, n] = sums.try_emplace(mp->object_id, Eigen::Vector3d::Zero(), 0).first->second;
-    sum += mp->position;
-    ++n;
-  }
-  std::vector<Eigen::Vector3d> out;
-  for (const auto& [id, s] : sums)
-    if (s.second >= 3) out.push_back(to_camera * (s.first / s.second));
+// The parked cars a keyframe sees (objects/object_layout.hpp), in the frame that `to_camera` maps the world into.
+std::vector<Eigen::Vector3d> parkedCars(const KeyFrame* kf, const objects::ObjectStore& store, const Sim3& to_camera) {
+  std::vector<Eigen::Vector3d> out = objects::parkedCarCentres(*kf, store);
+  for (Eigen::Vector3d& p : out) p = to_camera * p;
   return out;
 }
 
@@ -283,22 +276,16 @@ bool LoopCloser::process(KeyFrame* kf, bool metric) {
     // BEV object check: parked cars of the loop keyframe, moved by the loop transform, against the new one's.
     if (options_.object_check) {
       const double radius = metric ? options_.object_radius : options_.object_radius * kf->medianDepth() / 10.0;
-      const auto cars_now = parkedCars(kf, Sim3::fromIsometry(kf->T_cw));
-      const auto cars_then = parkedCars(loop_kf, S_cw_corrected);
-      if (static_cast<int>(cars_now.size()) >= options_.object_min_cars &&
-          static_cast<int>(cars_then.size()) >= options_.object_min_cars) {
-        int disagree = 0;
-        for (const Eigen::Vector3d& p : cars_then) {
-          double nearest = 1e300;
-          for (const Eigen::Vector3d& q : cars_now) nearest = std::min(nearest, (p - q).norm());
-          if (nearest > radius) ++disagree;
-        }
-        if (disagree > options_.object_max_disagreement * static_cast<double>(cars_then.size())) {
-          ++stats_.object_rejections;
-          if (debug)
-            std::fprintf(stderr, "    BEV object check: %d of %zu parked cars disagree\n", disagree, cars_then.size());
-          continue;
-        }
+      const auto cars_now = parkedCars(kf, map_.objects(), Sim3::fromIsometry(kf->T_cw));
+      const auto cars_then = parkedCars(loop_kf, map_.objects(), S_cw_corrected);
+      const objects::LayoutCheck check = objects::compareLayouts(
+          cars_then, cars_now, {radius, options_.object_max_disagreement, options_.object_min_cars});
+      if (debug)
+        std::fprintf(stderr, "    BEV object check: %zu parked cars then, %zu now; %s (%d disagree)\n",
+                     cars_then.size(), cars_now.size(), check.decided ? "decided" : "undecided", check.disagree);
+      if (check.rejected) {
+        ++stats_.object_rejections;
+        continue;
       }
     }
     timings_.emplace_back("loop_check", msSince(t0));

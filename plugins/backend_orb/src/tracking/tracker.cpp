@@ -15,6 +15,7 @@
 #include "map/map_point.hpp"
 #include "map_io/localise_in_map.hpp"
 #include "matching/matcher.hpp"
+#include "objects/object_layout.hpp"
 #include "optimize/bundle_adjustment.hpp"
 #include "optimize/pose_optimizer.hpp"
 #include "place/keyframe_database.hpp"
@@ -559,8 +560,30 @@ bool Tracker::relocaliseWith(KeyFrame* kf) {
     }
   }
   if (good < 50) return false;
+  if (!carsAgreeWith(kf)) {
+    ++reloc_object_rejections_;
+    if (std::getenv("BESLAM_ORB_DEBUG")) std::fprintf(stderr, "  refused: its parked cars disagree\n");
+    return false;
+  }
   discardOutliers();
   return true;
+}
+
+// The candidate keyframe's parked cars, placed by the recovered pose, against the frame's car boxes. Only
+// the cars the frame could show are expected: in front of the camera, inside the image, and no farther
+// than the farthest car box of the frame (what the detector reaches here). Without boxes: no check.
+bool Tracker::carsAgreeWith(const KeyFrame* kf) const {
+  if (!options_.relocalisation_object_check || cars_in_view_.empty()) return true;
+  double reach = 0;
+  for (const Eigen::Vector3d& p : cars_in_view_) reach = std::max(reach, p.norm());
+  std::vector<Eigen::Vector3d> p_cam = objects::parkedCarCentres(*kf, map_.objects());
+  for (Eigen::Vector3d& p : p_cam) p = current_.T_cw * p;
+  const std::vector<Eigen::Vector3d> expected = objects::carsInView(p_cam, camera_, reach);
+  const objects::LayoutCheck check = objects::compareLayouts(expected, cars_in_view_, objects::LayoutOptions());
+  if (std::getenv("BESLAM_ORB_DEBUG"))
+    std::fprintf(stderr, "  parked-car check: %zu cars expected in view, %zu car boxes; %s (%d disagree)\n",
+                 expected.size(), cars_in_view_.size(), check.decided ? "decided" : "undecided", check.disagree);
+  return !check.rejected;
 }
 
 // Without a vocabulary: the last good pose's neighbourhood searched by projection, then PnP.

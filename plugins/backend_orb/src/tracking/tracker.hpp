@@ -52,6 +52,11 @@ class Tracker {
   // keyframes' LiDAR ranges): ask for a keyframe when few of the frame's ranged keypoints are tracked. Set
   // per frame.
   void useLidarPoints(bool on) { lidar_points_ = on; }
+  // The frame's car boxes (centres in the camera frame, metres, any motion state) when the map is metric,
+  // for the parked-car check of relocalisation candidates (Options::relocalisation_object_check); empty
+  // otherwise (no check). Set per frame.
+  void setCarsInView(std::vector<Eigen::Vector3d> p_cam) { cars_in_view_ = std::move(p_cam); }
+  int relocalisationObjectRejections() const { return reloc_object_rejections_; }
   bool initialising() const { return state_ == TrackingState::NotInitialized; }
   TrackingState state() const { return state_; }
   std::optional<Eigen::Isometry3d> predictPose() const;  // T_world_cam
@@ -95,6 +100,7 @@ class Tracker {
   bool relocaliseByBoW();
   bool relocaliseNearLastPose();
   bool relocaliseWith(KeyFrame* kf);
+  bool carsAgreeWith(const KeyFrame* kf) const;
   void computeBow(Frame& f) const;
   bool localiseInLoadedMap();
   bool trackLocalMap();
@@ -137,6 +143,8 @@ class Tracker {
 
   std::vector<FrameRecord> records_;
   int resets_ = 0, relocalisations_ = 0;
+  std::vector<Eigen::Vector3d> cars_in_view_;
+  int reloc_object_rejections_ = 0;
   int64_t initialised_at_ = -1;
   bool lidar_points_ = false;
   bool map_loaded_ = false;     // never reset a loaded map
