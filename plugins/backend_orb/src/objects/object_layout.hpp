@@ -1,7 +1,7 @@
 // The layout of parked cars as a check of place (BE-SLAM's BEV object check). Loop closing compares the
 // cars the loop keyframe sees, moved by the loop transform, with the ones the new keyframe sees;
 // relocalisation compares the cars the candidate keyframe sees, placed by the recovered pose, with the
-// frame's own boxes of parked cars. A place whose parked cars mostly stand elsewhere is the wrong place.
+// frame's own car boxes. A place whose parked cars mostly stand where the view has no car is the wrong place.
 //
 // Where a car stands: its reconstructed landmark's centre when the map holds one (the centre of the whole
 // car, the same from every side), else the centroid of its trusted map points (the side the camera saw:
