@@ -6,6 +6,7 @@
 #include <map>
 #include <utility>
 
+#include "map/camera_model.hpp"
 #include "map/keyframe.hpp"
 #include "map/map_point.hpp"
 #include "objects/object_store.hpp"
@@ -20,14 +21,11 @@ std::vector<Eigen::Vector3d> parkedCarCentres(const KeyFrame& kf, const ObjectSt
     sum += mp->position;
     ++n;
   }
-  std::map<int64_t, Eigen::Vector3d> landmark_centres;
-  for (const ObjectEntry& e : store.entries())
-    landmark_centres.emplace(e.landmark.id, e.landmark.T_world_object.translation());
   std::vector<Eigen::Vector3d> out;
   for (const auto& [id, s] : sums) {
     if (s.second < min_points) continue;
-    const auto landmark = landmark_centres.find(id);
-    out.push_back(landmark != landmark_centres.end() ? landmark->second : Eigen::Vector3d(s.first / s.second));
+    const ObjectEntry* landmark = store.find(id);
+    out.push_back(landmark ? landmark->landmark.T_world_object.translation() : Eigen::Vector3d(s.first / s.second));
   }
   return out;
 }
@@ -36,10 +34,8 @@ std::vector<Eigen::Vector3d> carsInView(const std::vector<Eigen::Vector3d>& p_ca
   std::vector<Eigen::Vector3d> out;
   for (const Eigen::Vector3d& p : p_cam) {
     if (p.z() < 1.0 || p.norm() > reach) continue;
-    const double u = camera.fx * p.x() / p.z() + camera.cx;
-    const double v = camera.fy * p.y() / p.z() + camera.cy;
-    if (u < 0 || u >= camera.width || v < 0 || v >= camera.height) continue;
-    out.push_back(p);
+    const Eigen::Vector2d uv = project(camera, p);
+    if (inImage(camera, uv.x(), uv.y())) out.push_back(p);
   }
   return out;
 }

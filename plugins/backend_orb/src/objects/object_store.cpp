@@ -37,7 +37,11 @@ long ObjectStore::boxesAfter(int64_t id) const {
 }
 
 ObjectEntry* ObjectStore::find(int64_t id) {
-  for (ObjectEntry& e : entries_)
+  return const_cast<ObjectEntry*>(static_cast<const ObjectStore*>(this)->find(id));
+}
+
+const ObjectEntry* ObjectStore::find(int64_t id) const {
+  for (const ObjectEntry& e : entries_)
     if (e.landmark.id == id) return &e;
   return nullptr;
 }

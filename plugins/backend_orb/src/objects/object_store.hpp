@@ -32,6 +32,7 @@ class ObjectStore {
   // Keyframes with an id above this may contribute boxes of object `id` (-1: all).
   long boxesAfter(int64_t id) const;
   ObjectEntry* find(int64_t id);
+  const ObjectEntry* find(int64_t id) const;
   std::vector<ObjectEntry>& entries() { return entries_; }
   const std::vector<ObjectEntry>& entries() const { return entries_; }
   std::vector<ObjectLandmark> landmarks() const;
