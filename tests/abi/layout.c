@@ -21,7 +21,11 @@ _Static_assert(sizeof(beslam_config_value) == 48, "beslam_config_value");
 _Static_assert(sizeof(beslam_frame) == 104, "beslam_frame");
 _Static_assert(sizeof(beslam_create_info) == 192, "beslam_create_info");
 _Static_assert(offsetof(beslam_create_info, camera_height) == 184, "ABI 1.1 appends camera_height to 1.0's 184 bytes");
-_Static_assert(sizeof(beslam_track_result) == 184, "beslam_track_result");
+_Static_assert(sizeof(beslam_track_result) == 296, "beslam_track_result");
+_Static_assert(offsetof(beslam_track_result, world_moved) == 184, "ABI 1.7 appends world_moved to 1.6's 184 bytes");
+_Static_assert(offsetof(beslam_track_result, S_new_old) == 200, "beslam_track_result.S_new_old");
+_Static_assert(sizeof(beslam_motion_checker_v1) == 24, "beslam_motion_checker_v1");
+_Static_assert(offsetof(beslam_motion_checker_v1, world_moved) == 16, "ABI 1.7 appends world_moved to 1.6's 16 bytes");
 _Static_assert(offsetof(beslam_track_result, keyframe_points) == 168,
                "ABI 1.3 appends keyframe points to 1.2's 168 bytes");
 _Static_assert(offsetof(beslam_track_result, keypoints) == 152, "ABI 1.2 appends keypoints to 1.1's 152 bytes");

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
 #include <functional>
 #include <string>
 
@@ -300,6 +301,46 @@ TEST(Registry, AnAbi14DetectorsBoxesReadAsHavingNoPositionSigma) {
     EXPECT_EQ(boxes[i].position_sigma[1], 0.0);
     EXPECT_EQ(boxes[i].range_drift, 0.0);
   }
+}
+
+// ABI 1.7: a backend says how it moved its world, and the host hands that to the motion checker. A 1.6
+// checker (16-byte table, no world_moved) still loads and the host skips the call; an SDK checker gets it;
+// a change that is not finite is refused by the backend's name.
+TEST(Registry, AWorldChangeCrossesFromBackendToMotionChecker) {
+  Registry registry;
+  registry.loadLibrary(fixture("backend_world_moved"));
+  registry.loadLibrary(fixture("motion_checker_1_6"));
+  registry.loadLibrary(fixture("sdk_fixtures"));
+  beslam::registry::HostLog log;
+  beslam::registry::BackendInstance backend(registry.find("backend_world_moved"), createInfo(log, {}), log);
+  beslam::registry::MotionCheckerInstance old_checker(registry.find("motion_checker_1_6"), createInfo(log, {}), log);
+  beslam::registry::MotionCheckerInstance checker(registry.find("fixture_all_static"), createInfo(log, {}), log);
+  EXPECT_EQ(registry.find("motion_checker_1_6").functions_size, offsetof(beslam_motion_checker_v1, world_moved));
+  EXPECT_EQ(registry.find("fixture_all_static").functions_size, sizeof(beslam_motion_checker_v1));
+
+  beslam_frame frame{};
+  frame.struct_size = sizeof(frame);
+  EXPECT_FALSE(backend.track(frame, beslam_image_view{}, {}).worldChange()) << "frame 0: the world stayed";
+  frame.index = 1;
+  const auto change = backend.track(frame, beslam_image_view{}, {}).worldChange();
+  ASSERT_TRUE(change);
+  EXPECT_DOUBLE_EQ(change->scale, 1.5);
+  const Eigen::Vector3d p_new =
+      change->scale * (change->S_new_old.linear() * Eigen::Vector3d(1, 0, 0)) + change->S_new_old.translation();
+  EXPECT_TRUE(p_new.isApprox(Eigen::Vector3d(2, 0, -1.5))) << p_new.transpose();
+  frame.index = 2;
+  const std::string m = errorOf([&] { backend.track(frame, beslam_image_view{}, {}); });
+  EXPECT_NE(m.find("plugin backend_world_moved: track moved the world by a non-finite change"), std::string::npos) << m;
+
+  std::vector<beslam_box3d> boxes(1);
+  EXPECT_NO_THROW(old_checker.worldMoved(change->S_new_old, change->scale));  // no call
+  old_checker.classify(frame, Eigen::Isometry3d::Identity(), boxes);
+  EXPECT_EQ(boxes[0].track_id, 3);
+  checker.worldMoved(change->S_new_old, change->scale);
+  checker.classify(frame, Eigen::Isometry3d::Identity(), boxes);
+  EXPECT_EQ(boxes[0].track_id, 8) << "the SDK checker was told once";
+  const std::string bad = errorOf([&] { checker.worldMoved(change->S_new_old, 0.0); });
+  EXPECT_NE(bad.find("world change with scale <= 0"), std::string::npos) << bad;
 }
 
 // The one checked copy the host and the backends read landmarks through (sdk::fromC): counts that

@@ -23,7 +23,7 @@ extern "C" {
 #endif
 
 #define BESLAM_ABI_VERSION_MAJOR 1
-#define BESLAM_ABI_VERSION_MINOR 6
+#define BESLAM_ABI_VERSION_MINOR 7
 /* (major << 16) | minor, as returned by beslam_plugin_abi_version(). */
 #define BESLAM_ABI_VERSION ((uint32_t)((BESLAM_ABI_VERSION_MAJOR << 16) | BESLAM_ABI_VERSION_MINOR))
 

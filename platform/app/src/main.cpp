@@ -214,6 +214,9 @@ int runCommand(const std::vector<std::string>& args) {
                       ? "; the motion checker ran again on the " + std::to_string(s.motion_replayed_frames) +
                             " frames before, with metric poses"
                       : std::string())
+              << (s.world_moves > 0 ? "; the backend moved it " + std::to_string(s.world_moves) +
+                                          " times (loop corrections, changes of scale)"
+                                    : std::string())
               << "\n";
   else
     std::cout << "map scale: not metric (monocular unit)\n";

@@ -467,6 +467,15 @@ class Run {
       if (name == "relocalisations" && value > 0) record_.relocalisation_frames.push_back(f.frame.index);
     }
     if (loop_closed > 0) record_.loop_closures.push_back({f.frame.index, loop_correction});
+    // A world moved under a metric map (a loop correction, a change of scale): the checker's tracks follow it
+    // (ABI 1.7), so the correction does not read as parked cars moving.
+    if (const auto change = f.tracked.worldChange(); change && world_metric_ && f.tracked.worldIsMetric()) {
+      ++summary_.world_moves;
+      if (motion_) {
+        StageTimer timer(f.timing, "motion_world_moved");
+        motion_->worldMoved(change->S_new_old, change->scale);
+      }
+    }
     if (f.tracked.worldIsMetric() != world_metric_) {
       world_metric_ = f.tracked.worldIsMetric();
       summary_.metric_from_frame = world_metric_ ? f.frame.index : -1;

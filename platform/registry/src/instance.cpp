@@ -1,5 +1,6 @@
 #include "beslam/registry/instance.hpp"
 
+#include <cmath>
 #include <cstddef>
 #include <cstring>
 #include <iostream>
@@ -96,6 +97,13 @@ void MotionCheckerInstance::classify(const beslam_frame& frame, const std::optio
   check(table<beslam_motion_checker_v1>().classify(handle_, &frame, T_world_cam ? &pose : nullptr, &array), "classify");
 }
 
+void MotionCheckerInstance::worldMoved(const Eigen::Isometry3d& S_new_old, double scale) {
+  const auto world_moved = table<beslam_motion_checker_v1>().world_moved;
+  if (world_moved == nullptr) return;  // an ABI 1.6 checker
+  const beslam_pose pose = formats::toPose(S_new_old);
+  check(world_moved(handle_, &pose, scale), "world_moved");
+}
+
 void MaskGeneratorInstance::generate(const beslam_frame& frame, const std::vector<beslam_box3d>& boxes,
                                      beslam_mask_buffer& mask) {
   beslam_box_list list{boxes.data(), static_cast<uint32_t>(boxes.size()), sizeof(beslam_box3d)};
@@ -171,6 +179,12 @@ TrackOutput BackendInstance::track(const beslam_frame& frame, const beslam_image
       std::memcpy(&out.keyframe_points[i], bytes + size_t(i) * out.result.keyframe_point_size,
                   sizeof(beslam_keyframe_point));
   }
+  if (out.result.world_moved != 0) {
+    bool finite = std::isfinite(out.result.world_change_scale) && out.result.world_change_scale > 0;
+    for (double v : out.result.S_new_old.m) finite = finite && std::isfinite(v);
+    if (!finite)
+      throw Error("plugin " + plugin().id + ": track moved the world by a non-finite change or a scale <= 0");
+  }
   out.result.keypoints = nullptr;
   out.result.keypoint_count = 0;
   out.result.keyframe_points = nullptr;
@@ -180,6 +194,11 @@ TrackOutput BackendInstance::track(const beslam_frame& frame, const beslam_image
   out.result.counters = nullptr;
   out.result.counter_count = 0;
   return out;
+}
+
+std::optional<TrackOutput::WorldChange> TrackOutput::worldChange() const {
+  if (result.world_moved == 0) return std::nullopt;
+  return WorldChange{formats::toIsometry(result.S_new_old), result.world_change_scale};
 }
 
 void BackendInstance::addLandmarks(const Landmarks& landmarks) {

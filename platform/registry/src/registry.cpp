@@ -75,8 +75,8 @@ uint32_t minTableSize(int32_t kind) {
   switch (kind) {
     case BESLAM_KIND_DETECTOR:
       return sizeof(beslam_detector_v1);
-    case BESLAM_KIND_MOTION_CHECKER:
-      return sizeof(beslam_motion_checker_v1);
+    case BESLAM_KIND_MOTION_CHECKER:  // ABI 1.7's world_moved is optional
+      return offsetof(beslam_motion_checker_v1, world_moved);
     case BESLAM_KIND_MASK_GENERATOR:
       return sizeof(beslam_mask_generator_v1);
     case BESLAM_KIND_RECONSTRUCTOR:  // ABI 1.3's finish is optional

@@ -403,6 +403,12 @@ struct OrbSlam::Impl {
         mapper.lastBundleAdjustment().object_box_factors + mapper.lastBundleAdjustment().object_surface_factors;
     // Mapping is idle here in both modes: a metric scale the mapper found is applied to everything at
     // once, before this frame is tracked (the same frame in the threaded and the inline mode).
+    // What moves the metric world below (a change of scale, a loop correction) is told to the host as one
+    // change about the last tracked camera.
+    const bool was_metric = mapper.metric();
+    const std::optional<Eigen::Isometry3d> T_world_last_before = tracker.lastWorldCam();
+    double world_scale_change = 1;
+    bool world_moved = false;
     if (const auto s = mapper.takePendingScale()) becomeMetric(*s, index);
     if (mapper.lidarScaled() && !stats.lidar_scaled) {
       // The scan measures the unit directly and holds it in local BA: the parked cars' fit is not needed.
@@ -421,6 +427,8 @@ struct OrbSlam::Impl {
         const Eigen::Vector3d centre = tracker.lastCentre();
         map.rescaleFrom(0, s, centre);
         tracker.rescaleFrom(map.keyFrameFrom(0), centre, s);
+        world_scale_change *= s;
+        world_moved = true;
       }
       mapper.objectScaled();
       if (std::getenv("BESLAM_ORB_DEBUG"))
@@ -437,6 +445,8 @@ struct OrbSlam::Impl {
       tracker.rescaleFrom(first, centre, c->factor);
       parked_scale.clear();  // its stored poses are in the old unit
       ++stats.scale_corrections;
+      world_scale_change *= c->factor;
+      world_moved = true;
       if (std::getenv("BESLAM_ORB_DEBUG"))
         std::fprintf(stderr, "frame %ld: scale x%.4f from keyframe %ld (frame %ld) on\n", static_cast<long>(index),
                      c->factor, c->first_kf_id, static_cast<long>(first->frame_index));
@@ -445,8 +455,9 @@ struct OrbSlam::Impl {
     double loop_correction_m = -1;
     if (loop_pending) {  // mapping closed a loop after the last frame: the tracked frames follow the map
       loop_pending = false;
-      tracker.followCorrection(loop_closer->posesBefore());
-      parked_scale.clear();  // its stored poses are from before the correction
+      tracker.followCorrection(loop_closer->posesBefore());  // rigid: a metric map's loop keeps its scale
+      parked_scale.clear();                                  // its stored poses are from before the correction
+      world_moved = true;
       const LoopClosureEvent& e = loop_closer->stats().closures.back();
       loop_correction_m = e.correction_m;
       stats.loop_frames.emplace_back(e.frame_index, e.loop_frame_index);
@@ -457,6 +468,17 @@ struct OrbSlam::Impl {
             "corrected %d keyframes in %.0f ms\n",
             static_cast<long>(index), static_cast<long>(e.frame_index), static_cast<long>(e.loop_frame_index),
             e.matches, e.correction_m, e.correction_deg, e.keyframes, e.correct_ms);
+    }
+    std::optional<Eigen::Isometry3d> S_new_old;
+    const std::optional<Eigen::Isometry3d> T_world_last_after = tracker.lastWorldCam();
+    if (world_moved && was_metric && mapper.metric() && T_world_last_before && T_world_last_after) {
+      // p_new = s R p_old + t, with the last camera carried along: R = R_after R_before^T and its centre
+      // c_after = s R c_before + t.
+      Eigen::Isometry3d S = Eigen::Isometry3d::Identity();
+      S.linear() = T_world_last_after->linear() * T_world_last_before->linear().transpose();
+      S.translation() =
+          T_world_last_after->translation() - world_scale_change * (S.linear() * T_world_last_before->translation());
+      S_new_old = S;
     }
     double background_mapping_ms = 0;
     if (options.threaded_mapping) {
@@ -480,6 +502,8 @@ struct OrbSlam::Impl {
     TrackResult result = tracker.track(features, timestamp, index);
     result.relocalisation_object_rejections = tracker.relocalisationObjectRejections() - reloc_rejections_before;
     result.world_is_metric = mapper.metric();
+    result.S_new_old = S_new_old;
+    result.world_change_scale = world_scale_change;
     result.loop_closed = loop_correction_m >= 0;
     result.loop_correction_m = std::max(0.0, loop_correction_m);
     if (loop_closer) {

@@ -149,6 +149,8 @@ class OrbBackend : public beslam::sdk::Backend {
                     {"relocalisation_object_rejections", r.relocalisation_object_rejections},
                     {"object_landmarks", r.object_landmarks},
                     {"object_factors", r.object_factors}};
+    out.S_new_old = r.S_new_old;
+    out.world_change_scale = r.world_change_scale;
     out.keypoints.reserve(r.keypoints.size());
     for (const auto& k : r.keypoints)
       out.keypoints.push_back(

@@ -136,6 +136,55 @@ void BevTracker::reset() {
   jitter_rms_ = 0;
   ego_speed_ = ego_yaw_rate_ = 0;
   ego_velocity_ = Eigen::Vector2d::Zero();
+  last_frame_posed_ = false;
+}
+
+void BevTracker::worldMoved(const Eigen::Isometry3d& S_new_old, double scale) {
+  if (!S_new_old.matrix().allFinite() || !std::isfinite(scale) || !(scale > 0))
+    throw std::invalid_argument("motion tracker: a world change needs a finite transform and a scale > 0");
+  if (!pose_mode_) return;  // nothing placed in the world yet
+  // A camera centre moves with the change, scale included; a box's offset from the camera that saw it is in
+  // metres (the detector's), so it only turns with the camera. In the BEV plane: a point is lifted to the
+  // height of the latest camera (a correction's tilt is a fraction of a degree), moved, and projected again.
+  const Eigen::Matrix3d R = S_new_old.linear();
+  const double y = poses_.empty() ? 0.0 : poses_.back().second.translation().y();
+  auto moveCentre = [&](const Eigen::Vector2d& c) {
+    const Eigen::Vector3d q = scale * (R * Eigen::Vector3d(c.x(), y, c.y())) + S_new_old.translation();
+    return Eigen::Vector2d(q.x(), q.z());
+  };
+  Eigen::Matrix2d L;  // the turn of BEV vectors (offsets, velocities, covariances)
+  L << R(0, 0), R(0, 2), R(2, 0), R(2, 2);
+  auto seenFrom = [&](const Eigen::Vector2d& p, const Eigen::Vector2d& cam) {
+    return Eigen::Vector2d(moveCentre(cam) + L * (p - cam));
+  };
+  Eigen::Matrix4d J = Eigen::Matrix4d::Zero();
+  J.topLeftCorner<2, 2>() = J.bottomRightCorner<2, 2>() = L;
+  auto turn = [&](double yaw) {
+    const Eigen::Vector2d h = L * Eigen::Vector2d(std::cos(yaw), std::sin(yaw));
+    return std::atan2(h.y(), h.x());
+  };
+  for (Track& t : tracks_) {
+    const Eigen::Vector2d last_cam = t.history.empty() ? Eigen::Vector2d(t.x.head<2>()) : t.history.back().cam;
+    t.x.head<2>() = seenFrom(t.x.head<2>(), last_cam);
+    t.x.tail<2>() = L * t.x.tail<2>();
+    t.P = J * t.P * J.transpose();
+    t.yaw_bev = turn(t.yaw_bev);
+    for (Observation& o : t.history) {
+      o.p = seenFrom(o.p, o.cam);
+      o.cam = moveCentre(o.cam);
+      o.cov = L * o.cov * L.transpose();
+      o.drift_cov = L * o.drift_cov * L.transpose();
+    }
+    t.anchor = seenFrom(t.anchor, t.anchor_cam);
+    t.anchor_cam = moveCentre(t.anchor_cam);
+    t.anchor_cov = L * t.anchor_cov * L.transpose();
+  }
+  for (auto& [t, T_world_cam] : poses_) {
+    T_world_cam.translation() = scale * (R * T_world_cam.translation()) + S_new_old.translation();
+    T_world_cam.linear() = R * T_world_cam.linear();
+  }
+  ego_velocity_ = scale * (L * ego_velocity_);
+  ego_speed_ *= scale;
 }
 
 BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
@@ -344,6 +393,8 @@ void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_
     track.anchor_n = std::min(track.anchor_n + 1, params_.anchor_frames);
     track.anchor = track.anchor_n == 1 ? o.p : Eigen::Vector2d(track.anchor + (o.p - track.anchor) / track.anchor_n);
     track.anchor_t = track.anchor_n == 1 ? o.t : track.anchor_t + (o.t - track.anchor_t) / track.anchor_n;
+    track.anchor_cam =
+        track.anchor_n == 1 ? o.cam : Eigen::Vector2d(track.anchor_cam + (o.cam - track.anchor_cam) / track.anchor_n);
     track.anchor_cov = o.cov / track.anchor_n;
   } else if (track.state != BESLAM_MOTION_STATIC) {
     track.anchor_n = 0;
@@ -382,6 +433,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
 
   // Camera pose: given, extrapolated from the last two, or none (camera frame, decisions UNKNOWN).
   std::optional<Eigen::Isometry3d> T_world_cam = T_world_cam_in;
+  bool extrapolated = false;
   if (T_world_cam) {
     if (!T_world_cam->matrix().allFinite()) throw std::invalid_argument("motion tracker: non-finite camera pose");
     if (!pose_mode_) {  // tracks built in the camera frame cannot continue in the world frame
@@ -389,7 +441,10 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       pose_mode_ = true;
       first_pose_t_ = now;
     }
-    if (params_.pose_jitter && poses_.size() == 2 && poses_[1].first > poses_[0].first && now > poses_[1].first) {
+    // Jitter is measured between consecutive given poses only: after a gap the prediction spans the gap,
+    // and how far the ego's real path leaves a straight extrapolation over seconds is no pose error.
+    if (params_.pose_jitter && last_frame_posed_ && poses_.size() == 2 && poses_[1].first > poses_[0].first &&
+        now > poses_[1].first) {
       // How far the pose is from where steady motion would have put it: a real vehicle's acceleration
       // explains centimetres at 10 Hz, a backend's map correction decimetres to metres.
       const Eigen::Vector3d d = T_world_cam->translation() - steadyPose(now).translation();
@@ -411,6 +466,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       ego_velocity_ = Eigen::Vector2d(d.x(), d.z()) / span;
     }
   } else if (!poses_.empty() && now - poses_.back().first > params_.max_miss_time) {
+    last_frame_posed_ = false;
     // The backend has given no pose for longer than a track may coast: an extrapolated ego pose would place
     // every parked car wrongly (a lost SLAM, a long gap). Every box is unknown, and the tracks wait,
     // untouched, for the next real pose.
@@ -420,9 +476,12 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     return unknown;
   } else if (!poses_.empty()) {
     T_world_cam = steadyPose(now);
+    extrapolated = true;
   }
+  last_frame_posed_ = T_world_cam_in.has_value();
   const Eigen::Isometry3d T_wc = T_world_cam ? *T_world_cam : Eigen::Isometry3d::Identity();
   const Eigen::Matrix3d R_wc = T_wc.linear();
+  const Eigen::Vector2d cam(T_wc.translation().x(), T_wc.translation().z());
 
   // Predict every track to now.
   const double q = params_.accel_sigma * params_.accel_sigma;
@@ -511,12 +570,24 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       if (a[i] >= 0 && cost[i * m + static_cast<size_t>(a[i])] < kNoMatch) det_to_track[i] = a[i];
   }
 
-  // Update matched tracks, start new ones.
+  // Update matched tracks, start new ones. With an extrapolated pose a box only keeps its track alive and
+  // takes its state: where the ego really went is a guess, so its position is no evidence (a guess off by a
+  // metre over a second reads as a parked car moving at a metre a second), and no track starts from it.
   std::vector<Decision> out(n);
   std::vector<char> matched(m, 0);
   for (size_t i = 0; i < n; ++i) {
     const beslam_box3d& b = boxes[i];
     Track* t = nullptr;
+    if (extrapolated) {
+      out[i].range = range[i];
+      if (det_to_track[i] < 0) continue;
+      t = &tracks_[static_cast<size_t>(det_to_track[i])];
+      matched[static_cast<size_t>(det_to_track[i])] = 1;
+      t->last_t = now;
+      out[i].track_id = t->id;
+      out[i].motion_state = range[i] <= params_.max_range ? t->state : BESLAM_MOTION_UNKNOWN;
+      continue;
+    }
     if (det_to_track[i] >= 0) {
       t = &tracks_[static_cast<size_t>(det_to_track[i])];
       matched[static_cast<size_t>(det_to_track[i])] = 1;
@@ -547,7 +618,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     t->length = b.size[0] > 0 ? b.size[0] : t->length;
     t->width = b.size[1] > 0 ? b.size[1] : t->width;
     ++t->hits;
-    t->history.push_back({now, p[i], v_sigma[i], cov[i], drift_cov[i], line_of_sight[i].squaredNorm() == 0});
+    t->history.push_back({now, p[i], cam, v_sigma[i], cov[i], drift_cov[i], line_of_sight[i].squaredNorm() == 0});
     while (static_cast<int>(t->history.size()) > params_.max_history) t->history.pop_front();
 
     Decision& d = out[i];

@@ -40,6 +40,8 @@ class MotionBevTracker : public beslam::sdk::MotionChecker {
     tracker_.classify(frame.timestamp, T_world_cam, boxes);
   }
 
+  void worldMoved(const Eigen::Isometry3d& S_new_old, double scale) override { tracker_.worldMoved(S_new_old, scale); }
+
  private:
   beslam::motion::BevTracker tracker_;
 };

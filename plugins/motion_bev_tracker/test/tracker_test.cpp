@@ -592,6 +592,98 @@ TEST(BevTracker, LongPoseGapsGiveUnknownNotExtrapolation) {
   EXPECT_EQ(unknown_in_gap, boxes_in_gap) << "more than 1 s after the last pose every box is unknown";
 }
 
+// A loop correction moves the backend's world under the tracker at frame 30: from then on every pose is the
+// old one moved by S (3 degrees, 1.5 m, scale 0.95: the map's unit corrected by 5 %; the boxes stay metric). Told of
+// it, the tracker carries its tracks over, so parked cars stay static on the same tracks and the moving car stays
+// dynamic; not told (the control), the parked cars seem to jump: their tracks break and they are unknown again for
+// seconds.
+TEST(BevTracker, FollowsAWorldMovedUnderIt) {
+  Eigen::Isometry3d S = Eigen::Isometry3d::Identity();
+  S.linear() = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  S.translation() = Eigen::Vector3d(1.2, 0.05, -0.9);
+  const double scale = 0.95;
+  auto runWith = [&](bool told) {
+    Sim sim;
+    sim.objects = {parked(4.0, 30.0), parked(-4.0, 40.0), parked(4.0, 50.0), driving(-3.0, 25.0, 0.0, 14.0)};
+    BevTracker tracker(backendOrbProfile(true));
+    std::vector<std::map<int, Decision>> out(sim.objects.size());
+    std::vector<int> ids;
+    for (int k = 0; k < 60; ++k) {
+      if (k == 30 && told) tracker.worldMoved(S, scale);
+      Eigen::Isometry3d pose = sim.ego(k * kDt);
+      if (k >= 30) {  // the same camera in the moved world: centre s R c + t, rotation R R_wc
+        pose.translation() = scale * (S.linear() * pose.translation()) + S.translation();
+        pose.linear() = S.linear() * pose.linear();
+      }
+      const std::vector<beslam_box3d> boxes = sim.boxes(k, ids);
+      const std::vector<Decision> d = tracker.update(k * kDt, pose, boxes);
+      for (size_t i = 0; i < d.size(); ++i) out[static_cast<size_t>(ids[i])][k] = d[i];
+    }
+    return out;
+  };
+  const auto told = runWith(true), not_told = runWith(false);
+  int static_told = 0, static_not_told = 0, broken_not_told = 0;
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(countState(told[i], BESLAM_MOTION_DYNAMIC), 0) << "parked car " << i;
+    EXPECT_EQ(trackCount(told[i]), 1u) << "parked car " << i << " changed track";
+    int not_static = 0;  // static from before the change to the end
+    for (auto it = told[i].lower_bound(25); it != told[i].end(); ++it)
+      not_static += it->second.motion_state != BESLAM_MOTION_STATIC;
+    EXPECT_EQ(not_static, 0) << "parked car " << i;
+    static_told += countState(told[i], BESLAM_MOTION_STATIC, 30);
+    static_not_told += countState(not_told[i], BESLAM_MOTION_STATIC, 30);
+    broken_not_told += trackCount(not_told[i]) > 1 ? 1 : 0;
+  }
+  EXPECT_EQ(countState(told[3], BESLAM_MOTION_STATIC), 0);
+  EXPECT_GT(countState(told[3], BESLAM_MOTION_DYNAMIC, 30), 20);
+  // The control: not told, the jump breaks the parked cars' tracks and their states start again from unknown.
+  EXPECT_GT(broken_not_told, 0);
+  EXPECT_LT(static_not_told, static_told / 2);
+}
+
+TEST(BevTracker, RejectsANonFiniteWorldChange) {
+  BevTracker tracker;
+  Eigen::Isometry3d S = Eigen::Isometry3d::Identity();
+  EXPECT_THROW(tracker.worldMoved(S, 0.0), std::invalid_argument);
+  S.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(tracker.worldMoved(S, 1.0), std::invalid_argument);
+}
+
+// The backend loses the camera for 0.8 s in a bend (no pose; the tracker carries the last two on, at their
+// speed and turn rate, while the real ego slows from 6 to 3 m/s): boxes placed with the guess keep their tracks
+// but give no evidence, so the parked cars are never called dynamic, keep their tracks, and the pose jitter is
+// not taken from the gap.
+TEST(BevTracker, BoxesPlacedWithAnExtrapolatedPoseGiveNoEvidence) {
+  Sim sim;
+  // Along the bend, then slower: arc length 6 t until 2 s, then 12 + 3 (t - 2).
+  auto arc = [](double t) { return t < 2.0 ? 6.0 * t : 12.0 + 3.0 * (t - 2.0); };
+  sim.ego = [arc](double t) { return turningEgo(arc(t) / 6.0); };
+  for (int i = 0; i < 6; ++i) {
+    const double b = 0.5 + 0.2 * i;
+    sim.objects.push_back(parked(-20.0 + 25.0 * std::cos(b), 25.0 * std::sin(b)));
+  }
+  BevTracker tracker(backendOrbProfile(true));
+  std::vector<std::map<int, Decision>> out(sim.objects.size());
+  std::vector<int> ids;
+  double jitter_after_gap = 0;
+  for (int k = 0; k < 45; ++k) {
+    std::optional<Eigen::Isometry3d> pose;
+    if (k < 20 || k >= 28) pose = sim.ego(k * kDt);
+    const std::vector<beslam_box3d> boxes = sim.boxes(k, ids);
+    const std::vector<Decision> d = tracker.update(k * kDt, pose, boxes);
+    for (size_t i = 0; i < d.size(); ++i) out[static_cast<size_t>(ids[i])][k] = d[i];
+    if (k == 29) jitter_after_gap = tracker.poseJitter();
+  }
+  int seen = 0;
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (out[i].empty()) continue;
+    ++seen;
+    EXPECT_EQ(countState(out[i], BESLAM_MOTION_DYNAMIC), 0) << "parked car " << i;
+  }
+  EXPECT_GE(seen, 3);
+  EXPECT_LT(jitter_after_gap, 0.05);
+}
+
 TEST(BevTracker, DetectorVelocityDecidesWithinStartFrames) {
   BevTracker tracker;  // start_frames = 2
   beslam_box3d moving{}, still{};

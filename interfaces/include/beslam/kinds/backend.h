@@ -60,6 +60,15 @@ typedef struct beslam_track_result {
   const beslam_keyframe_point* keyframe_points;
   uint32_t keyframe_point_count;
   uint32_t keyframe_point_size;
+  /* ABI 1.7. world_moved = 1: this call moved the backend's world (a loop correction, a change of scale),
+   * and T_world_cam and every later pose are in the moved world. A point the world held before the call is
+   * now at world_change_scale * R * p + t, [R | t] = S_new_old; the change is exact about the last tracked
+   * camera (where the objects a motion checker follows are) and approximate farther away. 0: the world
+   * stayed as it was (an ABI 1.6 backend leaves 0). */
+  int32_t world_moved;
+  uint32_t reserved_1_7;
+  double world_change_scale;
+  beslam_pose S_new_old;
 } beslam_track_result;
 
 #define BESLAM_TRAJECTORY_FINAL 0     /* every tracked frame, relative to its keyframe after optimisation */

@@ -18,6 +18,11 @@ typedef struct beslam_motion_checker_v1 {
    * answers BESLAM_MOTION_UNKNOWN, or decides only by a test that needs no scale. */
   beslam_status (*classify)(void* instance, const beslam_frame* frame, const beslam_pose* T_world_cam,
                             beslam_box_array* boxes);
+  /* ABI 1.7, optional (NULL, or absent from an older table: the host skips it). The backend moved its
+   * world (beslam_track_result.world_moved) while the world was metric: a point the checker placed in the
+   * world is now at scale * R * p + t, [R | t] = S_new_old, and the next classify's pose is in the moved
+   * world. Called after the track() that moved it, before the next classify. */
+  beslam_status (*world_moved)(void* instance, const beslam_pose* S_new_old, double scale);
 } beslam_motion_checker_v1;
 
 #ifdef __cplusplus

@@ -211,8 +211,13 @@ struct TrackResult {
   int tracked_static = 0;  // inliers on static-object map points
   std::vector<std::pair<std::string, double>> stage_ms;  // extract, track, local_map, mapping...
   bool relocalised = false;                              // this frame recovered from Lost
-  bool loop_closed = false;                  // a loop was closed before this frame was tracked (the map moved)
-  double loop_correction_m = 0;              // then: how far the loop keyframe's centre moved
+  bool loop_closed = false;      // a loop was closed before this frame was tracked (the map moved)
+  double loop_correction_m = 0;  // then: how far the loop keyframe's centre moved
+  // The metric world moved before this frame was tracked (a loop correction, a change of scale): a point the
+  // world held at p is at world_change_scale * (R * p) + t now, [R | t] = *S_new_old, exact about the last
+  // tracked camera. Empty when nothing moved it, or the world was not metric before.
+  std::optional<Eigen::Isometry3d> S_new_old;
+  double world_change_scale = 1.0;
   int loop_object_rejections = 0;            // loop candidates the BEV object check refused since the last frame
   int relocalisation_object_rejections = 0;  // relocalisation candidates the parked-car check refused
   int object_landmarks = 0;                  // object landmarks in the map

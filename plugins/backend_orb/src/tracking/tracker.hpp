@@ -88,6 +88,10 @@ class Tracker {
   void followCorrection(const std::map<long, Eigen::Isometry3d>& T_cw_before);
   // The centre of the last tracked frame (world), the fixed point of scale corrections.
   Eigen::Vector3d lastCentre() const { return last_.T_cw.inverse().translation(); }
+  // The last tracked frame's pose (world from camera), empty before the first.
+  std::optional<Eigen::Isometry3d> lastWorldCam() const {
+    return last_.has_pose ? std::optional<Eigen::Isometry3d>(last_.T_cw.inverse()) : std::nullopt;
+  }
 
  private:
   void initialise(TrackResult& result);

@@ -31,6 +31,11 @@ struct TrackResult {
   std::vector<beslam_keypoint> keypoints;
   // When is_keyframe (ABI 1.3): the map points the new keyframe observes, for the reconstructor.
   std::vector<KeyframePoint> keyframe_points;
+  // ABI 1.7: this call moved the world (a loop correction, a change of scale): a point the world held at
+  // p_old is now at world_change_scale * R * p_old + t, [R | t] = *S_new_old, exact about the last tracked
+  // camera. Empty when the world stayed.
+  std::optional<Eigen::Isometry3d> S_new_old;
+  double world_change_scale = 1.0;
 };
 
 struct TrajectoryEntry {

@@ -66,6 +66,7 @@ struct RunSummary {
   // The world unit: the first frame the backend said its world was in metres (-1: never).
   int64_t metric_from_frame = -1;
   int64_t motion_replayed_frames = 0;  // frames the motion checker was run on again when the world turned metric
+  int64_t world_moves = 0;             // times the backend moved its metric world (ABI 1.7), handed to the checker
   double camera_height = 0;            // the rig value handed to the plugins (0: unknown)
   // Detections after the motion checker, by motion state; frames whose mask marks any pixel.
   int64_t detections_static = 0, detections_dynamic = 0, detections_unknown = 0;

@@ -65,6 +65,9 @@ class MotionCheckerInstance : public Instance {
   using Instance::Instance;
   void classify(const beslam_frame& frame, const std::optional<Eigen::Isometry3d>& T_world_cam,
                 std::vector<beslam_box3d>& boxes);
+  // ABI 1.7: the backend moved its world (p_new = scale * R * p_old + t, [R | t] = S_new_old); nothing for a
+  // checker without the call (an older table, or NULL).
+  void worldMoved(const Eigen::Isometry3d& S_new_old, double scale);
 };
 
 class MaskGeneratorInstance : public Instance {
@@ -95,6 +98,12 @@ struct TrackOutput {
   std::vector<beslam_keypoint> keypoints;              // ABI 1.2 (empty from older backends)
   std::vector<beslam_keyframe_point> keyframe_points;  // ABI 1.3: what a new keyframe observes
   bool worldIsMetric() const { return result.world_scale == BESLAM_WORLD_SCALE_METRIC; }
+  // ABI 1.7: how this call moved the backend's world (p_new = scale * R * p_old + t); nullopt when it did not.
+  struct WorldChange {
+    Eigen::Isometry3d S_new_old;
+    double scale;
+  };
+  std::optional<WorldChange> worldChange() const;
 };
 
 struct PoseEntry {

@@ -42,6 +42,11 @@
 // across it (unconstrained) below static_speed. Windows whose boxes carry no noise take the plain fit above,
 // unchanged.
 //
+// No pose for a frame (the backend lost): the last two poses are carried on for at most max_miss_time. Boxes
+// placed with that guess keep their tracks alive and take their state, but give no evidence and start no track;
+// pose jitter is measured between consecutive given poses only. A world change (worldMoved: a loop correction)
+// re-expresses every track in the new world.
+//
 // Pose jitter (pose_jitter: true, for the poses of a monocular SLAM backend): a vehicle cannot leave its
 // constant-velocity path by much between two frames, so how far the given poses do (a backend correcting
 // itself) is measured as an RMS over the last window_static seconds, and every world position made with
@@ -132,6 +137,14 @@ class BevTracker {
   void classify(double timestamp, const std::optional<Eigen::Isometry3d>& T_world_cam,
                 std::vector<beslam_box3d>& boxes);
 
+  // The pose source moved its world (a loop correction, a change of scale): a point it held at p_old is at
+  // scale * R * p_old + t now ([R | t] = S_new_old). Every track, its history and parked position, and the
+  // last poses are expressed in the new world, so the next pose (already in it) continues them: the
+  // correction reads neither as motion of the cars nor as pose jitter. The camera centres move by the whole
+  // change; a box's offset from the camera that saw it is metric and only turns. Throws
+  // std::invalid_argument on a non-finite transform or a scale <= 0.
+  void worldMoved(const Eigen::Isometry3d& S_new_old, double scale);
+
   void reset();
   size_t trackCount() const { return tracks_.size(); }
   const Params& params() const { return params_; }
@@ -144,6 +157,7 @@ class BevTracker {
   struct Observation {
     double t;
     Eigen::Vector2d p;          // world BEV
+    Eigen::Vector2d cam;        // world BEV centre of the camera that saw it (a world change scales from it)
     double v_sigma;             // apparent velocity from ego-motion error (m/s)
     Eigen::Matrix2d cov;        // position covariance in the world BEV
     Eigen::Matrix2d drift_cov;  // velocity covariance of the box's range drift while the camera closes in
@@ -163,7 +177,8 @@ class BevTracker {
     int dynamic_run = 0, static_run = 0;
     Eigen::Vector2d anchor = Eigen::Vector2d::Zero();  // where a static track is parked
     Eigen::Matrix2d anchor_cov = Eigen::Matrix2d::Zero();
-    double anchor_t = 0;  // mean time of the parked position's observations
+    double anchor_t = 0;                                   // mean time of the parked position's observations
+    Eigen::Vector2d anchor_cam = Eigen::Vector2d::Zero();  // mean camera centre of those observations
     int anchor_n = 0;
   };
   struct Speed {
@@ -198,6 +213,7 @@ class BevTracker {
   std::vector<std::pair<double, Eigen::Isometry3d>> poses_;  // last two known poses, for extrapolation
   std::deque<std::pair<double, double>> jitter_;  // (time, squared BEV distance of a pose from its prediction)
   double jitter_rms_ = 0;                         // m, over the last window_static seconds
+  bool last_frame_posed_ = false;                 // the previous frame had a given pose (not extrapolated, not none)
   double first_pose_t_ = 0;  // time of the first pose: with pose_jitter, decisions wait window_static from it
   double ego_speed_ = 0, ego_yaw_rate_ = 0;                 // between the last two known poses (m/s, rad/s)
   Eigen::Vector2d ego_velocity_ = Eigen::Vector2d::Zero();  // BEV, between the last two known poses (m/s)

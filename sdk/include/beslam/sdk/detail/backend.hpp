@@ -45,6 +45,11 @@ const void* table(Tag<Impl>, const Backend*) {
           c.keyframe_points = abi.keyframe_points.empty() ? nullptr : abi.keyframe_points.data();
           c.keyframe_point_count = static_cast<uint32_t>(abi.keyframe_points.size());
           c.keyframe_point_size = sizeof(beslam_keyframe_point);
+          if (r.S_new_old) {
+            c.world_moved = 1;
+            c.world_change_scale = r.world_change_scale;
+            c.S_new_old = toPose(*r.S_new_old);
+          }
           std::memcpy(result, &c, std::min<size_t>(result->struct_size ? result->struct_size : sizeof(c), sizeof(c)));
         });
       },
