@@ -329,6 +329,8 @@ TEST(Registry, AWorldChangeCrossesFromBackendToMotionChecker) {
       change->scale * (change->S_new_old.linear() * Eigen::Vector3d(1, 0, 0)) + change->S_new_old.translation();
   EXPECT_TRUE(p_new.isApprox(Eigen::Vector3d(2, 0, -1.5))) << p_new.transpose();
   frame.index = 2;
+  EXPECT_FALSE(backend.track(frame, beslam_image_view{}, {}).worldChange());
+  frame.index = 3;
   const std::string m = errorOf([&] { backend.track(frame, beslam_image_view{}, {}); });
   EXPECT_NE(m.find("plugin backend_world_moved: track moved the world by a non-finite change"), std::string::npos) << m;
 

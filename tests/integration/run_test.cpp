@@ -3,13 +3,16 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -300,6 +303,46 @@ TEST_F(RunTest, NanFromDetectorStopsTheRunAndKeepsEarlierOutput) {
   EXPECT_NE(r.err.find("frame 0"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("non-finite centre"), std::string::npos) << r.err;
   EXPECT_EQ(slurp(dir_ / "out/trajectory.tum"), before);
+}
+
+// ABI 1.7 end to end: a backend that moves its metric world in frame 1's track() (backend_world_moved) has
+// the host tell the motion checker before frame 2's classify (fixture_all_static moves its track ids on by
+// one per change: 7 and 8 before, 8 and 9 after), and summary.json counts the move; its non-finite change in
+// frame 3 stops the run with one error naming the plugin, and the earlier run's outputs stay as they were.
+TEST_F(RunTest, AMovedWorldReachesTheMotionCheckerAndABadChangeIsNamed) {
+  auto write = [&](int last) {
+    const fs::path path = dir_ / "pipeline.yaml";
+    std::ofstream(path) << "dataset: {type: kitti_odometry, root: data, sequence: \"00\", last: " << last << "}\n"
+                        << "plugin_paths: [" << FIXTURE_DIR << "]\n"
+                        << "backend: {plugin: backend_world_moved}\n"
+                        << "detector: {plugin: fixture_boxes, count: 2}\n"
+                        << "motion_checker: {plugin: fixture_all_static}\n";
+    return path.string();
+  };
+  const fs::path out = dir_ / "out";
+  const Result good = beslam("run " + write(2) + " --out " + out.string(), dir_);
+  ASSERT_EQ(good.code, 0) << good.err;
+  std::map<int, std::set<int>> ids;  // frame -> track ids
+  std::istringstream rows(slurp(out / "objects.txt"));
+  for (std::string line; std::getline(rows, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream f(line);
+    int frame = 0, id = 0;
+    f >> frame >> id;
+    ids[frame].insert(id);
+  }
+  EXPECT_EQ(ids[0], (std::set<int>{7, 8}));
+  EXPECT_EQ(ids[1], (std::set<int>{7, 8})) << "classified before its own track() moved the world";
+  EXPECT_EQ(ids[2], (std::set<int>{8, 9})) << "the checker was told once, before frame 2";
+  EXPECT_EQ(nlohmann::json::parse(slurp(out / "summary.json"))["world"]["moves"], 1);
+  const std::string objects = slurp(out / "objects.txt");
+
+  const Result bad = beslam("run " + write(-1) + " --out " + out.string(), dir_);
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.err.find("plugin backend_world_moved: track moved the world by a non-finite change"), std::string::npos)
+      << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  EXPECT_EQ(slurp(out / "objects.txt"), objects);
 }
 
 TEST_F(RunTest, TruncatedImageIsNamed) {
