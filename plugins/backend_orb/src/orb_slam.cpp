@@ -105,6 +105,7 @@ bool Options::validate(std::string* error) const {
   if (min_tracked_inliers < 10) return fail("min_tracked_inliers must be >= 10");
   if (keyframe_min_gap < 1) return fail("keyframe_min_gap must be >= 1");
   if (keyframe_ref_ratio <= 0 || keyframe_ref_ratio > 1) return fail("keyframe_ref_ratio must be in (0, 1]");
+  if (!(keyframe_floor_ratio >= 0)) return fail("keyframe_floor_ratio must be >= 0");
   if (triangulation_ratio <= 0 || triangulation_ratio > 1) return fail("triangulation_ratio must be in (0, 1]");
   if (triangulation_max_cos_parallax <= 0 || triangulation_max_cos_parallax >= 1)
     return fail("triangulation_max_cos_parallax must be in (0, 1)");

@@ -73,6 +73,7 @@ struct Options {
   double fps = 10.0;                 // frame rate: max frames between keyframes
   int min_tracked_inliers = 30;      // local-map inliers for tracking to be OK
   double keyframe_ref_ratio = 0.9;   // new keyframe when tracking < ratio x reference's points
+  double keyframe_floor_ratio = 2;   // ... or when tracking < this x min_tracked_inliers (0: the ratio alone)
   int keyframe_min_gap = 2;          // frames between keyframes at least (ORB-SLAM's "mapper busy")
   int lost_reset_max_keyframes = 5;  // lost with at most this many keyframes -> reset and re-init
   // Place recognition (docs/place-recognition.md). vocabulary: a file written by `beslam vocab train`

@@ -801,7 +801,11 @@ bool Tracker::needNewKeyFrame() const {
     }
     need_close = tracked < 100 && untracked > 70;
   }
-  const bool c2 = (settled_inliers < ref_matches * options_.keyframe_ref_ratio || need_close) && inliers_ > 15;
+  // A thin map (most points seen twice) leaves the reference's count small, so the ratio asks late: a frame
+  // near the tracking floor asks too, while it still tracks enough points to make new ones.
+  const bool near_floor = inliers_ < options_.keyframe_floor_ratio * options_.min_tracked_inliers;
+  const bool c2 =
+      (settled_inliers < ref_matches * options_.keyframe_ref_ratio || need_close || near_floor) && inliers_ > 15;
   return c1 && c2 && (!accepts_keyframe_ || accepts_keyframe_());
 }
 
