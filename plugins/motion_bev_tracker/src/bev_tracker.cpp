@@ -147,9 +147,10 @@ void BevTracker::worldMoved(const Eigen::Isometry3d& S_new_old, double scale) {
   // metres (the detector's), so it only turns with the camera. In the BEV plane: a point is lifted to the
   // height of the latest camera (a correction's tilt is a fraction of a degree), moved, and projected again.
   const Eigen::Matrix3d R = S_new_old.linear();
+  auto move = [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(scale * (R * p) + S_new_old.translation()); };
   const double y = poses_.empty() ? 0.0 : poses_.back().second.translation().y();
   auto moveCentre = [&](const Eigen::Vector2d& c) {
-    const Eigen::Vector3d q = scale * (R * Eigen::Vector3d(c.x(), y, c.y())) + S_new_old.translation();
+    const Eigen::Vector3d q = move(Eigen::Vector3d(c.x(), y, c.y()));
     return Eigen::Vector2d(q.x(), q.z());
   };
   Eigen::Matrix2d L;  // the turn of BEV vectors (offsets, velocities, covariances)
@@ -180,7 +181,7 @@ void BevTracker::worldMoved(const Eigen::Isometry3d& S_new_old, double scale) {
     t.anchor_cov = L * t.anchor_cov * L.transpose();
   }
   for (auto& [t, T_world_cam] : poses_) {
-    T_world_cam.translation() = scale * (R * T_world_cam.translation()) + S_new_old.translation();
+    T_world_cam.translation() = move(T_world_cam.translation());
     T_world_cam.linear() = R * T_world_cam.linear();
   }
   ego_velocity_ = scale * (L * ego_velocity_);
