@@ -9,7 +9,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
@@ -52,6 +51,12 @@ int dataLines(const std::string& s) {
   int n = 0;
   for (std::string line; std::getline(in, line);) n += !line.empty() && line[0] != '#';
   return n;
+}
+
+// The number after the first "key": in a JSON text (-1 when the key is not there).
+double jsonNumber(const std::string& json, const std::string& key) {
+  const size_t at = json.find("\"" + key + "\":");
+  return at == std::string::npos ? -1.0 : std::stod(json.substr(at + key.size() + 3));
 }
 
 class RunTest : public ::testing::Test {
@@ -334,14 +339,14 @@ TEST_F(RunTest, AMovedWorldReachesTheMotionCheckerAndABadChangeIsNamed) {
   EXPECT_EQ(ids[0], (std::set<int>{7, 8}));
   EXPECT_EQ(ids[1], (std::set<int>{7, 8})) << "classified before its own track() moved the world";
   EXPECT_EQ(ids[2], (std::set<int>{8, 9})) << "the checker was told once, before frame 2";
-  EXPECT_EQ(nlohmann::json::parse(slurp(out / "summary.json"))["world"]["moves"], 1);
+  EXPECT_EQ(jsonNumber(slurp(out / "summary.json"), "moves"), 1);
   const std::string objects = slurp(out / "objects.txt");
 
   const Result bad = beslam("run " + write(-1) + " --out " + out.string(), dir_);
   EXPECT_EQ(bad.code, 1);
   EXPECT_NE(bad.err.find("plugin backend_world_moved: track moved the world by a non-finite change"), std::string::npos)
       << bad.err;
-  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  EXPECT_EQ(lines(bad.err), 1) << bad.err;
   EXPECT_EQ(slurp(out / "objects.txt"), objects);
 }
 
@@ -519,14 +524,6 @@ TEST_F(RunTest, WhenTheWorldTurnsMetricTheMotionCheckerRunsAgainOnTheFramesBefor
   EXPECT_GT(by_replay[30].min_id_after, by_replay[30].max_id_before) << "an id never names two tracks";
 }
 
-namespace {
-// The number after the first "key": in a JSON text (-1 when the key is not there).
-double jsonNumber(const std::string& json, const std::string& key) {
-  const size_t at = json.find("\"" + key + "\":");
-  return at == std::string::npos ? -1.0 : std::stod(json.substr(at + key.size() + 3));
-}
-}  // namespace
-
 // The README's demo is a BE-SLAM run, not a DynaSLAM-style one: on its own monocular (then metric) map the
 // motion checker calls parked cars static, and calls no moving car static; the parked cars it called static
 // are reconstructed. 200 frames of urban_loop.
@@ -582,7 +579,7 @@ TEST(Tracking, AFrameNearTheInlierFloorAsksForAKeyframe) {
                    ratio + " --out " + out.string(),
                dir);
     EXPECT_EQ(r.code, 0) << r.err;
-    return nlohmann::json::parse(slurp(out / "summary.json"))["tracked"].get<int>();
+    return jsonNumber(slurp(out / "summary.json"), "tracked");
   };
   EXPECT_LT(tracked("0"), 150) << "the control: ORB-SLAM2's rule alone loses this corner";
   EXPECT_EQ(tracked("2"), 200);
