@@ -215,7 +215,7 @@ int runCommand(const std::vector<std::string>& args) {
                             " frames before, with metric poses"
                       : std::string())
               << (s.world_moves > 0 ? "; the backend moved it " + std::to_string(s.world_moves) +
-                                          " times (loop corrections, changes of scale)"
+                                          " times (loop corrections, changes of scale, local BA under the camera)"
                                     : std::string())
               << "\n";
   else

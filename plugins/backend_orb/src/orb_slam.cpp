@@ -470,8 +470,15 @@ struct OrbSlam::Impl {
             static_cast<long>(index), static_cast<long>(e.frame_index), static_cast<long>(e.loop_frame_index),
             e.matches, e.correction_m, e.correction_deg, e.keyframes, e.correct_ms);
     }
+    // Local BA may also have moved the keyframe the last frame was tracked against: the tracker carries
+    // that frame along (its pose relative to the keyframe is kept), and so is the host told.
+    std::optional<Eigen::Isometry3d> T_world_last_after = tracker.lastWorldCam();
+    if (options.report_map_moves && T_world_last_after)
+      if (const auto T_in_map = tracker.lastWorldCamInMap(); T_in_map && !T_in_map->isApprox(*T_world_last_after)) {
+        T_world_last_after = T_in_map;
+        world_moved = true;
+      }
     std::optional<Eigen::Isometry3d> S_new_old;
-    const std::optional<Eigen::Isometry3d> T_world_last_after = tracker.lastWorldCam();
     if (world_moved && was_metric && mapper.metric() && T_world_last_before && T_world_last_after) {
       // p_new = s R p_old + t, with the last camera carried along: R = R_after R_before^T and its centre
       // c_after = s R c_before + t.

@@ -6,7 +6,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <condition_variable>
+#include <iostream>
 #include <mutex>
 #include <thread>
 
@@ -23,6 +25,7 @@ struct RunResult {
   std::vector<FramePose> trajectory;
   Statistics stats;
   std::vector<CloudPoint> points;
+  std::vector<TrackResult> results;  // what each track() returned, in frame order
 };
 
 // prepare_ahead: each frame is first prepared (OrbSlam::prepare) on a producer thread running up to that
@@ -37,6 +40,7 @@ RunResult runCorridor(const Options& options, int frames = kFrames, int prepare_
   std::mutex m;
   std::condition_variable cv;
   int prepared = 0, tracked = 0;
+  std::vector<TrackResult> results;
   std::thread producer;
   if (prepare_ahead > 0)
     producer = std::thread([&] {
@@ -60,9 +64,9 @@ RunResult runCorridor(const Options& options, int frames = kFrames, int prepare_
     }
     if (lidar) {
       const Eigen::Matrix3Xf scan = world.lidarScan(i);
-      slam.track(images[i], cv::Mat(), 0.1 * i, i, {}, &scan);
+      results.push_back(slam.track(images[i], cv::Mat(), 0.1 * i, i, {}, &scan));
     } else {
-      slam.track(images[i], cv::Mat(), 0.1 * i, i);
+      results.push_back(slam.track(images[i], cv::Mat(), 0.1 * i, i));
     }
     std::lock_guard<std::mutex> lock(m);
     tracked = i + 1;
@@ -70,7 +74,7 @@ RunResult runCorridor(const Options& options, int frames = kFrames, int prepare_
   }
   if (producer.joinable()) producer.join();
   slam.finish();
-  return {slam.trajectory(), slam.statistics(), slam.mapPoints()};
+  return {slam.trajectory(), slam.statistics(), slam.mapPoints(), std::move(results)};
 }
 
 // Sim(3)-aligned position APE of a run against the corridor's truth.
@@ -137,6 +141,62 @@ TEST(SlamSynthetic, LidarRangesMakeTheMapMetricSoonAfterInitialisationAndHoldIt)
   EXPECT_FALSE(without.stats.lidar_scaled);
   EXPECT_GT(without.stats.metric_from_frame < 0 ? kFrames : without.stats.metric_from_frame,
             with.stats.metric_from_frame);
+}
+
+// How far each metric pose is from the constant-velocity prediction of the two before it (RMS, metres): the
+// jitter a motion checker sees. follow_moves: the two earlier poses are first carried by every world change
+// the backend reported since (p -> s R p + t, about the last camera), as motion_bev_tracker does.
+double poseJitter(const std::vector<TrackResult>& results, bool follow_moves) {
+  std::vector<Eigen::Vector3d> held;  // the last two metric camera centres
+  double sum = 0;
+  int n = 0;
+  for (const TrackResult& r : results) {
+    if (r.state != TrackingState::Ok || !r.world_is_metric) {
+      held.clear();
+      continue;
+    }
+    if (follow_moves && r.S_new_old)
+      for (Eigen::Vector3d& c : held)
+        c = r.world_change_scale * (r.S_new_old->linear() * c) + r.S_new_old->translation();
+    const Eigen::Vector3d c = r.T_world_cam.translation();
+    if (held.size() == 2) {
+      sum += (c - (2 * held[1] - held[0])).squaredNorm();
+      ++n;
+    }
+    held.push_back(c);
+    if (held.size() > 2) held.erase(held.begin());
+  }
+  return n > 0 ? std::sqrt(sum / n) : 0.0;
+}
+
+// Local BA moves the keyframe the last frame was tracked against; the tracker carries that frame along, and
+// backend_orb tells the host the same move (report_map_moves): a checker that follows it sees steadier poses
+// than one that reads every keyframe's correction as the car's path jumping.
+TEST(SlamSynthetic, TheMapsMovesUnderTheCameraAreReportedAndFollowingThemSteadiesThePoses) {
+  Options o = smallOptions();
+  o.metric_scale = true;
+  o.camera_height = 1.5;  // the corridor's floor
+  o.object_scale = false;
+  const RunResult run = runCorridor(o, kFrames, 0, /*lidar=*/true);
+  ASSERT_GE(run.stats.metric_from_frame, 0);
+  int moves = 0;
+  for (const TrackResult& r : run.results) {
+    if (!r.S_new_old) continue;
+    ++moves;
+    EXPECT_TRUE(r.S_new_old->matrix().allFinite());
+    EXPECT_NEAR(r.world_change_scale, 1.0, 1e-12) << "a LiDAR-held map is not rescaled";
+  }
+  const double raw = poseJitter(run.results, false), followed = poseJitter(run.results, true);
+  std::cout << moves << " moves reported; pose jitter " << raw << " m as given, " << followed
+            << " m following the moves\n";
+  EXPECT_GE(moves, 3);
+  EXPECT_LT(followed, raw);
+  o.report_map_moves = false;
+  const RunResult quiet = runCorridor(o, kFrames, 0, /*lidar=*/true);
+  for (size_t i = 0; i < quiet.results.size(); ++i) EXPECT_FALSE(quiet.results[i].S_new_old) << "frame " << i;
+  ASSERT_EQ(quiet.trajectory.size(), run.trajectory.size());
+  for (size_t i = 0; i < run.trajectory.size(); ++i)  // telling the host changes nothing in the SLAM
+    EXPECT_EQ(quiet.trajectory[i].T_world_cam.matrix(), run.trajectory[i].T_world_cam.matrix());
 }
 
 // The map points' distances to the corridor's faces, the map put on the truth by the trajectory's Sim(3).

@@ -127,6 +127,7 @@ struct Options {
   // agree, the map is rescaled so the camera sits camera_height metres over them, and the ground prior
   // (switched on with it) holds that height: poses and points are in metres from then on.
   bool metric_scale = false;
+  bool report_map_moves = true;    // tell the host how local BA moved the map under the last camera
   double camera_height = 0;        // the rig's camera height over the road, metres
   double metric_max_spread = 0.1;  // the reference fits' heights must agree this well (rel. MAD)
   // Once metric: the last ground_reference_keyframes fits that say the camera height is off by more than
@@ -214,9 +215,10 @@ struct TrackResult {
   bool relocalised = false;                              // this frame recovered from Lost
   bool loop_closed = false;      // a loop was closed before this frame was tracked (the map moved)
   double loop_correction_m = 0;  // then: how far the loop keyframe's centre moved
-  // The metric world moved before this frame was tracked (a loop correction, a change of scale): a point the
-  // world held at p is at world_change_scale * (R * p) + t now, [R | t] = *S_new_old, exact about the last
-  // tracked camera. Empty when nothing moved it, or the world was not metric before.
+  // The metric world moved before this frame was tracked (a loop correction, a change of scale, and with
+  // report_map_moves local BA under the last frame's reference keyframe): a point the world held at p is at
+  // world_change_scale * (R * p) + t now, [R | t] = *S_new_old, exact about the last tracked camera. Empty
+  // when nothing moved it, or the world was not metric before.
   std::optional<Eigen::Isometry3d> S_new_old;
   double world_change_scale = 1.0;
   int loop_object_rejections = 0;            // loop candidates the BEV object check refused since the last frame

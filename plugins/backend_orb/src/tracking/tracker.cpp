@@ -68,6 +68,20 @@ std::optional<Eigen::Isometry3d> Tracker::predictPose() const {
   return ((*velocity_) * last_.T_cw).inverse();
 }
 
+std::optional<Eigen::Isometry3d> Tracker::lastPoseInMap() const {
+  if (state_ != TrackingState::Ok || !last_.has_pose || records_.empty() || records_.back().index != last_.index)
+    return std::nullopt;
+  const FrameRecord& rec = records_.back();
+  Eigen::Isometry3d T_c_ref = rec.T_c_ref;
+  KeyFrame* ref = rec.reference;
+  while (ref && ref->bad && ref->parent) {
+    T_c_ref = T_c_ref * ref->T_cp;
+    ref = ref->parent;
+  }
+  if (!ref) return std::nullopt;
+  return T_c_ref * ref->T_cw;
+}
+
 TrackResult Tracker::track(std::shared_ptr<const FeatureSet> features, double timestamp, int64_t index) {
   TrackResult result;
   current_ = Frame(index, timestamp, std::move(features));
@@ -92,16 +106,7 @@ TrackResult Tracker::track(std::shared_ptr<const FeatureSet> features, double ti
   for (MapPoint*& mp : last_.points)
     if (mp && mp->replaced_by) mp = mp->latest()->bad ? nullptr : mp->latest();
   // The last frame's pose re-anchored to its reference keyframe, which local BA may have moved since.
-  if (state_ == TrackingState::Ok && last_.has_pose && !records_.empty() && records_.back().index == last_.index) {
-    const FrameRecord& rec = records_.back();
-    Eigen::Isometry3d T_c_ref = rec.T_c_ref;
-    KeyFrame* ref = rec.reference;
-    while (ref && ref->bad && ref->parent) {
-      T_c_ref = T_c_ref * ref->T_cp;
-      ref = ref->parent;
-    }
-    if (ref) last_.T_cw = T_c_ref * ref->T_cw;
-  }
+  if (const auto T_cw = lastPoseInMap()) last_.T_cw = *T_cw;
   if (state_ == TrackingState::Ok) {
     if (!velocity_ || index < last_reloc_frame_ + 2) {
       ok = trackReferenceKeyFrame();

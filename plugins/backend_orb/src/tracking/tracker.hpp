@@ -92,9 +92,17 @@ class Tracker {
   std::optional<Eigen::Isometry3d> lastWorldCam() const {
     return last_.has_pose ? std::optional<Eigen::Isometry3d>(last_.T_cw.inverse()) : std::nullopt;
   }
+  // The same frame's pose as the map holds it now: re-anchored to its reference keyframe, which mapping
+  // (local BA) may have moved since the frame was tracked; the tracker predicts from this. Empty when the
+  // last frame was not tracked.
+  std::optional<Eigen::Isometry3d> lastWorldCamInMap() const {
+    const auto T_cw = lastPoseInMap();
+    return T_cw ? std::optional<Eigen::Isometry3d>(T_cw->inverse()) : std::nullopt;
+  }
 
  private:
   void initialise(TrackResult& result);
+  std::optional<Eigen::Isometry3d> lastPoseInMap() const;  // camera from world, see lastWorldCamInMap
   bool createInitialMap(const std::vector<int>& matches12, const TwoViewResult& r);
   void reset();
   void backfillInitialFrames(KeyFrame* kf_ini, KeyFrame* kf_cur);
