@@ -94,6 +94,15 @@ Options smallOptions() {
   return o;
 }
 
+// Metric scale from the corridor's floor (and from the scans, where the frames carry them).
+Options metricOptions() {
+  Options o = smallOptions();
+  o.metric_scale = true;
+  o.camera_height = 1.5;  // the corridor's floor
+  o.object_scale = false;
+  return o;
+}
+
 TEST(SlamSynthetic, TracksTheCorridorAccurately) {
   const RunResult run = runCorridor(smallOptions());
   EXPECT_GE(run.stats.initialised_at_frame, 0);
@@ -123,10 +132,7 @@ double metricPathRatio(const RunResult& run) {
 }
 
 TEST(SlamSynthetic, LidarRangesMakeTheMapMetricSoonAfterInitialisationAndHoldIt) {
-  Options o = smallOptions();
-  o.metric_scale = true;
-  o.camera_height = 1.5;  // the corridor's floor
-  o.object_scale = false;
+  Options o = metricOptions();
   const RunResult with = runCorridor(o, kFrames, 0, /*lidar=*/true);
   EXPECT_TRUE(with.stats.lidar_scaled);
   ASSERT_GE(with.stats.metric_from_frame, 0);
@@ -173,10 +179,7 @@ double poseJitter(const std::vector<TrackResult>& results, bool follow_moves) {
 // backend_orb tells the host the same move (report_map_moves): a checker that follows it sees steadier poses
 // than one that reads every keyframe's correction as the car's path jumping.
 TEST(SlamSynthetic, TheMapsMovesUnderTheCameraAreReportedAndFollowingThemSteadiesThePoses) {
-  Options o = smallOptions();
-  o.metric_scale = true;
-  o.camera_height = 1.5;  // the corridor's floor
-  o.object_scale = false;
+  Options o = metricOptions();
   const RunResult run = runCorridor(o, kFrames, 0, /*lidar=*/true);
   ASSERT_GE(run.stats.metric_from_frame, 0);
   int moves = 0;
@@ -217,10 +220,7 @@ std::vector<double> surfaceDistances(const RunResult& run) {
 }
 
 TEST(SlamSynthetic, WithAScanKeyframesMakeMapPointsWhereTheRangesPutThem) {
-  Options o = smallOptions();
-  o.metric_scale = true;
-  o.camera_height = 1.5;
-  o.object_scale = false;
+  Options o = metricOptions();
   const RunResult with = runCorridor(o, kFrames, 0, /*lidar=*/true);
   ASSERT_TRUE(with.stats.lidar_scaled);
   EXPECT_GT(with.stats.lidar_points, 100);
