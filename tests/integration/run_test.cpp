@@ -59,12 +59,26 @@ double jsonNumber(const std::string& json, const std::string& key) {
   return at == std::string::npos ? -1.0 : std::stod(json.substr(at + key.size() + 3));
 }
 
-class RunTest : public ::testing::Test {
+// A fresh folder per test (dir_) under the system's temporary one, removed afterwards, also when an
+// assertion ended the test early.
+class ScratchDirTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("beslam_run_test_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("beslam_run_test_" + std::to_string(::getpid()) + "_" + test->test_suite_name() + "_" + test->name());
     fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path dir_;
+};
+
+class RunTest : public ScratchDirTest {
+ protected:
+  void SetUp() override {
+    ScratchDirTest::SetUp();
     const fs::path seq = dir_ / "data/sequences/00";
     fs::create_directories(seq / "image_0");
     fs::create_directories(dir_ / "data/poses");
@@ -81,7 +95,6 @@ class RunTest : public ::testing::Test {
     }
     std::ofstream(seq / "calib.txt") << "P0: 100 0 80 0 0 100 60 0 0 0 1 0\n";
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   std::string pipeline(const std::string& extra = "") {
     const fs::path path = dir_ / "pipeline.yaml";
@@ -93,8 +106,11 @@ class RunTest : public ::testing::Test {
   }
 
   static constexpr int kFrames = 6;
-  fs::path dir_;
 };
+
+// Whole runs of the shipped pipelines on the synthetic sequences, each in its own scratch folder.
+class Demo : public ScratchDirTest {};
+class Tracking : public ScratchDirTest {};
 
 }  // namespace
 
@@ -527,20 +543,17 @@ TEST_F(RunTest, WhenTheWorldTurnsMetricTheMotionCheckerRunsAgainOnTheFramesBefor
 // The README's demo is a BE-SLAM run, not a DynaSLAM-style one: on its own monocular (then metric) map the
 // motion checker calls parked cars static, and calls no moving car static; the parked cars it called static
 // are reconstructed. 200 frames of urban_loop.
-TEST(Demo, CallsParkedCarsStaticAndReconstructsThem) {
-  const fs::path dir = fs::temp_directory_path() / ("beslam_demo_test_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+TEST_F(Demo, CallsParkedCarsStaticAndReconstructsThem) {
   const Result r = beslam("run " + std::string(BESLAM_SOURCE_DIR) + "/configs/demo.yaml --set dataset.last=199 --out " +
-                              (dir / "out").string(),
-                          dir);
+                              (dir_ / "out").string(),
+                          dir_);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("map in metres from frame"), std::string::npos) << r.out;
   // `beslam <command> --run OUT --json FILE` on the run: FILE's text ("" when the command failed).
   const auto evaluate = [&](const std::string& command, const std::string& file) {
-    const Result e = beslam(command + " --run " + (dir / "out").string() + " --json " + (dir / file).string(), dir);
+    const Result e = beslam(command + " --run " + (dir_ / "out").string() + " --json " + (dir_ / file).string(), dir_);
     EXPECT_EQ(e.code, 0) << e.err;
-    return e.code == 0 ? slurp(dir / file) : std::string();
+    return e.code == 0 ? slurp(dir_ / file) : std::string();
   };
   const std::string motion = evaluate("eval-motion", "motion.json");
   ASSERT_FALSE(motion.empty());
@@ -549,7 +562,7 @@ TEST(Demo, CallsParkedCarsStaticAndReconstructsThem) {
   EXPECT_LE(jsonNumber(motion, "moving_static") / jsonNumber(motion, "moving"), 0.01) << motion;
   // Trusted statics reach the backend: features on parked cars' labels, matches to their map points, and
   // map points on them in the final map.
-  const std::string summary = slurp(dir / "out/summary.json");
+  const std::string summary = slurp(dir_ / "out/summary.json");
   for (const char* key : {"features_static", "tracked_static", "on_static_objects"})
     EXPECT_GT(jsonNumber(summary, key), 0) << key << ": " << summary;
   // Parked cars are reconstructed (objects.json, meshes), near true parked cars and none where there is none.
@@ -558,8 +571,7 @@ TEST(Demo, CallsParkedCarsStaticAndReconstructsThem) {
   ASSERT_FALSE(scored.empty());
   EXPECT_GE(jsonNumber(scored, "correct"), 2) << scored;
   EXPECT_EQ(jsonNumber(scored, "false"), 0) << scored;
-  EXPECT_TRUE(fs::exists(dir / "out/map.ply"));
-  fs::remove_all(dir);
+  EXPECT_TRUE(fs::exists(dir_ / "out/map.ply"));
 }
 
 // configs/reconstruction/mono.yaml (the monocular BE-SLAM pipeline) with backend seed 42 and no reconstructor,
@@ -580,14 +592,11 @@ Result runMonocular(const fs::path& dir, const fs::path& out, const std::string&
 // near the floor asking for one (keyframe_floor_ratio, the default) keeps every frame tracked. The motion
 // checker's states shape the masks and so the map: the scene is pinned with report_map_moves off, as it was
 // measured (with it on, this seed's masks differ and the control keeps tracking through the corner).
-TEST(Tracking, AFrameNearTheInlierFloorAsksForAKeyframe) {
-  const fs::path dir = fs::temp_directory_path() / ("beslam_tracking_test_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+TEST_F(Tracking, AFrameNearTheInlierFloorAsksForAKeyframe) {
   auto tracked = [&](const std::string& ratio) {
-    const fs::path out = dir / ("ratio" + ratio);
+    const fs::path out = dir_ / ("ratio" + ratio);
     const Result r = runMonocular(
-        dir, out,
+        dir_, out,
         "dataset.sequence=urban_loop dataset.last=199 backend.report_map_moves=false backend.keyframe_floor_ratio=" +
             ratio);
     EXPECT_EQ(r.code, 0) << r.err;
@@ -595,7 +604,6 @@ TEST(Tracking, AFrameNearTheInlierFloorAsksForAKeyframe) {
   };
   EXPECT_LT(tracked("0"), 150) << "the control: ORB-SLAM2's rule alone loses this corner";
   EXPECT_EQ(tracked("2"), 200);
-  fs::remove_all(dir);
 }
 
 // backend_orb tells the host when local BA moved the map under the last tracked camera (report_map_moves,
@@ -603,19 +611,16 @@ TEST(Tracking, AFrameNearTheInlierFloorAsksForAKeyframe) {
 // instead of reading each keyframe's correction as pose jitter. On dynamic_street's first 100 frames (backend
 // seed 42) that is 22 more moves and more parked cars within 30 m decided static (50 against 42 of 105),
 // with no parked car called dynamic and no moving car called static either way.
-TEST(Tracking, LocalBundleAdjustmentMovesReachTheMotionChecker) {
-  const fs::path dir = fs::temp_directory_path() / ("beslam_map_moves_test_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+TEST_F(Tracking, LocalBundleAdjustmentMovesReachTheMotionChecker) {
   struct Scored {
     double moves, near_static, standing_dynamic, moving_static;
   };
   auto run = [&](const std::string& report) {
-    const fs::path out = dir / ("report_" + report);
+    const fs::path out = dir_ / ("report_" + report);
     const Result r =
-        runMonocular(dir, out, "dataset.sequence=dynamic_street dataset.last=99 backend.report_map_moves=" + report);
+        runMonocular(dir_, out, "dataset.sequence=dynamic_street dataset.last=99 backend.report_map_moves=" + report);
     EXPECT_EQ(r.code, 0) << r.err;
-    const Result e = beslam("eval-motion --run " + out.string() + " --json " + (out / "motion.json").string(), dir);
+    const Result e = beslam("eval-motion --run " + out.string() + " --json " + (out / "motion.json").string(), dir_);
     EXPECT_EQ(e.code, 0) << e.err;
     const std::string motion = slurp(out / "motion.json");
     return Scored{jsonNumber(slurp(out / "summary.json"), "moves"), jsonNumber(motion, "standing_near_static"),
@@ -628,5 +633,4 @@ TEST(Tracking, LocalBundleAdjustmentMovesReachTheMotionChecker) {
     EXPECT_EQ(s.standing_dynamic, 0);
     EXPECT_EQ(s.moving_static, 0);
   }
-  fs::remove_all(dir);
 }
