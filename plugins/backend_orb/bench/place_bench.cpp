@@ -149,7 +149,7 @@ void BM_GlobalBa300(benchmark::State& state) {
     auto map = std::make_unique<Map>();
     test::buildRoad(*map, camera, pyramid, kKeyFrames, 20, 11, spacing);
     state.ResumeTiming();
-    report = optimize::globalBundleAdjustment(*map, 10, solver);
+    report = optimize::globalBundleAdjustment(*map, 10, optimize::plainOptions(solver));
     benchmark::DoNotOptimize(report.final_cost);
     state.PauseTiming();
     map.reset();

@@ -222,10 +222,8 @@ struct OrbSlam::Impl {
       lo.object_check = options.loop_object_check;
       lo.global_ba_iterations = options.loop_global_ba_iterations;
       lo.global_ba_solver = baSolver(options.loop_global_ba_solver);
-      const LocalMapperOptions mo = mapperOptions(options);
-      lo.lidar_range_sigma = mo.lidar_range_sigma;
-      lo.lidar_range_sigma_per_m = mo.lidar_range_sigma_per_m;
-      lo.lidar_scaled = [this] { return mapper.lidarScaled(); };
+      lo.metric_terms = [this] { return mapper.metricTerms(); };
+      lo.global_ba_objects = options.loop_global_ba_objects;
       lo.seed = options.seed;
       loop_closer = std::make_unique<LoopCloser>(map, database, extractor.pyramid(), lo);
     }

@@ -232,8 +232,10 @@ TEST(BundleAdjustment, GlobalBaSparseSchurLmAndCeresReachTheSameMinimum) {
   const auto kfs_ceres = test::buildRoad(map_ceres, kCam, pyr, 90, 10, 11);
   const auto kfs_schur = test::buildRoad(map_schur, kCam, pyr, 90, 10, 11);
   ASSERT_GT(static_cast<int>(kfs_schur.size()) - 1, optimize::SchurLevenbergMarquardt::kMaxDensePoses);
-  const auto ceres_report = optimize::globalBundleAdjustment(map_ceres, 10, optimize::BaSolver::Ceres);
-  const auto schur_report = optimize::globalBundleAdjustment(map_schur, 10, optimize::BaSolver::SchurLm);
+  const auto ceres_report =
+      optimize::globalBundleAdjustment(map_ceres, 10, optimize::plainOptions(optimize::BaSolver::Ceres));
+  const auto schur_report =
+      optimize::globalBundleAdjustment(map_schur, 10, optimize::plainOptions(optimize::BaSolver::SchurLm));
   EXPECT_GT(schur_report.initial_cost, 50 * schur_report.final_cost);
   EXPECT_NEAR(schur_report.initial_cost, ceres_report.initial_cost, 1e-9 * ceres_report.initial_cost);
   EXPECT_NEAR(schur_report.final_cost, ceres_report.final_cost, 1e-8 * ceres_report.final_cost);
@@ -250,7 +252,7 @@ TEST(BundleAdjustment, GlobalBaSparseSchurLmAndCeresReachTheSameMinimum) {
     cv::setNumThreads(threads);
     Map map;
     const auto kfs = test::buildRoad(map, kCam, pyr, 90, 10, 11);
-    optimize::globalBundleAdjustment(map, 10, optimize::BaSolver::SchurLm);
+    optimize::globalBundleAdjustment(map, 10, optimize::plainOptions(optimize::BaSolver::SchurLm));
     results.push_back(poses(kfs));
   }
   cv::setNumThreads(threads_before);
@@ -278,8 +280,9 @@ TEST(BundleAdjustment, GlobalBaWithLidarRangesHoldsTheMetricScale) {
       kf->T_cw = T_wc.inverse();
     }
     for (MapPoint* mp : map.points()) mp->position = origin + 1.01 * (mp->position - origin);
-    const auto report =
-        optimize::globalBundleAdjustment(map, 20, optimize::BaSolver::SchurLm, 5.991, ranges ? 0.05 : 0.0, 0.005);
+    optimize::BundleAdjustmentOptions options = optimize::plainOptions(optimize::BaSolver::SchurLm);
+    options.lidar_range_sigma = ranges ? 0.05 : 0.0;
+    const auto report = optimize::globalBundleAdjustment(map, 20, options);
     EXPECT_EQ(report.lidar_range_residuals > 0, ranges);
     ratio.push_back(length(kfs) / truth);
   }

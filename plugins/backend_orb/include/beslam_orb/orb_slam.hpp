@@ -96,6 +96,9 @@ struct Options {
   bool loop_object_check = true;
   int loop_own_stretch_keyframes = 30;
   int loop_global_ba_iterations = 10;  // 0: none after the essential graph
+  // The global BA keeps local BA's parked-car terms on a metric map: one anchor per parked car on its
+  // keyframes' boxes and, with object_landmarks: ba, the object landmarks (the LiDAR ranges it keeps always).
+  bool loop_global_ba_objects = true;
   // schur: SchurLevenbergMarquardt, block-sparse past 60 keyframes (the same steps as Ceres, on both
   // cores); ceres: Ceres' SPARSE_SCHUR LM, as before.
   BundleAdjustmentSolver loop_global_ba_solver = BundleAdjustmentSolver::Schur;

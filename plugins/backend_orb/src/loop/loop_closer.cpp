@@ -412,20 +412,29 @@ bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, 
     mp->position = solved.S_cw[n].inverse() * (graph.S_cw[n] * mp->position);
     mp->updateNormalAndDepth();
   }
-  if (options_.global_ba_iterations > 0) {
-    const bool ranges = options_.lidar_range_sigma > 0 && options_.lidar_scaled && options_.lidar_scaled();
-    optimize::globalBundleAdjustment(map_, options_.global_ba_iterations, options_.global_ba_solver,
-                                     optimize::BundleAdjustmentOptions{}.chi2_threshold,
-                                     ranges ? options_.lidar_range_sigma : 0, options_.lidar_range_sigma_per_m);
-  }
   // Object landmarks follow the keyframe they were last fitted at (a culled one: its next keyframe), as map
   // points follow theirs; left where they were, local BA would pull the corrected keyframes back to them.
-  map_.objects().followKeyFrames([&](long kf_id) -> std::optional<Eigen::Isometry3d> {
-    const KeyFrame* k = map_.keyFrameFrom(kf_id);
-    const auto before = k ? poses_before_.find(k->id) : poses_before_.end();
-    if (before == poses_before_.end()) return std::nullopt;
-    return k->T_cw.inverse() * before->second;
-  });
+  // Landmarks that enter the global BA follow the essential graph's correction first and are then refined
+  // with the map; the others follow the whole correction.
+  const auto followKeyFrames = [&] {
+    map_.objects().followKeyFrames([&](long kf_id) -> std::optional<Eigen::Isometry3d> {
+      const KeyFrame* k = map_.keyFrameFrom(kf_id);
+      const auto before = k ? poses_before_.find(k->id) : poses_before_.end();
+      if (before == poses_before_.end()) return std::nullopt;
+      return k->T_cw.inverse() * before->second;
+    });
+  };
+  optimize::BundleAdjustmentOptions ba =
+      options_.metric_terms ? options_.metric_terms() : optimize::BundleAdjustmentOptions{};
+  ba.solver = options_.global_ba_solver;
+  if (!options_.global_ba_objects) {
+    ba.object_range_sigma = 0;
+    ba.objects.enabled = false;
+  }
+  const bool objects_in_ba = options_.global_ba_iterations > 0 && ba.objects.enabled;
+  if (objects_in_ba) followKeyFrames();
+  if (options_.global_ba_iterations > 0) optimize::globalBundleAdjustment(map_, options_.global_ba_iterations, ba);
+  if (!objects_in_ba) followKeyFrames();
 
   LoopClosureEvent event;
   event.keyframe_id = kf->id;

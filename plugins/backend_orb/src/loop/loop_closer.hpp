@@ -52,10 +52,11 @@ struct LoopOptions {
   int pose_graph_iterations = 20;
   int global_ba_iterations = 10;  // 0: no global BA after the pose graph
   optimize::BaSolver global_ba_solver = optimize::BaSolver::SchurLm;
-  // The global BA keeps the keypoints' LiDAR ranges (as local BA does) while lidar_scaled() says the scan
-  // holds the map's scale; sigma 0 or no callback: never.
-  double lidar_range_sigma = 0, lidar_range_sigma_per_m = 0.005;
-  std::function<bool()> lidar_scaled;
+  // The metric terms the global BA keeps from local BA (LocalMapper::metricTerms): the keypoints' LiDAR ranges
+  // while the scan holds the map's scale and, with global_ba_objects, the parked cars' anchors and the object
+  // landmarks once the map is metric. No callback: none.
+  std::function<optimize::BundleAdjustmentOptions()> metric_terms;
+  bool global_ba_objects = true;
   uint64_t seed = 1;
 };
 

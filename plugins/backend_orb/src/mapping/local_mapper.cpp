@@ -40,6 +40,21 @@ void LocalMapper::yieldPoint() {
   if (gate_) gate_->yieldToTracker();
 }
 
+optimize::BundleAdjustmentOptions LocalMapper::metricTerms() const {
+  optimize::BundleAdjustmentOptions ba = options_.ba;
+  if (metric_) {  // the boxes are metric: so is the map now
+    ba.object_range_sigma = options_.object_range_sigma;
+    ba.object_range_sigma_per_m = options_.object_range_sigma_per_m;
+  }
+  if (metric_ && lidar_scaled_) {  // and the scan's ranges, once they agree with the map's unit
+    ba.lidar_range_sigma = options_.lidar_range_sigma;
+    ba.lidar_range_sigma_per_m = options_.lidar_range_sigma_per_m;
+  }
+  // Object landmarks are metric (boxes, shapes): they enter only a metric map.
+  ba.objects.enabled = options_.ba.objects.enabled && metric_;
+  return ba;
+}
+
 void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   timings_.clear();
   auto t0 = Clock::now();
@@ -68,17 +83,7 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   t0 = Clock::now();
   if (map_.numKeyFrames() > 2) {
     optimize::GroundPrior ground{options_.ground, &ground_reference_};
-    optimize::BundleAdjustmentOptions ba = options_.ba;
-    if (metric_) {  // the boxes are metric: so is the map now
-      ba.object_range_sigma = options_.object_range_sigma;
-      ba.object_range_sigma_per_m = options_.object_range_sigma_per_m;
-    }
-    if (metric_ && lidar_scaled_) {  // and the scan's ranges, once they agree with the map's unit
-      ba.lidar_range_sigma = options_.lidar_range_sigma;
-      ba.lidar_range_sigma_per_m = options_.lidar_range_sigma_per_m;
-    }
-    // Object landmarks are metric (boxes, shapes): they enter only a metric map.
-    ba.objects.enabled = options_.ba.objects.enabled && metric_;
+    optimize::BundleAdjustmentOptions ba = metricTerms();
     // Once the parked cars' boxes gave the scale, their range priors hold it; the ground prior would pull it
     // towards the road fits, whose biases (bare roads, kerbs) fight the direct measurement.
     const bool ground_prior = options_.ground.enabled && !object_scaled_ && !lidar_scaled_;

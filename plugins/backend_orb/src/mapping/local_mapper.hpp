@@ -126,6 +126,9 @@ class LocalMapper {
     pending_correction_.reset();
   }
   bool metric() const { return metric_; }
+  // Local BA's options with the metric terms it has now: the parked cars' anchors and the object landmarks
+  // once the map is metric, the LiDAR ranges once the scan holds its scale (the loop's global BA takes them).
+  optimize::BundleAdjustmentOptions metricTerms() const;
   // The LiDAR ranges gave the scale and hold it (see options).
   bool lidarScaled() const { return lidar_scaled_; }
   // Each live keyframe's camera height over its own ground fit, in the map's unit as it is now (keyframes

@@ -323,6 +323,22 @@ void addObjectAnchors(Problem& P, const Map& map, const BundleAdjustmentOptions&
   }
 }
 
+// The metric terms local and global BA share, in this order: the keypoints' LiDAR ranges, the object
+// landmarks as nodes, one anchor per parked car that is not a node.
+void addMetricTerms(Problem& P, Map& map, const BundleAdjustmentOptions& options, BundleAdjustmentReport* report) {
+  if (options.lidar_range_sigma > 0)
+    report->lidar_range_residuals =
+        addRangeEdges(P, lidarRangeOf, options.lidar_range_sigma, options.lidar_range_sigma_per_m);
+  if (options.objects.enabled && map.objects().size() > 0) {
+    const std::set<const KeyFrame*> moving(P.moving.begin(), P.moving.end());
+    P.objects = objects::buildObjectProblem(map.objects(), P.poses, moving, P.positions, options.objects);
+    report->object_nodes = static_cast<int>(P.objects->entries.size());
+    report->object_box_factors = P.objects->box_factors;
+    report->object_surface_factors = P.objects->surface_factors;
+  }
+  if (options.object_range_sigma > 0 && options.object_anchors) addObjectAnchors(P, map, options, report);
+}
+
 }  // namespace
 
 BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const BundleAdjustmentOptions& options,
@@ -359,17 +375,7 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
     report.object_range_residuals = addRangeEdges(
         P, [](const FeatureSet& f, size_t i) { return f.objectRange(i); }, options.object_range_sigma,
         options.object_range_sigma_per_m);
-  if (options.lidar_range_sigma > 0)
-    report.lidar_range_residuals =
-        addRangeEdges(P, lidarRangeOf, options.lidar_range_sigma, options.lidar_range_sigma_per_m);
-  if (options.objects.enabled && map.objects().size() > 0) {
-    const std::set<const KeyFrame*> moving(P.moving.begin(), P.moving.end());
-    P.objects = objects::buildObjectProblem(map.objects(), P.poses, moving, P.positions, options.objects);
-    report.object_nodes = static_cast<int>(P.objects->entries.size());
-    report.object_box_factors = P.objects->box_factors;
-    report.object_surface_factors = P.objects->surface_factors;
-  }
-  if (options.object_range_sigma > 0 && options.object_anchors) addObjectAnchors(P, map, options, &report);
+  addMetricTerms(P, map, options, &report);
   report.keyframes = static_cast<int>(P.moving.size());
   report.fixed_keyframes = static_cast<int>(P.fixed.size());
   report.points = static_cast<int>(P.points.size());
@@ -403,21 +409,20 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   return report;
 }
 
-BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, BaSolver solver, double chi2_threshold,
-                                              double lidar_range_sigma, double lidar_range_sigma_per_m) {
+BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, const BundleAdjustmentOptions& options) {
   BundleAdjustmentReport report;
   Problem P;
   for (KeyFrame* kf : map.keyframes()) P.moving.push_back(kf);
   for (MapPoint* mp : map.points()) P.points.push_back(mp);
   P.allocate();
-  addEdges(P, chi2_threshold, 1.0);
-  if (lidar_range_sigma > 0)
-    report.lidar_range_residuals = addRangeEdges(P, lidarRangeOf, lidar_range_sigma, lidar_range_sigma_per_m);
+  addEdges(P, options.chi2_threshold, 1.0);
+  addMetricTerms(P, map, options, &report);
   report.keyframes = static_cast<int>(P.moving.size());
   report.points = static_cast<int>(P.points.size());
   report.observations = static_cast<int>(P.edges.size());
   if (P.edges.empty()) return report;
-  report.final_cost = solve(P, true, iterations, chi2_threshold, true, map.origin(), &report.initial_cost, solver);
+  report.final_cost =
+      solve(P, true, iterations, options.chi2_threshold, true, map.origin(), &report.initial_cost, options.solver);
   writeBack(P);
   return report;
 }

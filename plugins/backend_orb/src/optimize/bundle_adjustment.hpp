@@ -77,10 +77,17 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
 // Every keyframe and point; the origin keyframe fixed. Used right after initialisation (Ceres) and after a
 // loop correction (LoopOptions::global_ba_solver). SchurLm takes Ceres' steps (the same minimum up to
 // rounding) and solves a map of more than SchurLevenbergMarquardt::kMaxDensePoses keyframes block-sparse.
-// lidar_range_sigma > 0 (a map the scan holds metric): the keypoints' LiDAR ranges hold their points as in
-// local BA (BundleAdjustmentOptions::lidar_range_sigma).
-BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, BaSolver solver = BaSolver::Ceres,
-                                              double chi2_threshold = 5.991, double lidar_range_sigma = 0,
-                                              double lidar_range_sigma_per_m = 0.005);
+// From `options` it takes the solver, the chi-square threshold and the metric terms local BA has on a
+// metric map (LocalMapper::metricTerms): the keypoints' LiDAR ranges (lidar_range_sigma > 0), one anchor
+// per parked car on its keyframes' boxes (object_range_sigma > 0 and object_anchors) and the object
+// landmarks as nodes (objects.enabled; these go to Ceres). Its pass counts and hooks are not used.
+BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, const BundleAdjustmentOptions& options);
+
+// A global BA's options without metric terms on the given solver (initialisation, tests).
+inline BundleAdjustmentOptions plainOptions(BaSolver solver) {
+  BundleAdjustmentOptions options;
+  options.solver = solver;
+  return options;
+}
 
 }  // namespace beslam::orb::optimize

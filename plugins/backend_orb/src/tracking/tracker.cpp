@@ -245,7 +245,7 @@ bool Tracker::createInitialMap(const std::vector<int>& matches12, const TwoViewR
   }
   kf_ini->updateConnections();
   kf_cur->updateConnections();
-  optimize::globalBundleAdjustment(map_, 20);
+  optimize::globalBundleAdjustment(map_, 20, optimize::plainOptions(optimize::BaSolver::Ceres));
 
   const double median = kf_ini->medianDepth(2);
   if (median <= 0 || kf_cur->trackedPoints(1) < 100) return false;
