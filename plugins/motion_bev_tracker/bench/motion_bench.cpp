@@ -31,13 +31,15 @@ using beslam::motion::EvalCounts;
 using beslam::motion::Params;
 
 // The LOO grid: the settings that no physical argument pins down (docs/motion.md, "How the defaults are
-// chosen"). Axes in order; the first axis varies slowest. 3 x 3 x 3 x 2 x 2 = 108 points.
+// chosen"). Axes in order; the first axis varies slowest. 3 x 3 x 3 x 2 x 2 x 3 x 3 = 972 points.
 const std::vector<std::pair<std::string, std::vector<std::string>>> kLooGrid = {
     {"ego_speed_noise", {"0", "0.01", "0.02"}},
     {"ego_turn_noise", {"0", "0.05", "0.1"}},
     {"pos_sigma_per_m", {"0.002", "0.005", "0.01"}},
     {"z_dynamic", {"2", "3"}},
     {"z_static", {"2", "3"}},
+    {"start_frames", {"1", "2", "3"}},
+    {"pull_out_frames", {"1", "2", "3"}},
 };
 
 void setParam(beslam::motion::Params& p, const std::string& kv) {
@@ -66,6 +68,7 @@ void setParam(beslam::motion::Params& p, const std::string& kv) {
                                       {"displacement_margin", &p.displacement_margin}};
   std::map<std::string, int*> i = {{"min_observations", &p.min_observations},
                                    {"start_frames", &p.start_frames},
+                                   {"pull_out_frames", &p.pull_out_frames},
                                    {"stop_dwell", &p.stop_dwell},
                                    {"anchor_frames", &p.anchor_frames}};
   if (k == "association")

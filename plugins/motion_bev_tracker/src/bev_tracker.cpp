@@ -115,7 +115,8 @@ std::string Params::validate() const {
   if (anchor_frames < 1) return "anchor_frames must be >= 1";
   if (!(dynamic_speed >= 0) || !(static_speed > 0)) return "dynamic_speed must be >= 0 and static_speed > 0";
   if (!(z_dynamic >= 0) || !(z_static >= 0)) return "z_dynamic and z_static must be >= 0";
-  if (start_frames < 1 || stop_dwell < 1) return "start_frames and stop_dwell must be >= 1";
+  if (start_frames < 1 || pull_out_frames < 1 || stop_dwell < 1)
+    return "start_frames, pull_out_frames and stop_dwell must be >= 1";
   if (!(max_range > 0)) return "max_range must be > 0";
   if (!(default_dt > 0)) return "default_dt must be > 0";
   return {};
@@ -382,7 +383,7 @@ void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_
         track.state = BESLAM_MOTION_STATIC;
       break;
     case BESLAM_MOTION_STATIC:
-      if (track.dynamic_run >= params_.start_frames) track.state = BESLAM_MOTION_DYNAMIC;
+      if (track.dynamic_run >= params_.pull_out_frames) track.state = BESLAM_MOTION_DYNAMIC;
       break;
     case BESLAM_MOTION_DYNAMIC:
       if (track.static_run >= params_.stop_dwell) track.state = BESLAM_MOTION_STATIC;

@@ -25,8 +25,9 @@
 // average away; the detection noise does, so a track seen longer gets a smaller sigma_v.
 // A static track also has dynamic evidence when its latest positions (mean of 3) leave its parked
 // position (a running mean while static) by displacement_margin plus z_dynamic standard errors.
-// Hysteresis: UNKNOWN -> STATIC on the first static evidence, UNKNOWN or STATIC -> DYNAMIC after
-// start_frames dynamic frames, DYNAMIC -> STATIC after stop_dwell static frames; a run of evidence is
+// Hysteresis: UNKNOWN -> STATIC on the first static evidence, UNKNOWN -> DYNAMIC after start_frames
+// dynamic frames, STATIC -> DYNAMIC after pull_out_frames (a car known parked asks for more: its box
+// jumping is likelier than its pulling out), DYNAMIC -> STATIC after stop_dwell static frames; a run is
 // broken only by contrary evidence (frames with none neither add nor break). Far objects whose speed
 // cannot be pinned down stay UNKNOWN (the paper checks nearby cars first). Without any camera pose the
 // tracker still tracks (camera frame) but reports UNKNOWN.
@@ -82,7 +83,7 @@ struct Params {
   // Ego-motion error (the pose source's drift): a parked car seems to move at up to
   // ego_speed_noise * (ego speed) + ego_turn_noise * (ego yaw rate) * range. A velocity error that more
   // observations do not average away; it widens every speed test and the pull-out test.
-  double ego_speed_noise = 0.01;     // fraction of the ego's speed (odometry translation drift)
+  double ego_speed_noise = 0.0;      // fraction of the ego's speed (odometry translation drift)
   double ego_turn_noise = 0.05;      // fraction of the ego's yaw rate (heading-rate error; lateral, grows with range)
   double init_velocity_sigma = 5.0;  // m/s, velocity uncertainty of a new track (no detector velocity)
   bool pose_jitter = false;          // measured pose jitter adds to every position's noise (for SLAM poses)
@@ -104,7 +105,8 @@ struct Params {
   double displacement_margin = 0.75;  // m: a static track whose last 3 positions leave its parked position by
                                       // this plus z_dynamic standard errors has dynamic evidence
   int anchor_frames = 30;             // depth of the parked position's running mean
-  int start_frames = 2;               // STATIC -> DYNAMIC after this many dynamic frames in a row
+  int start_frames = 1;               // UNKNOWN -> DYNAMIC after this many dynamic frames in a row
+  int pull_out_frames = 3;            // STATIC -> DYNAMIC after this many dynamic frames in a row
   int stop_dwell = 5;                 // DYNAMIC -> STATIC after this many static frames in a row
   double max_range = 200.0;           // m: boxes farther away get a track but stay UNKNOWN
   double default_dt = 0.1;            // s, when timestamps do not increase
