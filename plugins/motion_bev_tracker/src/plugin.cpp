@@ -32,7 +32,7 @@ class MotionBevTracker : public beslam::sdk::MotionChecker {
       << p.pos_sigma << " m + " << p.pos_sigma_per_m << "/m, ego " << p.ego_speed_noise << " x speed + "
       << p.ego_turn_noise << " x yaw rate x range, dynamic > " << p.dynamic_speed << " m/s, static < " << p.static_speed
       << " m/s, dynamic after " << p.start_frames << " frames (" << p.pull_out_frames << " when parked), static after "
-      << p.stop_dwell;
+      << p.stop_dwell << " frames";
     context.info(s.str());
   }
 
