@@ -83,11 +83,13 @@ inline Eigen::Isometry3d roadAt(double distance) {
 // n_keyframes cameras `spacing` m apart down the road (roadAt) and points_per_metre points a metre of road
 // (up to 8 m to either side, 2 m up or down), each observed (0.5 px noise) by the cameras it is 4-30 m
 // ahead of and in the image of (26 / spacing cameras). Every camera but the first is moved by about 5 cm
-// and 0.17 degrees, every point by about 5 cm. lidar_ranges: each keypoint also carries its point's true
-// range from the camera (FeatureSet::lidar_range), as a scan would give it.
+// and 0.17 degrees, every point by about 5 cm. ranges: each keypoint also carries its point's true range from
+// the camera, as a scan would give it (Lidar: FeatureSet::lidar_range) or a parked car's box (Object:
+// FeatureSet::object_range, as if every point lay on a car where its ray enters the box).
+enum class RoadRanges { None, Lidar, Object };
 inline std::vector<KeyFrame*> buildRoad(Map& map, const Camera& cam, const ScalePyramid& pyr, int n_keyframes,
                                         int points_per_metre, uint64_t seed, double spacing = 1.0,
-                                        bool lidar_ranges = false) {
+                                        RoadRanges with_ranges = RoadRanges::None) {
   std::mt19937 rng(static_cast<unsigned>(seed));
   const double length = spacing * (n_keyframes - 1);
   std::uniform_real_distribution<double> ux(-8, 8), uy(-2, 2), ud(5, length + 29);
@@ -114,7 +116,8 @@ inline std::vector<KeyFrame*> buildRoad(Map& map, const Camera& cam, const Scale
       seen[k].push_back(i);
     }
     std::shared_ptr<FeatureSet> features = blankFeatures(cam, std::move(keypoints));
-    if (lidar_ranges) features->lidar_range = std::move(ranges);
+    if (with_ranges == RoadRanges::Lidar) features->lidar_range = std::move(ranges);
+    if (with_ranges == RoadRanges::Object) features->object_range = std::move(ranges);
     Frame frame(k, 0.1 * k, features);
     frame.T_cw = T_cw;
     if (k > 0) {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <map>
 #include <opencv2/core/utility.hpp>
 #include <random>
 
@@ -259,19 +260,20 @@ TEST(BundleAdjustment, GlobalBaSparseSchurLmAndCeresReachTheSameMinimum) {
   for (size_t k = 0; k < results[0].size(); ++k) EXPECT_EQ(results[0][k].matrix(), results[1][k].matrix()) << k;
 }
 
-// A global BA (after a loop correction) on a map the scan holds metric keeps the keypoints' LiDAR ranges: a
-// road map grown 1 % about its first keyframe (a loop correction's scale change; ranges farther off than 3
-// sigma are gated out) comes back to its metric length with them, and stays 1 % long without (the scale is
-// free in a monocular BA).
-TEST(BundleAdjustment, GlobalBaWithLidarRangesHoldsTheMetricScale) {
+// A global BA (after a loop correction) on a map held metric keeps the metric terms local BA has: a road map
+// grown 1 % about its first keyframe (a loop correction's scale change; ranges farther off than 3 sigma are gated
+// out) comes back to its metric length with the keypoints' LiDAR ranges, or with the parked cars' keypoint
+// ranges (object_scale_hold: ranges), and stays 1 % long without (the scale is free in a monocular BA).
+TEST(BundleAdjustment, GlobalBaWithRangePriorsHoldsTheMetricScale) {
   const ScalePyramid pyr(8, 1.2);
   auto length = [](const std::vector<KeyFrame*>& kfs) {
     return (kfs.back()->T_cw.inverse().translation() - kfs.front()->T_cw.inverse().translation()).norm();
   };
-  std::vector<double> ratio;
-  for (const bool ranges : {false, true}) {
+  using test::RoadRanges;
+  std::map<RoadRanges, double> ratio;
+  for (const RoadRanges ranges : {RoadRanges::None, RoadRanges::Lidar, RoadRanges::Object}) {
     Map map;
-    const auto kfs = test::buildRoad(map, kCam, pyr, 30, 10, 12, 1.0, true);
+    const auto kfs = test::buildRoad(map, kCam, pyr, 30, 10, 12, 1.0, ranges);
     const double truth = (test::roadAt(29).translation() - test::roadAt(0).translation()).norm();
     const Eigen::Vector3d origin = kfs[0]->T_cw.inverse().translation();
     for (KeyFrame* kf : kfs) {  // grow the map by 1 % about the first camera
@@ -280,15 +282,21 @@ TEST(BundleAdjustment, GlobalBaWithLidarRangesHoldsTheMetricScale) {
       kf->T_cw = T_wc.inverse();
     }
     for (MapPoint* mp : map.points()) mp->position = origin + 1.01 * (mp->position - origin);
+    // The options LocalMapper::metricTerms gives a metric map of either kind: both sigmas set.
     optimize::BundleAdjustmentOptions options = optimize::plainOptions(optimize::BaSolver::SchurLm);
-    options.lidar_range_sigma = ranges ? 0.05 : 0.0;
+    options.lidar_range_sigma = 0.05;
+    options.object_range_sigma = 0.05;
+    options.object_range_priors = true;
     const auto report = optimize::globalBundleAdjustment(map, 20, options);
-    EXPECT_EQ(report.lidar_range_residuals > 0, ranges);
-    ratio.push_back(length(kfs) / truth);
+    EXPECT_EQ(report.lidar_range_residuals > 0, ranges == RoadRanges::Lidar);
+    EXPECT_EQ(report.object_range_residuals > 0, ranges == RoadRanges::Object);
+    ratio[ranges] = length(kfs) / truth;
   }
-  std::printf("length over truth: %.5f without ranges, %.5f with\n", ratio[0], ratio[1]);
-  EXPECT_NEAR(ratio[0], 1.01, 0.002) << "without ranges the scale stays where it was";
-  EXPECT_NEAR(ratio[1], 1.0, 0.002) << "the ranges bring it back";
+  std::printf("length over truth: %.5f without ranges, %.5f with LiDAR ranges, %.5f with parked cars' ranges\n",
+              ratio[RoadRanges::None], ratio[RoadRanges::Lidar], ratio[RoadRanges::Object]);
+  EXPECT_NEAR(ratio[RoadRanges::None], 1.01, 0.002) << "without ranges the scale stays where it was";
+  EXPECT_NEAR(ratio[RoadRanges::Lidar], 1.0, 0.002) << "the scan's ranges bring it back";
+  EXPECT_NEAR(ratio[RoadRanges::Object], 1.0, 0.002) << "the parked cars' ranges bring it back";
 }
 
 // Concurrent mapping's hooks: the callback runs after each pass, and a stop request skips the refining

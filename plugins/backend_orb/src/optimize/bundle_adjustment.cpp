@@ -323,9 +323,14 @@ void addObjectAnchors(Problem& P, const Map& map, const BundleAdjustmentOptions&
   }
 }
 
-// The metric terms local and global BA share, in this order: the keypoints' LiDAR ranges, the object
-// landmarks as nodes, one anchor per parked car that is not a node.
+// The metric terms local and global BA share, in this order: the parked cars' keypoint ranges (with
+// object_range_priors), the keypoints' LiDAR ranges, the object landmarks as nodes, one anchor per parked car
+// that is not a node.
 void addMetricTerms(Problem& P, Map& map, const BundleAdjustmentOptions& options, BundleAdjustmentReport* report) {
+  if (options.object_range_sigma > 0 && options.object_range_priors)
+    report->object_range_residuals = addRangeEdges(
+        P, [](const FeatureSet& f, size_t i) { return f.objectRange(i); }, options.object_range_sigma,
+        options.object_range_sigma_per_m);
   if (options.lidar_range_sigma > 0)
     report->lidar_range_residuals =
         addRangeEdges(P, lidarRangeOf, options.lidar_range_sigma, options.lidar_range_sigma_per_m);
@@ -371,10 +376,6 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
   P.allocate();
   addEdges(P, options.chi2_threshold, options.trusted_weight);
   if (ground && ground->reference && ground->reference->ready()) addGroundEdges(P, *ground, &report);
-  if (options.object_range_sigma > 0 && options.object_range_priors)
-    report.object_range_residuals = addRangeEdges(
-        P, [](const FeatureSet& f, size_t i) { return f.objectRange(i); }, options.object_range_sigma,
-        options.object_range_sigma_per_m);
   addMetricTerms(P, map, options, &report);
   report.keyframes = static_cast<int>(P.moving.size());
   report.fixed_keyframes = static_cast<int>(P.fixed.size());

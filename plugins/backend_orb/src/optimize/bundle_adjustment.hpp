@@ -78,9 +78,10 @@ BundleAdjustmentReport localBundleAdjustment(KeyFrame* kf, Map& map, const Bundl
 // loop correction (LoopOptions::global_ba_solver). SchurLm takes Ceres' steps (the same minimum up to
 // rounding) and solves a map of more than SchurLevenbergMarquardt::kMaxDensePoses keyframes block-sparse.
 // From `options` it takes the solver, the chi-square threshold and the metric terms local BA has on a
-// metric map (LocalMapper::metricTerms): the keypoints' LiDAR ranges (lidar_range_sigma > 0), one anchor
-// per parked car on its keyframes' boxes (object_range_sigma > 0 and object_anchors) and the object
-// landmarks as nodes (objects.enabled; these go to Ceres). Its pass counts and hooks are not used.
+// metric map (LocalMapper::metricTerms): the parked cars' keypoint ranges (object_range_sigma > 0 and
+// object_range_priors), the keypoints' LiDAR ranges (lidar_range_sigma > 0), one anchor per parked car on its
+// keyframes' boxes (object_range_sigma > 0 and object_anchors) and the object landmarks as nodes
+// (objects.enabled; these go to Ceres). Its pass counts and hooks are not used.
 BundleAdjustmentReport globalBundleAdjustment(Map& map, int iterations, const BundleAdjustmentOptions& options);
 
 // A global BA's options without metric terms on the given solver (initialisation, tests).
