@@ -487,14 +487,17 @@ TEST_F(RunTest, MotionCheckerGetsNoPoseUntilTheWorldIsMetric) {
   }
 }
 
-// When the world turns metric late (here at frame 3), the motion checker is started again on the frames it
+// When the world turns metric late (here at frame 2), the motion checker is started again on the frames it
 // saw without a pose, placed with the backend's now metric poses: the boxes after it are decided with that
 // history (the boxes fixed in the camera move with it, so they are dynamic); with motion_replay_frames 0
-// the checker starts from nothing. The new checker's track ids follow every id given out before.
+// the checker starts from nothing. The new checker's track ids follow every id given out before. The checker
+// here watches its poses for 0.3 s before deciding (pose_jitter): with `motion_replay: poses` it has watched the
+// frames before the switch, so it decides as soon as its tracks, which start at frame 3 (no box was replayed), are
+// steady enough (the poses accelerate: 0.2 m of jitter); without a replay it is still watching at frame 5.
 TEST_F(RunTest, WhenTheWorldTurnsMetricTheMotionCheckerRunsAgainOnTheFramesBefore) {
   // The objects.txt rows of frames >= first: {decided rows, smallest track id}; and the largest id before.
   struct Rows {
-    int decided = 0, unknown = 0;
+    int decided = 0, unknown = 0, decided_first = 0;
     int min_id_after = 1 << 30, max_id_before = -1;
   };
   auto rows = [](const std::string& objects, int first) {
@@ -512,32 +515,50 @@ TEST_F(RunTest, WhenTheWorldTurnsMetricTheMotionCheckerRunsAgainOnTheFramesBefor
       r.min_id_after = std::min(r.min_id_after, id);
       const bool unknown = line.size() >= 8 && line.compare(line.size() - 8, 8, " unknown") == 0;
       (unknown ? r.unknown : r.decided) += 1;
+      if (frame == first && !unknown) ++r.decided_first;
     }
     return r;
   };
-  std::map<int, Rows> by_replay;
-  for (const int replay : {0, 30}) {
-    SCOPED_TRACE("motion_replay_frames " + std::to_string(replay));
+  std::map<std::string, Rows> by_replay;
+  for (const std::string replay : {"0 boxes", "30 boxes", "30 poses"}) {
+    SCOPED_TRACE("motion_replay_frames, motion_replay: " + replay);
+    const std::string frames = replay.substr(0, replay.find(' ')), what = replay.substr(replay.find(' ') + 1);
     const fs::path path = dir_ / "pipeline.yaml";
     std::ofstream(path) << "dataset: {type: kitti_odometry, root: data, sequence: \"00\"}\n"
                         << "plugin_paths: [" << FIXTURE_DIR << "]\n"
-                        << "backend: {plugin: backend_pose_replay, poses: data/poses/00.txt, metric_from_frame: 3}\n"
+                        << "backend: {plugin: backend_pose_replay, poses: data/poses/00.txt, metric_from_frame: 2}\n"
                         << "detector: {plugin: fixture_boxes, count: 2}\n"
-                        << "motion_checker: {plugin: motion_bev_tracker, min_observations: 2}\n"
-                        << "pipeline: {motion_replay_frames: " << replay << "}\n";
-    const fs::path out = dir_ / ("replay" + std::to_string(replay));
+                        << "motion_checker: {plugin: motion_bev_tracker, min_observations: 2, pose_jitter: true, "
+                           "window_static: 0.3}\n"
+                        << "pipeline: {motion_replay_frames: " << frames << ", motion_replay: " << what << "}\n";
+    const fs::path out = dir_ / ("replay" + frames + what);
     const Result r = beslam("run " + path.string() + " --out " + out.string(), dir_);
     ASSERT_EQ(r.code, 0) << r.err;
     const std::string summary = slurp(out / "summary.json");
-    EXPECT_NE(summary.find("\"metric_from_frame\": 3"), std::string::npos) << summary;
-    EXPECT_NE(summary.find("\"motion_replayed_frames\": " + std::string(replay ? "4" : "0")), std::string::npos)
+    EXPECT_NE(summary.find("\"metric_from_frame\": 2"), std::string::npos) << summary;
+    EXPECT_NE(summary.find("\"motion_replayed_frames\": " + std::string(frames == "30" ? "3" : "0")), std::string::npos)
         << summary;
-    by_replay[replay] = rows(slurp(out / "objects.txt"), 4);
-    EXPECT_EQ(by_replay[replay].decided + by_replay[replay].unknown, 4);  // 2 boxes in frames 4 and 5
+    by_replay[replay] = rows(slurp(out / "objects.txt"), 3);
+    EXPECT_EQ(by_replay[replay].decided + by_replay[replay].unknown, 6);  // 2 boxes in frames 3 to 5
+    EXPECT_GT(by_replay[replay].min_id_after, by_replay[replay].max_id_before) << "an id never names two tracks";
   }
-  EXPECT_EQ(by_replay[30].decided, 4) << "with the history every box after the metric frame is decided";
-  EXPECT_LT(by_replay[0].decided, 4) << "without it the checker starts from nothing at frame 4";
-  EXPECT_GT(by_replay[30].min_id_after, by_replay[30].max_id_before) << "an id never names two tracks";
+  EXPECT_EQ(by_replay["30 boxes"].decided, 6) << "with the history every box after the metric frame is decided";
+  EXPECT_EQ(by_replay["0 boxes"].decided, 0) << "without it the checker starts from nothing at frame 3 and watches";
+  EXPECT_EQ(by_replay["30 poses"].decided_first, 0) << "no box was replayed: the tracks start at frame 3";
+  EXPECT_GE(by_replay["30 poses"].decided, 2) << "the poses were watched: frame 5's boxes are decided";
+}
+
+// A pipeline file's `motion_replay` is one of its two words.
+TEST_F(RunTest, AnUnknownMotionReplayIsRejectedWithTheFileNamed) {
+  const fs::path path = dir_ / "pipeline.yaml";
+  std::ofstream(path) << "dataset: {type: kitti_odometry, root: data, sequence: \"00\"}\n"
+                      << "backend: {plugin: backend_pose_replay, poses: data/poses/00.txt}\n"
+                      << "pipeline: {motion_replay_frames: 10, motion_replay: tracks}\n";
+  const Result r = beslam("run " + path.string() + " --out " + (dir_ / "bad").string(), dir_);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find(path.filename().string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("motion_replay"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "bad" / "summary.json"));
 }
 
 // The README's demo is a BE-SLAM run, not a DynaSLAM-style one: on its own monocular (then metric) map the

@@ -419,7 +419,7 @@ class Run {
     if (motion_) {
       StageTimer timer(f.timing, "motion_checker");
       if (!world_metric_ && spec_.run.motion_replay_frames > 0) {
-        unposed_.push_back({f.frame, f.boxes});
+        unposed_.push_back({f.frame, spec_.run.motion_replay_boxes ? f.boxes : std::vector<beslam_box3d>{}});
         if (unposed_.size() > static_cast<size_t>(spec_.run.motion_replay_frames)) unposed_.pop_front();
       }
       std::vector<int32_t> detected_ids;
@@ -487,15 +487,16 @@ class Run {
   }
 
   // The motion checker again, on the frames it saw without a pose, now with the backend's metric poses
-  // (runner.hpp): a new instance takes over with their history. A backend that cannot give its trajectory
-  // between frames leaves the checker as it is (a warning).
+  // (runner.hpp): a new instance takes over with their history (boxes at the final poses) or having watched
+  // the poses the backend gave them online (poses alone). A backend that cannot give its trajectory between
+  // frames leaves the checker as it is (a warning).
   void replayMotionChecker(detail::TimingRow& timing) {
     if (!motion_ || unposed_.empty()) return;
     StageTimer timer(timing, "motion_replay");
     std::map<int64_t, Eigen::Isometry3d> T_world_cam;
     try {
-      for (const registry::PoseEntry& p : backend_->trajectory(BESLAM_TRAJECTORY_FINAL))
-        T_world_cam[p.frame_index] = p.T_world_cam;
+      const int32_t which = spec_.run.motion_replay_boxes ? BESLAM_TRAJECTORY_FINAL : BESLAM_TRAJECTORY_ONLINE;
+      for (const registry::PoseEntry& p : backend_->trajectory(which)) T_world_cam[p.frame_index] = p.T_world_cam;
     } catch (const Error& e) {
       if (options_.log_level <= BESLAM_LOG_WARNING)
         std::cerr << "warning: the motion checker starts without history: " << e.what() << "\n";

@@ -324,6 +324,7 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
   const PluginConfig run = validateSettings(doc["pipeline"], runFields(), "pipeline", path, "");
   spec.run.prefetch = static_cast<int>(value(run, "prefetch").number);
   spec.run.motion_replay_frames = static_cast<int>(value(run, "motion_replay_frames").number);
+  spec.run.motion_replay_boxes = std::string(value(run, "motion_replay").text) == "boxes";
 
   if (YAML::Node paths = doc["plugin_paths"]; paths.IsDefined() && !paths.IsNull()) {
     if (!paths.IsSequence()) fail(path, paths, "plugin_paths", "expected a list of folders");

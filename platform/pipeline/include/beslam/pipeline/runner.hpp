@@ -17,13 +17,17 @@
 // (at most motion_replay_frames, the latest) with their boxes as detected; on the frame the world turns metric it asks
 // the backend for its trajectory (now in metres), starts a new checker instance with the same settings and runs it over
 // those frames with their poses, then goes on with it. The states of the frames already processed are not changed;
-// later frames are decided with the history. The track ids the new instance makes up (not the detector's own, passed
-// through) are moved past every id given out before, so such an id never names two objects. Scheduling
-// (spec.run.prefetch > 0, the default): a producer thread loads the next frames and runs the detector on them (and the
-// mask generator, when no motion checker needs the backend's pose first) while the backend works on the current one; at
-// most `prefetch` frames wait. Each plugin is still called from one thread at a time, frame after frame in order, with
-// the same inputs as in the strictly sequential loop (prefetch 0), so the results are the same; an interrupted run may
-// have loaded and detected up to `prefetch` frames past the last one processed, which nothing else sees.
+// later frames are decided with the history. With spec.run.motion_replay_boxes false (`motion_replay: poses`) the
+// runner keeps no boxes and the new instance gets the poses the backend gave those frames when it tracked them (its
+// online trajectory, now in metres) and no boxes: it has watched the backend's poses, so it knows how much they
+// jitter from the first metric frame on, and no car is measured in the young map's unit. The track ids the new instance
+// makes up (not the detector's own, passed through) are moved past every id given out before, so such an id never names
+// two objects. Scheduling (spec.run.prefetch > 0, the default): a producer thread loads the next frames and runs the
+// detector on them (and the mask generator, when no motion checker needs the backend's pose first) while the backend
+// works on the current one; at most `prefetch` frames wait. Each plugin is still called from one thread at a time,
+// frame after frame in order, with the same inputs as in the strictly sequential loop (prefetch 0), so the results are
+// the same; an interrupted run may have loaded and detected up to `prefetch` frames past the last one processed, which
+// nothing else sees.
 #pragma once
 
 #include <functional>

@@ -86,8 +86,9 @@ struct EvaluationSpec {
 // How the runner schedules the stages (prefetch never changes what they compute) and the motion
 // checker's history when the world turns metric (runner.hpp).
 struct RunSpec {
-  int prefetch = 3;              // frames prepared ahead on a producer thread (0: strictly one stage after another)
-  int motion_replay_frames = 0;  // frames the motion checker is run on again with metric poses (0: none)
+  int prefetch = 3;                 // frames prepared ahead on a producer thread (0: strictly one stage after another)
+  int motion_replay_frames = 0;     // frames the motion checker is run on again with metric poses (0: none)
+  bool motion_replay_boxes = true;  // replay the boxes at the final poses; false: the online poses alone
 };
 
 struct PipelineSpec {
