@@ -53,8 +53,8 @@ struct LoopOptions {
   int global_ba_iterations = 10;  // 0: no global BA after the pose graph
   optimize::BaSolver global_ba_solver = optimize::BaSolver::SchurLm;
   // The metric terms the global BA keeps from local BA (LocalMapper::metricTerms): the keypoints' LiDAR ranges
-  // while the scan holds the map's scale and, with global_ba_objects, the parked cars' anchors and the object
-  // landmarks once the map is metric. No callback: none.
+  // while the scan holds the map's scale and, with global_ba_objects, the parked cars' anchors (or their keypoint
+  // ranges, object_scale_hold: ranges) and the object landmarks once the map is metric. No callback: none.
   std::function<optimize::BundleAdjustmentOptions()> metric_terms;
   bool global_ba_objects = true;
   uint64_t seed = 1;
