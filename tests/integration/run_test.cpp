@@ -538,6 +538,13 @@ TEST_F(RunTest, WhenTheWorldTurnsMetricTheMotionCheckerRunsAgainOnTheFramesBefor
     EXPECT_NE(summary.find("\"metric_from_frame\": 2"), std::string::npos) << summary;
     EXPECT_NE(summary.find("\"motion_replayed_frames\": " + std::string(frames == "30" ? "3" : "0")), std::string::npos)
         << summary;
+    EXPECT_NE(summary.find("\"motion_replay\": \"" + what + "\""), std::string::npos) << summary;
+    if (frames == "30") {
+      EXPECT_NE(r.out.find(what == "boxes" ? "the motion checker ran again on the 3 frames before"
+                                           : "the motion checker watched the backend's poses of the 3 frames before"),
+                std::string::npos)
+          << r.out;
+    }
     by_replay[replay] = rows(slurp(out / "objects.txt"), 3);
     EXPECT_EQ(by_replay[replay].decided + by_replay[replay].unknown, 6);  // 2 boxes in frames 3 to 5
     EXPECT_GT(by_replay[replay].min_id_after, by_replay[replay].max_id_before) << "an id never names two tracks";

@@ -210,10 +210,12 @@ int runCommand(const std::vector<std::string>& args) {
   if (!s.evaluation_error.empty()) std::cout << "no APE: " << s.evaluation_error << "\n";
   if (s.metric_from_frame >= 0)
     std::cout << "map in metres from frame " << s.metric_from_frame << " (camera height " << s.camera_height << " m)"
-              << (s.motion_replayed_frames > 0
+              << (s.motion_replayed_frames == 0 ? std::string()
+                  : spec.run.motion_replay_boxes
                       ? "; the motion checker ran again on the " + std::to_string(s.motion_replayed_frames) +
                             " frames before, with metric poses"
-                      : std::string())
+                      : "; the motion checker watched the backend's poses of the " +
+                            std::to_string(s.motion_replayed_frames) + " frames before")
               << (s.world_moves > 0 ? "; the backend moved it " + std::to_string(s.world_moves) +
                                           " times (loop corrections, changes of scale, local BA under the camera)"
                                     : std::string())

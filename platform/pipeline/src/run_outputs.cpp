@@ -211,6 +211,7 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
                    {"metric_from_frame", orNull(summary.metric_from_frame >= 0, summary.metric_from_frame)},
                    {"camera_height_m", orNull(summary.camera_height > 0, summary.camera_height)},
                    {"motion_replayed_frames", summary.motion_replayed_frames},
+                   {"motion_replay", spec.run.motion_replay_boxes ? "boxes" : "poses"},
                    {"moves", summary.world_moves}};
   json["detections"] = {{"static", summary.detections_static},
                         {"dynamic", summary.detections_dynamic},
