@@ -519,10 +519,11 @@ TEST_F(RunTest, WhenTheWorldTurnsMetricTheMotionCheckerRunsAgainOnTheFramesBefor
     }
     return r;
   };
-  std::map<std::string, Rows> by_replay;
-  for (const std::string replay : {"0 boxes", "30 boxes", "30 poses"}) {
-    SCOPED_TRACE("motion_replay_frames, motion_replay: " + replay);
-    const std::string frames = replay.substr(0, replay.find(' ')), what = replay.substr(replay.find(' ') + 1);
+  using Replay = std::pair<int, std::string>;  // motion_replay_frames, motion_replay
+  std::map<Replay, Rows> by_replay;
+  for (const Replay& replay : {Replay{0, "boxes"}, Replay{30, "boxes"}, Replay{30, "poses"}}) {
+    const auto& [frames, what] = replay;
+    SCOPED_TRACE("motion_replay_frames " + std::to_string(frames) + ", motion_replay: " + what);
     const fs::path path = dir_ / "pipeline.yaml";
     std::ofstream(path) << "dataset: {type: kitti_odometry, root: data, sequence: \"00\"}\n"
                         << "plugin_paths: [" << FIXTURE_DIR << "]\n"
@@ -531,15 +532,15 @@ TEST_F(RunTest, WhenTheWorldTurnsMetricTheMotionCheckerRunsAgainOnTheFramesBefor
                         << "motion_checker: {plugin: motion_bev_tracker, min_observations: 2, pose_jitter: true, "
                            "window_static: 0.3}\n"
                         << "pipeline: {motion_replay_frames: " << frames << ", motion_replay: " << what << "}\n";
-    const fs::path out = dir_ / ("replay" + frames + what);
+    const fs::path out = dir_ / ("replay" + std::to_string(frames) + what);
     const Result r = beslam("run " + path.string() + " --out " + out.string(), dir_);
     ASSERT_EQ(r.code, 0) << r.err;
     const std::string summary = slurp(out / "summary.json");
     EXPECT_NE(summary.find("\"metric_from_frame\": 2"), std::string::npos) << summary;
-    EXPECT_NE(summary.find("\"motion_replayed_frames\": " + std::string(frames == "30" ? "3" : "0")), std::string::npos)
+    EXPECT_NE(summary.find("\"motion_replayed_frames\": " + std::string(frames == 30 ? "3" : "0")), std::string::npos)
         << summary;
     EXPECT_NE(summary.find("\"motion_replay\": \"" + what + "\""), std::string::npos) << summary;
-    if (frames == "30") {
+    if (frames == 30) {
       EXPECT_NE(r.out.find(what == "boxes" ? "the motion checker ran again on the 3 frames before"
                                            : "the motion checker watched the backend's poses of the 3 frames before"),
                 std::string::npos)
@@ -549,10 +550,12 @@ TEST_F(RunTest, WhenTheWorldTurnsMetricTheMotionCheckerRunsAgainOnTheFramesBefor
     EXPECT_EQ(by_replay[replay].decided + by_replay[replay].unknown, 6);  // 2 boxes in frames 3 to 5
     EXPECT_GT(by_replay[replay].min_id_after, by_replay[replay].max_id_before) << "an id never names two tracks";
   }
-  EXPECT_EQ(by_replay["30 boxes"].decided, 6) << "with the history every box after the metric frame is decided";
-  EXPECT_EQ(by_replay["0 boxes"].decided, 0) << "without it the checker starts from nothing at frame 3 and watches";
-  EXPECT_EQ(by_replay["30 poses"].decided_first, 0) << "no box was replayed: the tracks start at frame 3";
-  EXPECT_GE(by_replay["30 poses"].decided, 2) << "the poses were watched: frame 5's boxes are decided";
+  const Rows &none = by_replay[Replay{0, "boxes"}], &boxes = by_replay[Replay{30, "boxes"}],
+             &poses = by_replay[Replay{30, "poses"}];
+  EXPECT_EQ(boxes.decided, 6) << "with the history every box after the metric frame is decided";
+  EXPECT_EQ(none.decided, 0) << "without it the checker starts from nothing at frame 3 and watches";
+  EXPECT_EQ(poses.decided_first, 0) << "no box was replayed: the tracks start at frame 3";
+  EXPECT_GE(poses.decided, 2) << "the poses were watched: frame 5's boxes are decided";
 }
 
 // A pipeline file's `motion_replay` is one of its two words.
