@@ -56,6 +56,8 @@ void setParam(beslam::motion::Params& p, const std::string& kv) {
                                       {"init_velocity_sigma", &p.init_velocity_sigma},
                                       {"ego_speed_noise", &p.ego_speed_noise},
                                       {"ego_turn_noise", &p.ego_turn_noise},
+                                      {"settling_speed_noise", &p.settling_speed_noise},
+                                      {"settling_time", &p.settling_time},
                                       {"max_miss_time", &p.max_miss_time},
                                       {"window_dynamic", &p.window_dynamic},
                                       {"window_static", &p.window_static},
@@ -66,11 +68,10 @@ void setParam(beslam::motion::Params& p, const std::string& kv) {
                                       {"max_range", &p.max_range},
                                       {"max_residual", &p.max_residual},
                                       {"displacement_margin", &p.displacement_margin}};
-  std::map<std::string, int*> i = {{"min_observations", &p.min_observations},
-                                   {"start_frames", &p.start_frames},
-                                   {"pull_out_frames", &p.pull_out_frames},
-                                   {"stop_dwell", &p.stop_dwell},
-                                   {"anchor_frames", &p.anchor_frames}};
+  std::map<std::string, int*> i = {
+      {"min_observations", &p.min_observations}, {"start_frames", &p.start_frames},
+      {"pull_out_frames", &p.pull_out_frames},   {"stop_dwell", &p.stop_dwell},
+      {"anchor_frames", &p.anchor_frames},       {"reference_tracks", &p.reference_tracks}};
   if (k == "association")
     p.association = v;
   else if (d.count(k))

@@ -105,6 +105,9 @@ std::string Params::validate() const {
   if (!(pos_sigma_per_m >= 0)) return "pos_sigma_per_m must be >= 0";
   if (!(velocity_sigma > 0)) return "velocity_sigma must be > 0";
   if (!(ego_speed_noise >= 0) || !(ego_turn_noise >= 0)) return "ego_speed_noise and ego_turn_noise must be >= 0";
+  if (!(settling_speed_noise >= 0) || !(settling_time >= 0))
+    return "settling_speed_noise and settling_time must be >= 0";
+  if (reference_tracks < 0) return "reference_tracks must be >= 0";
   if (!(init_velocity_sigma > 0)) return "init_velocity_sigma must be > 0";
   if (!(max_miss_time >= 0)) return "max_miss_time must be >= 0";
   if (max_history < 2) return "max_history must be >= 2";
@@ -134,6 +137,7 @@ void BevTracker::reset() {
   pose_mode_ = false;
   poses_.clear();
   jitter_.clear();
+  scale_change_t_ = scale_change_ = 0;
   jitter_rms_ = 0;
   ego_speed_ = ego_yaw_rate_ = 0;
   ego_velocity_ = Eigen::Vector2d::Zero();
@@ -144,6 +148,7 @@ void BevTracker::worldMoved(const Eigen::Isometry3d& S_new_old, double scale) {
   if (!S_new_old.matrix().allFinite() || !std::isfinite(scale) || !(scale > 0))
     throw std::invalid_argument("motion tracker: a world change needs a finite transform and a scale > 0");
   if (!pose_mode_) return;  // nothing placed in the world yet
+  if (std::abs(scale - 1.0) > 1e-9) scale_change_t_ = last_time_, scale_change_ = std::abs(scale - 1.0);
   // A camera centre moves with the change, scale included; a box's offset from the camera that saw it is in
   // metres (the detector's), so it only turns with the camera. In the BEV plane: a point is lifted to the
   // height of the latest camera (a correction's tilt is a fraction of a degree), moved, and projected again.
@@ -190,7 +195,8 @@ void BevTracker::worldMoved(const Eigen::Isometry3d& S_new_old, double scale) {
 }
 
 BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
-                                       const std::optional<Eigen::Vector2d>& det_velocity, double det_sigma) const {
+                                       const std::optional<Eigen::Vector2d>& det_velocity, double det_sigma,
+                                       bool dynamic_test) const {
   Speed s;
   const auto& h = track.history;
   Eigen::Vector2d v_fit = Eigen::Vector2d::Zero();
@@ -206,7 +212,7 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
     const bool isotropic = std::all_of(h.begin() + static_cast<std::ptrdiff_t>(first), h.end(),
                                        [](const Observation& o) { return o.isotropic; });
     if (enough && !isotropic) {
-      const std::optional<Fit> g = fitSpeedAnisotropic(h, first);
+      const std::optional<Fit> g = fitSpeedAnisotropic(h, first, dynamic_test);
       if (g) {
         v_fit = g->velocity, sigma_fit = g->sigma, sigma_bound = g->sigma_bound, fit = g->consistent;
         speed_bound = g->speed_bound;
@@ -216,7 +222,7 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
       Eigen::Vector2d p_mean = Eigen::Vector2d::Zero();
       for (size_t i = first; i < h.size(); ++i) {
         t_mean += h[i].t, p_mean += h[i].p, var_model += h[i].cov(0, 0);  // sigma^2: isotropic
-        var_ego += h[i].v_sigma * h[i].v_sigma;
+        var_ego += h[i].v_sigma * h[i].v_sigma + (dynamic_test ? h[i].v_settling * h[i].v_settling : 0.0);
       }
       t_mean /= static_cast<double>(n), p_mean /= static_cast<double>(n), var_model /= static_cast<double>(n);
       var_ego /= static_cast<double>(n);
@@ -261,6 +267,7 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
   }
   if (!fit) return s;
   s.valid = true;
+  s.velocity = v_fit;
   s.speed = v_fit.norm();
   s.sigma = sigma_fit;
   s.sigma_bound = sigma_bound;
@@ -268,7 +275,8 @@ BevTracker::Speed BevTracker::fitSpeed(const Track& track, double window,
   return s;
 }
 
-std::optional<BevTracker::Fit> BevTracker::fitSpeedAnisotropic(const std::deque<Observation>& h, size_t first) const {
+std::optional<BevTracker::Fit> BevTracker::fitSpeedAnisotropic(const std::deque<Observation>& h, size_t first,
+                                                               bool dynamic_test) const {
   // Generalised least squares of p_i = a + v (t_i - t_mean), each position weighted by its inverse
   // covariance: a range error along the line of sight says nothing about the motion across it.
   const size_t n = h.size() - first;
@@ -277,6 +285,7 @@ std::optional<BevTracker::Fit> BevTracker::fitSpeedAnisotropic(const std::deque<
   Eigen::Matrix2d drift = Eigen::Matrix2d::Zero();
   for (size_t i = first; i < h.size(); ++i) {
     t_mean += h[i].t, p_mean += h[i].p, var_ego += h[i].v_sigma * h[i].v_sigma;
+    if (dynamic_test) var_ego += h[i].v_settling * h[i].v_settling;
     drift += h[i].drift_cov;
   }
   t_mean /= static_cast<double>(n), p_mean /= static_cast<double>(n), var_ego /= static_cast<double>(n);
@@ -340,8 +349,11 @@ std::optional<BevTracker::Fit> BevTracker::fitSpeedAnisotropic(const std::deque<
 }
 
 void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_velocity, Decision& out) {
-  const Speed dyn = fitSpeed(track, params_.window_dynamic, det_velocity, params_.velocity_sigma);
-  const Speed sta = fitSpeed(track, params_.window_static, det_velocity, params_.velocity_sigma);
+  const Speed dyn = fitSpeed(track, params_.window_dynamic, det_velocity, params_.velocity_sigma, true);
+  const Speed sta = fitSpeed(track, params_.window_static, det_velocity, params_.velocity_sigma, false);
+  // The parked cars around: their common apparent velocity is the pose source's error, not motion.
+  const std::optional<std::pair<Eigen::Vector2d, double>> reference =
+      det_velocity ? std::nullopt : parkedReference(track.id);
   // A static track also moves when its latest positions leave the place it was parked at.
   bool displaced = false;
   if (track.state == BESLAM_MOTION_STATIC && track.anchor_n > 0 && !track.history.empty()) {
@@ -351,22 +363,32 @@ void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_
     double v_sigma = 0, t_recent = 0;
     for (size_t i = track.history.size() - k; i < track.history.size(); ++i) {
       const Observation& o = track.history[i];
-      recent += o.p, cov += o.cov, v_sigma += o.v_sigma, t_recent += o.t, range_drift += o.drift_cov;
+      recent += o.p, cov += o.cov, v_sigma += std::hypot(o.v_sigma, o.v_settling), t_recent += o.t,
+          range_drift += o.drift_cov;
     }
     recent /= static_cast<double>(k);
     const double since = std::max(0.0, t_recent / static_cast<double>(k) - track.anchor_t);
     // The boxes' range drift since the parked position was measured, along their lines of sight.
     cov = cov / static_cast<double>(k * k) + track.anchor_cov + range_drift / static_cast<double>(k) * since * since;
     // The noise along the displacement (a range error moves a box along its line of sight only).
-    const Eigen::Vector2d step = recent - track.anchor;
+    Eigen::Vector2d step = recent - track.anchor;
+    if (reference) {  // the parked cars around have drifted with it since (at their velocity now)
+      step -= reference->first * since;
+      cov += std::pow(reference->second * since, 2) * Eigen::Matrix2d::Identity();
+    }
     double var = step.norm() > 1e-12 ? step.dot(cov * step) / step.squaredNorm() : 0.5 * cov.trace();
     // Pose drift since the parked position was measured: the ego-motion velocity error over that time.
     const double drift = v_sigma / static_cast<double>(k) * since;
     var += drift * drift;
     displaced = step.norm() > params_.z_dynamic * std::sqrt(var) + params_.displacement_margin;
   }
+  double dyn_speed = dyn.speed, dyn_sigma = dyn.sigma;
+  if (dyn.valid && reference) {  // the speed against the parked cars around
+    dyn_speed = (dyn.velocity - reference->first).norm();
+    dyn_sigma = std::hypot(dyn.sigma, reference->second);
+  }
   const bool dynamic_evidence =
-      displaced || (dyn.valid && dyn.speed - params_.z_dynamic * dyn.sigma > params_.dynamic_speed);
+      displaced || (dyn.valid && dyn_speed - params_.z_dynamic * dyn_sigma > params_.dynamic_speed);
   const bool static_evidence = !dynamic_evidence && sta.valid && sta.speed_bound < params_.static_speed;
   if (dynamic_evidence) {
     ++track.dynamic_run;
@@ -403,6 +425,20 @@ void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_
   }
   out.speed = dyn.valid ? dyn.speed : 0;
   out.speed_sigma = dyn.valid ? dyn.sigma : 0;
+}
+
+std::optional<std::pair<Eigen::Vector2d, double>> BevTracker::parkedReference(int32_t track_id) const {
+  std::vector<double> vx, vz, sigma;
+  for (const Reference& r : references_)
+    if (r.track_id != track_id) vx.push_back(r.velocity.x()), vz.push_back(r.velocity.y()), sigma.push_back(r.sigma);
+  if (params_.reference_tracks <= 0 || static_cast<int>(vx.size()) < params_.reference_tracks) return std::nullopt;
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  // The median of n velocities has about 1.25 times the standard error of their mean.
+  const double n = static_cast<double>(vx.size());
+  return std::make_pair(Eigen::Vector2d(median(vx), median(vz)), 1.2533 * median(sigma) / std::sqrt(n));
 }
 
 Eigen::Isometry3d BevTracker::steadyPose(double now) const {
@@ -502,6 +538,10 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
   const size_t n = boxes.size(), m = tracks_.size();
   std::vector<Eigen::Vector2d> p(n);
   std::vector<double> range(n), v_sigma(n), yaw(n);
+  const double settling_share =
+      std::max(now - first_pose_t_ < params_.settling_time ? params_.settling_speed_noise : 0.0,
+               now - scale_change_t_ < params_.settling_time ? scale_change_ : 0.0);
+  const double v_settling = settling_share * ego_speed_;
   std::vector<Eigen::Matrix2d> cov(n), drift_cov(n, Eigen::Matrix2d::Zero());
   std::vector<Eigen::Vector2d> line_of_sight(n, Eigen::Vector2d::Zero());  // unit BEV bearing; zero: isotropic
   std::vector<std::optional<Eigen::Vector2d>> vel(n);
@@ -572,6 +612,15 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       if (a[i] >= 0 && cost[i * m + static_cast<size_t>(a[i])] < kNoMatch) det_to_track[i] = a[i];
   }
 
+  // The parked tracks' apparent velocities, from their positions before this frame.
+  references_.clear();
+  if (params_.reference_tracks > 0 && T_world_cam_in)
+    for (const Track& t : tracks_)
+      if (t.state == BESLAM_MOTION_STATIC) {
+        const Speed s = fitSpeed(t, params_.window_dynamic, std::nullopt, params_.velocity_sigma, false);
+        if (s.valid) references_.push_back({t.id, s.velocity, s.sigma});
+      }
+
   // Update matched tracks, start new ones. With an extrapolated pose a box only keeps its track alive and
   // takes its state: where the ego really went is a guess, so its position is no evidence (a guess off by a
   // metre over a second reads as a parked car moving at a metre a second), and no track starts from it.
@@ -620,7 +669,8 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     t->length = b.size[0] > 0 ? b.size[0] : t->length;
     t->width = b.size[1] > 0 ? b.size[1] : t->width;
     ++t->hits;
-    t->history.push_back({now, p[i], cam, v_sigma[i], cov[i], drift_cov[i], line_of_sight[i].squaredNorm() == 0});
+    t->history.push_back(
+        {now, p[i], cam, v_sigma[i], v_settling, cov[i], drift_cov[i], line_of_sight[i].squaredNorm() == 0});
     while (static_cast<int>(t->history.size()) > params_.max_history) t->history.pop_front();
 
     Decision& d = out[i];

@@ -53,6 +53,15 @@
 // itself) is measured as an RMS over the last window_static seconds, and every world position made with
 // them carries it as extra position noise. Ground truth and stereo odometry have almost none. Until the
 // poses have been watched for window_static seconds their jitter is unknown and no track is decided.
+//
+// A young map (for a monocular SLAM backend; both off by default). Its unit drifts by several per cent over a
+// second in its first seconds, which moves every parked car along the ego's path at that share of its speed:
+//  - settling_speed_noise for settling_time after the first pose (or at least a change of scale's own size
+//    after the change, worldMoved with scale != 1) joins the ego-motion error of the dynamic test and the
+//    pull-out test only; the static test is unchanged.
+//  - reference_tracks: with at least that many other static tracks, a track's dynamic evidence is its
+//    velocity against their median apparent velocity (fitted over window_dynamic before this frame), and a
+//    parked track's displacement is measured net of that velocity over the time since it was parked.
 #pragma once
 
 #include <Eigen/Core>
@@ -87,6 +96,17 @@ struct Params {
   double ego_turn_noise = 0.05;      // fraction of the ego's yaw rate (heading-rate error; lateral, grows with range)
   double init_velocity_sigma = 5.0;  // m/s, velocity uncertainty of a new track (no detector velocity)
   bool pose_jitter = false;          // measured pose jitter adds to every position's noise (for SLAM poses)
+  // Parked reference: with at least this many other static tracks in view, a track's dynamic evidence is its
+  // velocity relative to their common (median) apparent velocity, which is the pose source's own error (a map
+  // unit still settling moves every parked car along the ego's path at once). 0: off.
+  int reference_tracks = 0;
+  // A settling map unit (a monocular map just made metric: its unit drifts by several per cent over a second
+  // for its first seconds): for settling_time after the first pose, a parked car may seem to move at up to
+  // settling_speed_noise * (ego speed), which dynamic evidence must clear (static evidence need not: a car
+  // creeping at that speed is rarer than a parked one seen through a young map). A change of scale the
+  // backend reports (worldMoved with scale != 1) restarts the time, at least at the change's own size.
+  double settling_speed_noise = 0;
+  double settling_time = 0;  // s; 0: off
   // Track life.
   double max_miss_time = 1.0;  // s a track survives without a detection
   int max_history = 64;        // observations kept per track
@@ -161,6 +181,7 @@ class BevTracker {
     Eigen::Vector2d p;          // world BEV
     Eigen::Vector2d cam;        // world BEV centre of the camera that saw it (a world change scales from it)
     double v_sigma;             // apparent velocity from ego-motion error (m/s)
+    double v_settling;          // the same from a map unit still settling: dynamic evidence only (m/s)
     Eigen::Matrix2d cov;        // position covariance in the world BEV
     Eigen::Matrix2d drift_cov;  // velocity covariance of the box's range drift while the camera closes in
     bool isotropic;             // cov == sigma^2 I and no drift (the box gave no noise of its own)
@@ -189,6 +210,13 @@ class BevTracker {
     double sigma = 0;        // standard error of the speed (along the fitted velocity)
     double sigma_bound = 0;  // the largest standard error in any direction
     double speed_bound = 0;  // the static test's: speed plus z_static standard errors, at most
+    Eigen::Vector2d velocity = Eigen::Vector2d::Zero();  // the fitted (fused) BEV velocity
+  };
+  // A static track's apparent velocity over window_dynamic, before this frame's update (reference_tracks).
+  struct Reference {
+    int32_t track_id;
+    Eigen::Vector2d velocity;
+    double sigma;
   };
 
   struct Fit {
@@ -198,10 +226,14 @@ class BevTracker {
   };
   // The line fit when some position of the window has its own (range, bearing) noise; nullopt when the
   // window spans no time.
-  std::optional<Fit> fitSpeedAnisotropic(const std::deque<Observation>& history, size_t first) const;
+  std::optional<Fit> fitSpeedAnisotropic(const std::deque<Observation>& history, size_t first, bool dynamic_test) const;
+  // dynamic_test: the settling unit's error counts too (v_settling).
   Speed fitSpeed(const Track& track, double window, const std::optional<Eigen::Vector2d>& det_velocity,
-                 double det_sigma) const;
+                 double det_sigma, bool dynamic_test) const;
   void decide(Track& track, const std::optional<Eigen::Vector2d>& det_velocity, Decision& out);
+  // The parked tracks' common apparent velocity and its standard error, the given track left out; nullopt
+  // when fewer than reference_tracks remain.
+  std::optional<std::pair<Eigen::Vector2d, double>> parkedReference(int32_t track_id) const;
   // The last pose carried on to `now` at the last two poses' velocity and turn rate (the last pose alone
   // when there is one, or no time between them). Needs a pose.
   Eigen::Isometry3d steadyPose(double now) const;
@@ -215,9 +247,11 @@ class BevTracker {
   std::vector<std::pair<double, Eigen::Isometry3d>> poses_;  // last two known poses, for extrapolation
   std::deque<std::pair<double, double>> jitter_;  // (time, squared BEV distance of a pose from its prediction)
   double jitter_rms_ = 0;                         // m, over the last window_static seconds
+  std::vector<Reference> references_;             // this frame's parked tracks (reference_tracks)
   bool last_frame_posed_ = false;                 // the previous frame had a given pose (not extrapolated, not none)
   double first_pose_t_ = 0;  // time of the first pose: with pose_jitter, decisions wait window_static from it
-  double ego_speed_ = 0, ego_yaw_rate_ = 0;                 // between the last two known poses (m/s, rad/s)
+  double scale_change_t_ = 0, scale_change_ = 0;  // the last change of scale worldMoved was told (|scale - 1|)
+  double ego_speed_ = 0, ego_yaw_rate_ = 0;       // between the last two known poses (m/s, rad/s)
   Eigen::Vector2d ego_velocity_ = Eigen::Vector2d::Zero();  // BEV, between the last two known poses (m/s)
 };
 
