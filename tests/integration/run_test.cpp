@@ -621,15 +621,17 @@ Result runMonocular(const fs::path& dir, const fs::path& out, const std::string&
 // (frames 120-134) thins the map until a frame tracks fewer than the 30 inliers it needs; ORB-SLAM2's ratio
 // test alone asks for the next keyframe too late there (tracking is lost at frame 134 for good), while a frame
 // near the floor asking for one (keyframe_floor_ratio, the default) keeps every frame tracked. The motion
-// checker's states shape the masks and so the map: the scene is pinned with report_map_moves off, as it was
-// measured (with it on, this seed's masks differ and the control keeps tracking through the corner).
+// checker's states shape the masks and so the map: the scene is pinned with report_map_moves off and the checker
+// as it was when measured (no replay before the switch, no young-unit terms); with either, this seed's masks
+// differ and the control keeps tracking through the corner.
 TEST_F(Tracking, AFrameNearTheInlierFloorAsksForAKeyframe) {
   auto tracked = [&](const std::string& ratio) {
     const fs::path out = dir_ / ("ratio" + ratio);
-    const Result r = runMonocular(
-        dir_, out,
-        "dataset.sequence=urban_loop dataset.last=199 backend.report_map_moves=false backend.keyframe_floor_ratio=" +
-            ratio);
+    const Result r = runMonocular(dir_, out,
+                                  "dataset.sequence=urban_loop dataset.last=199 backend.report_map_moves=false "
+                                  "pipeline.motion_replay_frames=0 motion_checker.settling_time=0 "
+                                  "motion_checker.reference_tracks=0 backend.keyframe_floor_ratio=" +
+                                      ratio);
     EXPECT_EQ(r.code, 0) << r.err;
     return jsonNumber(slurp(out / "summary.json"), "tracked");
   };
