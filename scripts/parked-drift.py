@@ -1,0 +1,174 @@
+#!/usr/bin/env python3
+"""How fast a detector's boxes make parked cars seem to move: the floor under any static test.
+
+  scripts/parked-drift.py --poses POSES --times TIMES [--range M] [--min-detections N] [--z Z]
+                          [--static-speed V] RUN
+
+RUN is a `beslam run` output folder whose motion checker gave track ids (RUN/objects.txt: KITTI tracking
+rows, frame, track id, class, truncation, ..., x y z of the box's bottom centre in the camera frame, ...).
+POSES are the true camera poses (KITTI odometry format, one 3x4 row per frame: T_world_cam), TIMES the
+frame times (KITTI times.txt). Run it on a pipeline that replayed those poses (`backend_pose_replay`), so
+whatever moves is the boxes.
+
+Every car track with at least N detections within M metres (horizontal distance from the camera; boxes
+cut by the image border, truncation > 0, left out) is placed in the world bird's-eye view with the true
+poses, and one straight line is fitted through all its positions: its velocity is how fast the boxes make
+the car seem to move, its standard error how well its own scatter pins that down. For a parked car,
+|v| + Z * se is the best bound any static test could reach on that track, with all of its detections in
+one window; a test that must reject cars faster than V m/s (motion_bev_tracker's static_speed) can call it
+static only when that bound is below V. The script also prints the bound with the tracks' median velocity
+taken off every track: what a perfect calibration of the detector's systematic error, fitted on these very
+tracks, would leave; and for both, the earliest detection from which a window growing from the track's
+first detection is below V, and how many detections a static call from there would cover. On real KITTI
+odometry nearly every car in view is parked (docs/motion.md)."""
+import argparse
+import collections
+import math
+import sys
+
+
+def fail(path, line, problem):
+    where = "%s:%d" % (path, line) if line else path
+    sys.exit("%s: %s" % (where, problem))
+
+
+def read_numbers(path, width):
+    rows = []
+    try:
+        with open(path) as f:
+            for n, line in enumerate(f, 1):
+                if not line.strip():
+                    continue
+                try:
+                    v = [float(x) for x in line.split()]
+                except ValueError:
+                    fail(path, n, "expected numbers")
+                if len(v) != width:
+                    fail(path, n, "expected %d numbers, got %d" % (width, len(v)))
+                rows.append(v)
+    except OSError as e:
+        fail(path, 0, e.strerror)
+    return rows
+
+
+def read_tracks(run, poses, times, max_range):
+    path = run + "/objects.txt"
+    tracks = collections.defaultdict(list)
+    try:
+        f = open(path)
+    except OSError as e:
+        fail(path, 0, e.strerror)
+    with f:
+        for n, line in enumerate(f, 1):
+            v = line.split()
+            if not v:
+                continue
+            if len(v) < 17:
+                fail(path, n, "expected a KITTI tracking row with a motion state, got %d fields" % len(v))
+            if v[2] != "Car":
+                continue
+            try:
+                frame, truncation = int(v[0]), float(v[3])
+                x, y, z = float(v[13]), float(v[14]), float(v[15])
+            except ValueError:
+                fail(path, n, "the frame, truncation or box position is not a number")
+            if frame < 0 or frame >= len(poses) or frame >= len(times):
+                fail(path, n, "frame %d has no pose or time (%d poses, %d times)" % (frame, len(poses), len(times)))
+            if truncation > 0 or math.hypot(x, z) > max_range:
+                continue
+            m = poses[frame]
+            wx = m[0] * x + m[1] * y + m[2] * z + m[3]
+            wz = m[8] * x + m[9] * y + m[10] * z + m[11]
+            tracks[v[1]].append((times[frame], wx, wz, math.hypot(x, z)))
+    return tracks
+
+
+def line_fit(track):
+    """Velocity (vx, vz) of a least-squares line through the positions, and its standard error."""
+    n = len(track)
+    t_mean = sum(p[0] for p in track) / n
+    s_tt = sum((p[0] - t_mean) ** 2 for p in track)
+    if s_tt <= 0:
+        return None
+    velocity, residual = [], 0.0
+    for axis in (1, 2):
+        mean = sum(p[axis] for p in track) / n
+        slope = sum((p[0] - t_mean) * (p[axis] - mean) for p in track) / s_tt
+        velocity.append(slope)
+        residual += sum((p[axis] - mean - slope * (p[0] - t_mean)) ** 2 for p in track)
+    rms = math.sqrt(residual / max(2 * n - 4, 1))
+    return velocity, rms / math.sqrt(s_tt), rms
+
+
+def bound(track, offset, z):
+    fit = line_fit(track)
+    if fit is None:
+        return math.inf, 0.0
+    (vx, vz), se, _ = fit
+    return math.hypot(vx - offset[0], vz - offset[1]) + z * se, se
+
+
+def first_below(track, offset, z, speed):
+    """1-based detection at which a window from the track's first detection first gives a bound below speed."""
+    for m in range(3, len(track) + 1):
+        if bound(track[:m], offset, z)[0] < speed:
+            return m
+    return None
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--poses", required=True, help="true poses, KITTI odometry format")
+    ap.add_argument("--times", required=True, help="frame times, one per line")
+    ap.add_argument("--range", type=float, default=25.0, help="metres from the camera (default 25)")
+    ap.add_argument("--min-detections", type=int, default=8, help="detections a track needs (default 8)")
+    ap.add_argument("--z", type=float, default=2.0, help="standard errors of the bound (default 2, z_static)")
+    ap.add_argument("--static-speed", type=float, default=1.0, help="m/s a static test rejects (default 1)")
+    ap.add_argument("run")
+    a = ap.parse_args()
+    if a.min_detections < 3:
+        sys.exit("--min-detections must be at least 3")
+    poses = read_numbers(a.poses, 12)
+    times = [r[0] for r in read_numbers(a.times, 1)]
+    fits = []
+    for track_id, track in read_tracks(a.run, poses, times, a.range).items():
+        if len(track) < a.min_detections:
+            continue
+        fit = line_fit(track)
+        if fit:
+            fits.append((track_id, track, fit))
+    if not fits:
+        sys.exit("%s/objects.txt: no car track has %d detections within %g m" % (a.run, a.min_detections, a.range))
+    for f in fits:
+        f[1].sort()
+    fits.sort(key=lambda f: f[1][0][0])
+    median = [sorted(f[2][0][k] for f in fits)[len(fits) // 2] for k in (0, 1)]
+    print("| track | detections | range (m) | velocity x, z (m/s) | speed (m/s) | se (m/s) | residual (m) | bound "
+          "| from | bound, median velocity taken off | from |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    bounds, calibrated, covered, covered_cal, detections = [], [], 0, 0, 0
+    for track_id, track, (v, se, rms) in fits:
+        b = bound(track, (0.0, 0.0), a.z)[0]
+        b_cal = bound(track, median, a.z)[0]
+        first = first_below(track, (0.0, 0.0), a.z, a.static_speed)
+        first_cal = first_below(track, median, a.z, a.static_speed)
+        bounds.append(b)
+        calibrated.append(b_cal)
+        detections += len(track)
+        covered += len(track) - first + 1 if first else 0
+        covered_cal += len(track) - first_cal + 1 if first_cal else 0
+        print("| %s | %d | %.1f-%.1f | %.2f, %.2f | %.2f | %.2f | %.2f | %.2f | %s | %.2f | %s |" % (
+            track_id, len(track), min(p[3] for p in track), max(p[3] for p in track), v[0], v[1],
+            math.hypot(v[0], v[1]), se, rms, b, first or "-", b_cal, first_cal or "-"))
+    speeds = sorted(math.hypot(*f[2][0]) for f in fits)
+    print()
+    print("%d tracks, %d detections; apparent speed median %.2f m/s; bound |v| + %g se median %.2f, lowest %.2f "
+          "m/s: %d tracks below %g m/s, a growing window static on %d detections; with the median velocity (%.2f, "
+          "%.2f) taken off: %d tracks below, static on %d detections" % (
+              len(fits), detections, speeds[len(speeds) // 2], a.z, sorted(bounds)[len(bounds) // 2], min(bounds),
+              sum(1 for b in bounds if b < a.static_speed), a.static_speed, covered, median[0], median[1],
+              sum(1 for b in calibrated if b < a.static_speed), covered_cal))
+
+
+if __name__ == "__main__":
+    main()
