@@ -21,12 +21,12 @@ The map's points on a parked car are static by construction; on a car driving al
 travel they are triangulated as a parked car farther away (docs/motion.md "The floor under a static call")."""
 import argparse
 import collections
-import math
+import os
 import sys
 
-
-def fail(path, line, problem):
-    sys.exit("%s: %s" % ("%s:%d" % (path, line) if line else path, problem))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "lib"))
+import objects_txt  # noqa: E402
+from objects_txt import fail  # noqa: E402
 
 
 def lines(path):
@@ -84,25 +84,9 @@ def read_run(run):
 
 
 def read_boxes(run, max_range):
-    path = run + "/objects.txt"
     boxes = collections.defaultdict(list)
-    for n, line in enumerate(lines(path), 1):
-        v = line.split()
-        if not v:
-            continue
-        if len(v) < 17:
-            fail(path, n, "expected a KITTI tracking row with a motion state, got %d fields" % len(v))
-        if v[2] != "Car":
-            continue
-        try:
-            frame, truncation = int(v[0]), float(v[3])
-            box2d = [float(x) for x in v[6:10]]
-            x, y, z = float(v[13]), float(v[14]), float(v[15])
-        except ValueError:
-            fail(path, n, "the frame, truncation, 2D box or box position is not a number")
-        if truncation > 0 or math.hypot(x, z) > max_range:
-            continue
-        boxes[frame].append((v[1], box2d, (x, y, z)))
+    for car in objects_txt.cars(run, max_range, unclipped=True):
+        boxes[car.frame].append((car.track, car.box2d, car.bottom_cam))
     return boxes
 
 

@@ -24,12 +24,12 @@ odometry nearly every car in view is parked (docs/motion.md)."""
 import argparse
 import collections
 import math
+import os
 import sys
 
-
-def fail(path, line, problem):
-    where = "%s:%d" % (path, line) if line else path
-    sys.exit("%s: %s" % (where, problem))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "lib"))
+import objects_txt  # noqa: E402
+from objects_txt import fail  # noqa: E402
 
 
 def read_numbers(path, width):
@@ -52,34 +52,16 @@ def read_numbers(path, width):
 
 
 def read_tracks(run, poses, times, max_range):
-    path = run + "/objects.txt"
     tracks = collections.defaultdict(list)
-    try:
-        f = open(path)
-    except OSError as e:
-        fail(path, 0, e.strerror)
-    with f:
-        for n, line in enumerate(f, 1):
-            v = line.split()
-            if not v:
-                continue
-            if len(v) < 17:
-                fail(path, n, "expected a KITTI tracking row with a motion state, got %d fields" % len(v))
-            if v[2] != "Car":
-                continue
-            try:
-                frame, truncation = int(v[0]), float(v[3])
-                x, y, z = float(v[13]), float(v[14]), float(v[15])
-            except ValueError:
-                fail(path, n, "the frame, truncation or box position is not a number")
-            if frame < 0 or frame >= len(poses) or frame >= len(times):
-                fail(path, n, "frame %d has no pose or time (%d poses, %d times)" % (frame, len(poses), len(times)))
-            if truncation > 0 or math.hypot(x, z) > max_range:
-                continue
-            m = poses[frame]
-            wx = m[0] * x + m[1] * y + m[2] * z + m[3]
-            wz = m[8] * x + m[9] * y + m[10] * z + m[11]
-            tracks[v[1]].append((times[frame], wx, wz, math.hypot(x, z)))
+    for car in objects_txt.cars(run, max_range, unclipped=True):
+        if car.frame < 0 or car.frame >= len(poses) or car.frame >= len(times):
+            fail(run + "/objects.txt", 0, "frame %d has no pose or time (%d poses, %d times)" % (
+                car.frame, len(poses), len(times)))
+        m = poses[car.frame]
+        x, y, z = car.bottom_cam
+        wx = m[0] * x + m[1] * y + m[2] * z + m[3]
+        wz = m[8] * x + m[9] * y + m[10] * z + m[11]
+        tracks[car.track].append((times[car.frame], wx, wz, math.hypot(x, z)))
     return tracks
 
 
