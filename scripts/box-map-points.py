@@ -25,26 +25,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "lib"))
-import objects_txt  # noqa: E402
-from objects_txt import fail  # noqa: E402
-
-
-def lines(path):
-    try:
-        with open(path) as f:
-            return f.read().splitlines()
-    except OSError as e:
-        fail(path, 0, e.strerror)
-
-
-def numbers(path, n, text, width=None):
-    try:
-        v = [float(x) for x in text.split()]
-    except ValueError:
-        fail(path, n, "expected numbers")
-    if width is not None and len(v) != width:
-        fail(path, n, "expected %d numbers, got %d" % (width, len(v)))
-    return v
+import run_files  # noqa: E402
+from run_files import fail, lines, numbers  # noqa: E402
 
 
 def read_camera(path):
@@ -72,20 +54,17 @@ def read_map(path):
 
 
 def read_run(run):
-    poses = [numbers(run + "/trajectory.kitti", n, l, 12) for n, l in enumerate(lines(run + "/trajectory.kitti"), 1)
-             if l.strip()]
-    times = [numbers(run + "/trajectory.tum", n, l, 8)[0] for n, l in enumerate(lines(run + "/trajectory.tum"), 1)
-             if l.strip() and not l.startswith("#")]
+    poses = run_files.rows(run + "/trajectory.kitti", 12)
+    times = [r[0] for r in run_files.rows(run + "/trajectory.tum", 8, comments=True)]
     if len(poses) != len(times):
         fail(run, 0, "trajectory.kitti has %d poses, trajectory.tum %d" % (len(poses), len(times)))
-    keyframe_times = set(round(numbers(run + "/keyframes.tum", n, l, 8)[0], 4)
-                         for n, l in enumerate(lines(run + "/keyframes.tum"), 1) if l.strip() and not l.startswith("#"))
+    keyframe_times = set(round(r[0], 4) for r in run_files.rows(run + "/keyframes.tum", 8, comments=True))
     return poses, times, keyframe_times
 
 
 def read_boxes(run, max_range):
     boxes = collections.defaultdict(list)
-    for car in objects_txt.cars(run, max_range, unclipped=True):
+    for car in run_files.cars(run, max_range, unclipped=True):
         boxes[car.frame].append((car.track, car.box2d, car.bottom_cam))
     return boxes
 

@@ -28,32 +28,13 @@ import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "lib"))
-import objects_txt  # noqa: E402
-from objects_txt import fail  # noqa: E402
-
-
-def read_numbers(path, width):
-    rows = []
-    try:
-        with open(path) as f:
-            for n, line in enumerate(f, 1):
-                if not line.strip():
-                    continue
-                try:
-                    v = [float(x) for x in line.split()]
-                except ValueError:
-                    fail(path, n, "expected numbers")
-                if len(v) != width:
-                    fail(path, n, "expected %d numbers, got %d" % (width, len(v)))
-                rows.append(v)
-    except OSError as e:
-        fail(path, 0, e.strerror)
-    return rows
+import run_files  # noqa: E402
+from run_files import fail  # noqa: E402
 
 
 def read_tracks(run, poses, times, max_range):
     tracks = collections.defaultdict(list)
-    for car in objects_txt.cars(run, max_range, unclipped=True):
+    for car in run_files.cars(run, max_range, unclipped=True):
         if car.frame < 0 or car.frame >= len(poses) or car.frame >= len(times):
             fail(run + "/objects.txt", 0, "frame %d has no pose or time (%d poses, %d times)" % (
                 car.frame, len(poses), len(times)))
@@ -82,18 +63,12 @@ def line_fit(track):
     return velocity, rms / math.sqrt(s_tt), rms
 
 
-def bound(track, offset, z):
-    fit = line_fit(track)
-    if fit is None:
-        return math.inf, 0.0
-    (vx, vz), se, _ = fit
-    return math.hypot(vx - offset[0], vz - offset[1]) + z * se, se
-
-
 def first_below(track, offset, z, speed):
-    """1-based detection at which a window from the track's first detection first gives a bound below speed."""
+    """1-based detection at which a window from the track's first detection first gives a bound below speed
+    (the line's speed with offset taken off its velocity, plus z standard errors)."""
     for m in range(3, len(track) + 1):
-        if bound(track[:m], offset, z)[0] < speed:
+        fit = line_fit(track[:m])
+        if fit and math.hypot(fit[0][0] - offset[0], fit[0][1] - offset[1]) + z * fit[1] < speed:
             return m
     return None
 
@@ -110,8 +85,8 @@ def main():
     a = ap.parse_args()
     if a.min_detections < 3:
         sys.exit("--min-detections must be at least 3")
-    poses = read_numbers(a.poses, 12)
-    times = [r[0] for r in read_numbers(a.times, 1)]
+    poses = run_files.rows(a.poses, 12)
+    times = [r[0] for r in run_files.rows(a.times, 1)]
     fits = []
     for track_id, track in read_tracks(a.run, poses, times, a.range).items():
         if len(track) < a.min_detections:
@@ -130,8 +105,8 @@ def main():
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     bounds, calibrated, covered, covered_cal, detections = [], [], 0, 0, 0
     for track_id, track, (v, se, rms) in fits:
-        b = bound(track, (0.0, 0.0), a.z)[0]
-        b_cal = bound(track, median, a.z)[0]
+        b = math.hypot(v[0], v[1]) + a.z * se
+        b_cal = math.hypot(v[0] - median[0], v[1] - median[1]) + a.z * se
         first = first_below(track, (0.0, 0.0), a.z, a.static_speed)
         first_cal = first_below(track, median, a.z, a.static_speed)
         bounds.append(b)
