@@ -1,5 +1,6 @@
 // Detector2D: OpenCV DNN YOLO-style detector, COCO classes mapped to cars, pedestrians and cyclists.
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -22,6 +23,8 @@ void requireReadable(const std::string& path, const char* what) {
   if (!in || !in.get(c))
     throw std::invalid_argument(std::string(what) + " '" + path + "' is missing, unreadable or empty");
 }
+
+constexpr int kYoloxStrides[] = {8, 16, 32};
 
 bool contains(const std::vector<int>& v, int x) { return std::find(v.begin(), v.end(), x) != v.end(); }
 
@@ -64,6 +67,57 @@ Detector2D::Detector2D(const DnnOptions& options) : options_(options) {
   net_.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   net_.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
   out_names_ = net_.getUnconnectedOutLayersNames();
+  if (options_.head != "auto" && options_.head != "yolo" && options_.head != "yolox")
+    throw std::invalid_argument("head '" + options_.head + "': expected auto, yolo or yolox");
+  if (options_.head == "yolox" && !onnx_)
+    throw std::invalid_argument("model '" + options_.model + "': head yolox needs an .onnx model");
+  head_ = options_.head == "auto" ? (onnx_ ? "" : "yolo") : options_.head;
+  if (head_.empty() || head_ == "yolox") {
+    // One forward pass on a grey input tells the output's shape: YOLOX's raw head has one row per grid cell.
+    head_ = "yolox";  // the letterboxed input both heads accept
+    double unused = 1;
+    try {
+      forward(cv::Mat(options_.input_height, options_.input_width, CV_8UC3, cv::Scalar::all(114)), unused);
+    } catch (const cv::Exception& e) {
+      throw std::invalid_argument("model '" + options_.model + "' does not run at input " +
+                                  std::to_string(options_.input_width) + "x" + std::to_string(options_.input_height) +
+                                  " (set input_width and input_height to the size it was exported for): " + e.err);
+    }
+    const bool grid = outs_.size() == 1 && outs_[0].total() == yoloxCells() * outs_[0].size[outs_[0].dims - 1];
+    if (options_.head == "auto") head_ = grid ? "yolox" : "yolo";
+    if (head_ == "yolox" && !grid)
+      throw std::invalid_argument("model '" + options_.model + "': head yolox expects one output row per cell of the " +
+                                  "stride 8, 16 and 32 grids at input " + std::to_string(options_.input_width) + "x" +
+                                  std::to_string(options_.input_height) + " (" + std::to_string(yoloxCells()) +
+                                  " rows); set input_width and input_height to the size it was exported for");
+  }
+}
+
+size_t Detector2D::yoloxCells() const {
+  size_t cells = 0;
+  for (int stride : kYoloxStrides)
+    cells += static_cast<size_t>(options_.input_width / stride) * static_cast<size_t>(options_.input_height / stride);
+  return cells;
+}
+
+void Detector2D::forward(const cv::Mat& bgr, double& letterbox_scale) {
+  letterbox_scale = 1;
+  if (head_ == "yolox") {
+    // Aspect kept, into the top-left corner, the rest grey 114; BGR, 0-255 (YOLOX's own preprocessing).
+    letterbox_scale = std::min(static_cast<double>(options_.input_width) / bgr.cols,
+                               static_cast<double>(options_.input_height) / bgr.rows);
+    const cv::Size scaled(std::max(1, static_cast<int>(bgr.cols * letterbox_scale)),
+                          std::max(1, static_cast<int>(bgr.rows * letterbox_scale)));
+    letterbox_.create(options_.input_height, options_.input_width, CV_8UC3);
+    letterbox_.setTo(cv::Scalar::all(114));
+    cv::resize(bgr, letterbox_(cv::Rect(0, 0, scaled.width, scaled.height)), scaled, 0, 0, cv::INTER_LINEAR);
+    cv::dnn::blobFromImage(letterbox_, blob_, 1.0, cv::Size(), cv::Scalar(), /*swapRB=*/false, /*crop=*/false);
+  } else {
+    cv::dnn::blobFromImage(bgr, blob_, 1.0 / 255.0, cv::Size(options_.input_width, options_.input_height), cv::Scalar(),
+                           /*swapRB=*/true, /*crop=*/false);
+  }
+  net_.setInput(blob_);
+  net_.forward(outs_, out_names_);
 }
 
 std::vector<Detection2D> Detector2D::detect(const cv::Mat& image) {
@@ -75,10 +129,9 @@ std::vector<Detection2D> Detector2D::detect(const cv::Mat& image) {
     cv::cvtColor(image, bgr_, cv::COLOR_GRAY2BGR);
     bgr = &bgr_;
   }
-  cv::dnn::blobFromImage(*bgr, blob_, 1.0 / 255.0, cv::Size(options_.input_width, options_.input_height), cv::Scalar(),
-                         /*swapRB=*/true, /*crop=*/false);
-  net_.setInput(blob_);
-  net_.forward(outs_, out_names_);
+  double letterbox_scale = 1;
+  forward(*bgr, letterbox_scale);
+  const bool yolox = head_ == "yolox";
 
   // Candidates per wanted COCO class.
   const double W = image.cols, H = image.rows;
@@ -90,6 +143,7 @@ std::vector<Detection2D> Detector2D::detect(const cv::Mat& image) {
   for (cv::Mat out : outs_) {
     if (out.dims > 2) out = out.reshape(1, static_cast<int>(out.total() / out.size[out.dims - 1]));
     if (out.cols < 6) continue;
+    int stride_index = 0, grid_start = 0;  // yolox: the grid the row belongs to, and its first row
     for (int r = 0; r < out.rows; ++r) {
       const float* row = out.ptr<float>(r);
       const float objectness = row[4];
@@ -100,10 +154,25 @@ std::vector<Detection2D> Detector2D::detect(const cv::Mat& image) {
         if (row[c] > best_score) best_score = row[c], best = c - 5;
       const float score = onnx_ ? best_score * objectness : best_score;  // OpenCV's Darknet output is already P(class)
       if (best < 0 || score < options_.score_threshold) continue;
-      double cx = row[0], cy = row[1], w = row[2], h = row[3];
-      if (onnx_ && std::max({cx, cy, w, h}) > 2.0)  // input pixels rather than fractions
-        cx /= options_.input_width, w /= options_.input_width, cy /= options_.input_height, h /= options_.input_height;
-      cv::Rect2d box((cx - w / 2) * W, (cy - h / 2) * H, w * W, h * H);
+      cv::Rect2d box;
+      if (yolox) {
+        int stride = kYoloxStrides[stride_index], columns = options_.input_width / stride;
+        while (r - grid_start >= columns * (options_.input_height / stride)) {
+          grid_start += columns * (options_.input_height / stride);
+          stride = kYoloxStrides[++stride_index], columns = options_.input_width / stride;
+        }
+        const int cell = r - grid_start;
+        const double cx = (row[0] + cell % columns) * stride, cy = (row[1] + cell / columns) * stride;
+        const double w = std::exp(std::min(row[2], 10.0f)) * stride, h = std::exp(std::min(row[3], 10.0f)) * stride;
+        box = cv::Rect2d((cx - w / 2) / letterbox_scale, (cy - h / 2) / letterbox_scale, w / letterbox_scale,
+                         h / letterbox_scale);
+      } else {
+        double cx = row[0], cy = row[1], w = row[2], h = row[3];
+        if (onnx_ && std::max({cx, cy, w, h}) > 2.0)  // input pixels rather than fractions
+          cx /= options_.input_width, w /= options_.input_width, cy /= options_.input_height,
+              h /= options_.input_height;
+        box = cv::Rect2d((cx - w / 2) * W, (cy - h / 2) * H, w * W, h * H);
+      }
       box &= cv::Rect2d(0, 0, W, H);
       if (box.area() <= 0) continue;
       Candidates* target = contains(options_.car_classes, best)          ? &cars

@@ -1,8 +1,15 @@
 // Monocular detector lifted to 3D (the core of the detector_image plugin).
 //
-// Detector2D runs a 2D object detector through OpenCV's DNN module (a Darknet cfg + weights such as
-// Yolo-Fastest, or a YOLO-style ONNX model whose output rows are cx cy w h objectness class-scores...), keeps
-// cars, pedestrians and cyclists (a person riding a bicycle or motorbike box), and applies per-class NMS.
+// Detector2D runs a 2D object detector through OpenCV's DNN module, keeps cars, pedestrians and cyclists (a
+// person riding a bicycle or motorbike box), and applies per-class NMS. Two output heads:
+//  - "yolo": a Darknet cfg + weights such as Yolo-Fastest, or an ONNX model whose output rows are already
+//    boxes (cx cy w h objectness class-scores..., in input pixels or fractions); the image is stretched to
+//    the input size, RGB, scaled to [0, 1].
+//  - "yolox": YOLOX's raw head (ONNX, e.g. YOLOX-Nano): one row per cell of the stride 8, 16 and 32 grids
+//    (row-major, in that order), x y as offsets in cells, w h as logs, then objectness and class scores; the
+//    image is letterboxed (aspect kept, top-left, the rest grey 114), BGR, 0-255.
+// "auto" (the default) takes "yolox" for an ONNX model whose output has exactly one row per grid cell of
+// the input size, else "yolo".
 // GroundLifter lifts each 2D box to a 3D box in the camera frame under a flat-ground assumption: the camera
 // sits camera_height above the road, pitched down by camera_pitch; a class size prior is placed on the road
 // so that its projection's bottom edge and horizontal centre (or the edge that is not cut by the image
@@ -28,8 +35,9 @@ struct Detection2D {
 };
 
 struct DnnOptions {
-  std::string model;    // .cfg (Darknet) or .onnx
-  std::string weights;  // .weights for a Darknet model; unused for ONNX
+  std::string model;          // .cfg (Darknet) or .onnx
+  std::string weights;        // .weights for a Darknet model; unused for ONNX
+  std::string head = "auto";  // "auto" | "yolo" | "yolox" (see above)
   int input_width = 320, input_height = 320;
   double score_threshold = 0.3;
   double nms_threshold = 0.45;
@@ -47,13 +55,20 @@ class Detector2D {
   // image: CV_8UC3 BGR or CV_8UC1 grey, any size.
   std::vector<Detection2D> detect(const cv::Mat& image);
   const DnnOptions& options() const { return options_; }
+  // The head in use ("yolo" or "yolox"; "auto" resolved when the model was loaded).
+  const std::string& head() const { return head_; }
 
  private:
+  // The network's outputs for one image, and the factor from input pixels back to image pixels (yolox).
+  void forward(const cv::Mat& bgr, double& letterbox_scale);
+  size_t yoloxCells() const;  // rows of a YOLOX head at the input size
+
   DnnOptions options_;
   cv::dnn::Net net_;
   std::vector<std::string> out_names_;
   bool onnx_ = false;
-  cv::Mat bgr_, blob_;
+  std::string head_;
+  cv::Mat bgr_, blob_, letterbox_;
   std::vector<cv::Mat> outs_;
 };
 
