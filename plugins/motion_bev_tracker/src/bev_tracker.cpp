@@ -624,19 +624,21 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
   // Update matched tracks, start new ones. With an extrapolated pose a box only keeps its track alive and
   // takes its state: where the ego really went is a guess, so its position is no evidence (a guess off by a
   // metre over a second reads as a parked car moving at a metre a second), and no track starts from it.
+  // The same for a box its detector doubts when uncertain_evidence is off (a car leaving the image shows a
+  // shrinking part of itself, whose centre moves with what is cut, not with the car).
   std::vector<Decision> out(n);
   std::vector<char> matched(m, 0);
   for (size_t i = 0; i < n; ++i) {
     const beslam_box3d& b = boxes[i];
     Track* t = nullptr;
-    if (extrapolated) {
+    if (extrapolated || (!params_.uncertain_evidence && (b.flags & BESLAM_BOX_UNCERTAIN) != 0)) {
       out[i].range = range[i];
       if (det_to_track[i] < 0) continue;
       t = &tracks_[static_cast<size_t>(det_to_track[i])];
       matched[static_cast<size_t>(det_to_track[i])] = 1;
       t->last_t = now;
       out[i].track_id = t->id;
-      out[i].motion_state = range[i] <= params_.max_range ? t->state : BESLAM_MOTION_UNKNOWN;
+      out[i].motion_state = T_world_cam && range[i] <= params_.max_range ? t->state : BESLAM_MOTION_UNKNOWN;
       continue;
     }
     if (det_to_track[i] >= 0) {

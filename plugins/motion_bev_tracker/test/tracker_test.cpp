@@ -831,6 +831,41 @@ TEST(BevTracker, BoxesPlacedWithAnExtrapolatedPoseGiveNoEvidence) {
   EXPECT_LT(jitter_after_gap, 0.05);
 }
 
+// A parked car the ego drives past: once its box is cut by the image border, the detector flags it uncertain
+// and its centre slides with the cut (here 2 m/s towards the ego). As evidence (the default) that pulls the car
+// out; with uncertain_evidence off the track keeps its state and id, and an uncertain box starts no track.
+TEST(BevTracker, UncertainBoxesCanBeKeptFromTheEvidence) {
+  auto run = [](bool uncertain_evidence, std::vector<Decision>& last) {
+    Params params;
+    params.uncertain_evidence = uncertain_evidence;
+    BevTracker tracker(params);
+    for (int k = 0; k < 38; ++k) {
+      const double t = k * kDt;
+      Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
+      T_world_cam.translation() = Eigen::Vector3d(0, 0, 5.0 * t);  // 5 m/s along world z
+      const bool cut = k >= 25;
+      const double z_world = 25.0 - (cut ? 2.0 * (t - 2.5) : 0.0);  // parked at z 25; the cut box slides back
+      beslam_box3d car{};
+      car.class_id = BESLAM_CLASS_CAR;
+      car.size[0] = 3.9, car.size[1] = 1.6, car.size[2] = 1.5;
+      car.center_cam[0] = 3.0, car.center_cam[1] = 0.9, car.center_cam[2] = z_world - 5.0 * t;
+      car.flags = cut ? BESLAM_BOX_UNCERTAIN : 0u;
+      beslam_box3d far = car;  // another car, always uncertain (too far): no track from it without evidence
+      far.center_cam[0] = -3.0, far.center_cam[2] = 60.0, far.flags = BESLAM_BOX_UNCERTAIN;
+      last = tracker.update(t, T_world_cam, {car, far});
+    }
+  };
+  std::vector<Decision> with, without;
+  run(true, with);
+  run(false, without);
+  EXPECT_EQ(with[0].motion_state, BESLAM_MOTION_DYNAMIC) << "the sliding cut box was taken as motion";
+  EXPECT_EQ(without[0].motion_state, BESLAM_MOTION_STATIC);
+  EXPECT_GE(without[0].track_id, 0);
+  EXPECT_GE(with[1].track_id, 0);
+  EXPECT_EQ(without[1].track_id, -1);
+  EXPECT_EQ(without[1].motion_state, BESLAM_MOTION_UNKNOWN);
+}
+
 TEST(BevTracker, DetectorVelocityDecidesWithinStartFrames) {
   for (const int start_frames : {1, 2}) {  // the default, then the image pipelines' profile
     Params p;

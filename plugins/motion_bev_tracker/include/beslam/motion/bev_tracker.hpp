@@ -44,7 +44,8 @@
 // unchanged.
 //
 // No pose for a frame (the backend lost): the last two poses are carried on for at most max_miss_time. Boxes
-// placed with that guess keep their tracks alive and take their state, but give no evidence and start no track;
+// placed with that guess (and, with uncertain_evidence off, boxes their detector flags uncertain) keep their
+// tracks alive and take their state, but give no evidence and start no track;
 // pose jitter is measured between consecutive given poses only. A world change (worldMoved: a loop correction)
 // re-expresses every track in the new world.
 //
@@ -107,6 +108,10 @@ struct Params {
   // backend reports (worldMoved with scale != 1) restarts the time, at least at the change's own size.
   double settling_speed_noise = 0;
   double settling_time = 0;  // s; 0: off
+  // A box its detector flags BESLAM_BOX_UNCERTAIN (an image detector: cut by the image border, too far or
+  // its range too unsure) is evidence like any other (true), or only keeps its track alive and takes its
+  // state, starting no track (false: for boxes lifted from one image, whose cut boxes move with the cut).
+  bool uncertain_evidence = true;
   // Track life.
   double max_miss_time = 1.0;  // s a track survives without a detection
   int max_history = 64;        // observations kept per track
