@@ -2,7 +2,7 @@
 """How fast a detector's boxes make parked cars seem to move: the floor under any static test.
 
   scripts/parked-drift.py --poses POSES --times TIMES [--range M] [--min-detections N] [--z Z]
-                          [--static-speed V] RUN
+                          [--static-speed V] [--near M] RUN
 
 RUN is a `beslam run` output folder whose motion checker gave track ids (RUN/objects.txt: KITTI tracking
 rows, frame, track id, class, truncation, ..., x y z of the box's bottom centre in the camera frame, ...).
@@ -20,7 +20,13 @@ static only when that bound is below V. The script also prints the bound with th
 taken off every track: what a perfect calibration of the detector's systematic error, fitted on these very
 tracks, would leave; and for both, the earliest detection from which a window growing from the track's
 first detection is below V, and how many detections a static call from there would cover. On real KITTI
-odometry nearly every car in view is parked (docs/motion.md)."""
+odometry nearly every car in view is parked (docs/motion.md).
+
+--near M adds the boxes' range error as a share of the range: for each track with two or more detections
+closer than M metres, the mean world position of those is taken as the car's place (a box's range error
+shrinks with the square of its range), and every farther detection's range is compared with that place's
+range from the same camera. The velocity a parked car seems to move at is about this share times the ego's
+speed."""
 import argparse
 import collections
 import math
@@ -42,7 +48,7 @@ def read_tracks(run, poses, times, max_range):
         x, y, z = car.bottom_cam
         wx = m[0] * x + m[1] * y + m[2] * z + m[3]
         wz = m[8] * x + m[9] * y + m[10] * z + m[11]
-        tracks[car.track].append((times[car.frame], wx, wz, math.hypot(x, z)))
+        tracks[car.track].append((times[car.frame], wx, wz, math.hypot(x, z), car.frame))
     return tracks
 
 
@@ -81,6 +87,7 @@ def main():
     ap.add_argument("--min-detections", type=int, default=8, help="detections a track needs (default 8)")
     ap.add_argument("--z", type=float, default=2.0, help="standard errors of the bound (default 2, z_static)")
     ap.add_argument("--static-speed", type=float, default=1.0, help="m/s a static test rejects (default 1)")
+    ap.add_argument("--near", type=float, default=0.0, help="range error against the near detections (m; 0: off)")
     ap.add_argument("run")
     a = ap.parse_args()
     if a.min_detections < 3:
@@ -125,6 +132,31 @@ def main():
               len(fits), detections, speeds[len(speeds) // 2], a.z, sorted(bounds)[len(bounds) // 2], min(bounds),
               sum(1 for b in bounds if b < a.static_speed), a.static_speed, covered, median[0], median[1],
               sum(1 for b in calibrated if b < a.static_speed), covered_cal))
+    if a.near > 0:
+        e = range_errors([f[1] for f in fits], poses, a.near)
+        if not e:
+            sys.exit("%s/objects.txt: no track has two detections closer than %g m" % (a.run, a.near))
+        mean = sum(e) / len(e)
+        sd = math.sqrt(sum((x - mean) ** 2 for x in e) / len(e))
+        print("range error of %d detections beyond %g m against their track's place within it: median %+.3f, sd "
+              "%.3f, 10th-90th percentile %+.3f to %+.3f" % (len(e), a.near, e[len(e) // 2], sd,
+                                                              e[len(e) // 10], e[(9 * len(e)) // 10]))
+
+
+def range_errors(tracks, poses, near):
+    """Relative range errors of the detections farther than `near` against the track's near place."""
+    errors = []
+    for track in tracks:
+        close = [p for p in track if p[3] < near]
+        if len(close) < 2:
+            continue
+        place = (sum(p[1] for p in close) / len(close), sum(p[2] for p in close) / len(close))
+        for t, wx, wz, rng, frame in track:
+            if rng < near:
+                continue
+            m = poses[frame]
+            errors.append(rng / math.hypot(place[0] - m[3], place[1] - m[11]) - 1)
+    return sorted(errors)
 
 
 if __name__ == "__main__":
