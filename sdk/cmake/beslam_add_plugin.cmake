@@ -1,10 +1,11 @@
-# beslam_add_plugin(<target> SOURCES <src>... [LIBRARIES <lib>...] [INCLUDES <dir>...] [SETTINGS <json>...])
+# beslam_add_plugin(<target> SOURCES <src>... [LIBRARIES <lib>...] [INCLUDES <dir>...] [SETTINGS <json>...]
+#                   [NO_INSTALL])
 #
 # Builds one BE-SLAM plugin library: a MODULE linked against beslam::sdk, with hidden symbols (only the
 # two entry points are exported by BESLAM_EXPORT_PLUGINS), --no-undefined so a missing symbol fails at
 # link time rather than at load time, and no "lib" prefix. Output goes to BESLAM_PLUGIN_OUTPUT_DIR when
 # set (the BE-SLAM tree sets it to build/lib/beslam/plugins), else to <build>/plugins; installs to
-# <prefix>/lib/beslam/plugins, where the host looks by default. SETTINGS: the plugin's settings files
+# <prefix>/lib/beslam/plugins, where the host looks by default (NO_INSTALL: never, for test fixtures). SETTINGS: the plugin's settings files
 # (beslam_plugin_settings.cmake has their format), turned at configure time into the header
 # "<target>_settings.hpp" with the plugin's `kSettings` (and its options struct, if the file declares it).
 #
@@ -15,7 +16,7 @@
 include(${CMAKE_CURRENT_LIST_DIR}/beslam_plugin_settings.cmake)
 
 function(beslam_add_plugin target)
-  cmake_parse_arguments(P "" "" "SOURCES;LIBRARIES;INCLUDES;SETTINGS" ${ARGN})
+  cmake_parse_arguments(P "NO_INSTALL" "" "SOURCES;LIBRARIES;INCLUDES;SETTINGS" ${ARGN})
   if(NOT P_SOURCES)
     message(FATAL_ERROR "beslam_add_plugin(${target}): SOURCES is required")
   endif()
@@ -50,8 +51,10 @@ function(beslam_add_plugin target)
     set_property(GLOBAL PROPERTY BESLAM_PLUGIN_CHECK_DEFERRED ON)
     cmake_language(DEFER DIRECTORY ${CMAKE_SOURCE_DIR} CALL beslam_check_plugin_links)
   endif()
-  include(GNUInstallDirs)
-  install(TARGETS ${target} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/beslam/plugins)
+  if(NOT P_NO_INSTALL)
+    include(GNUInstallDirs)
+    install(TARGETS ${target} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/beslam/plugins)
+  endif()
 endfunction()
 
 # The names a link item stands for: generator expressions a target's link properties carry ($<LINK_ONLY:x>,
