@@ -3,7 +3,7 @@
 # Debian's). `scripts/check-format.sh --fix` rewrites them in place.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-command -v clang-format >/dev/null || { echo "check-format: clang-format is not installed (scripts/install-deps.sh)"; exit 1; }
+command -v clang-format >/dev/null || { echo "check-format: clang-format is not installed (scripts/install-deps.sh --test)"; exit 1; }
 mapfile -t files < <(git ls-files '*.c' '*.h' '*.cpp' '*.hpp')
 if [ "${1:-}" = "--fix" ]; then
   clang-format -i "${files[@]}"

@@ -1,16 +1,22 @@
 #!/usr/bin/env bash
-# Installs the Debian bookworm packages BE-SLAM builds against. Idempotent: does nothing when all are
-# present (no apt-get update either), so repeated runs and CI re-runs cost a second.
+# Installs the Debian bookworm packages BE-SLAM needs. Idempotent: does nothing when all are present (no
+# apt-get update either), so repeated runs and CI re-runs cost a second.
+#   scripts/install-deps.sh          what the build and the demo need (scripts/demo.sh)
+#   scripts/install-deps.sh --test   that and what the tests need: GoogleTest, clang (the sanitised build and
+#                                    the fuzz targets), clang-format, Chromium (the report's browser test)
 set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config ccache
   libeigen3-dev libopencv-dev libceres-dev libpcl-dev libyaml-cpp-dev
   libboost-dev libboost-filesystem-dev liboctomap-dev nlohmann-json3-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
-  clang libclang-rt-14-dev clang-format
-  libjs-three libjs-chart.js chromium   # the HTML report's libraries; chromium for its browser test
+  libjs-three libjs-chart.js   # the HTML report's libraries
 )
+case "${1:-}" in
+  "") ;;
+  --test) packages+=(libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev clang-format chromium) ;;
+  *) echo "install-deps: unknown option '$1' (expected none or --test)" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do

@@ -12,7 +12,7 @@ out="${2:?usage: scripts/objects-picture.sh RUN_DIR OUT.png [WxH]}"
 size="${3:-1200x700}"
 bin="${BESLAM_BUILD_DIR:-build}/bin/beslam"
 [ -f "$run/objects.json" ] || { echo "objects-picture: $run/objects.json: no such file (a run with a reconstructor?)" >&2; exit 1; }
-command -v chromium >/dev/null || { echo "objects-picture: chromium is not installed (scripts/install-deps.sh installs it)" >&2; exit 1; }
+command -v chromium >/dev/null || { echo "objects-picture: chromium is not installed (scripts/install-deps.sh --test installs it)" >&2; exit 1; }
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 "$bin" report "$run" --out "$tmp/report" > "$tmp/report.log" 2>&1 || { cat "$tmp/report.log" >&2; exit 1; }

@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 run="${1:?usage: scripts/report-bench.sh RUN_DIR [REPEATS]}"
 repeats="${2:-3}"
 bin="${BESLAM_BUILD_DIR:-build}/bin/beslam"
-command -v chromium >/dev/null || { echo "report-bench: chromium is not installed (scripts/install-deps.sh)" >&2; exit 1; }
+command -v chromium >/dev/null || { echo "report-bench: chromium is not installed (scripts/install-deps.sh --test)" >&2; exit 1; }
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 "$bin" report "$run" --out "$tmp/report" > /dev/null

@@ -5,9 +5,9 @@
 # Tests that need ../shared/data skip with a message where it is absent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/install-deps.sh
+scripts/install-deps.sh --test
 scripts/check-format.sh
-scripts/build.sh "$@"
+scripts/build.sh -DBESLAM_BUILD_TESTS=ON "$@"
 (cd build && ctest --output-on-failure -j"${BESLAM_TEST_JOBS:-2}" --timeout 900)
 if [ "${BESLAM_SKIP_SANITIZE:-}" != "1" ]; then
   scripts/sanitize.sh
