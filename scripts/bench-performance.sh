@@ -16,6 +16,7 @@
 # Cases: orb00 (configs/kitti_mono_orb.yaml on KITTI 00, deterministic inline mapping), orb00_threaded
 # (the same with backend.threaded_mapping=true), orb00_concurrent (backend.concurrent_mapping=true:
 # tracking does not wait for mapping, not reproducible), detector06 (configs/kitti06_detector_image.yaml),
+# beslam00 (configs/kitti_beslam.yaml on KITTI 00: YOLOX-Nano, the checker, masks, the metric backend),
 # demo (configs/demo.yaml). KITTI cases need ../shared/data (skipped with a message when absent).
 # Runs go to out/bench-performance/<build>/<case>/runN (overwritten).
 set -euo pipefail
@@ -55,6 +56,7 @@ case_args() {  # the `beslam run` arguments of a case
     orb00_threaded) echo "configs/kitti_mono_orb.yaml --set dataset.sequence=00 --set backend.threaded_mapping=true" ;;
     orb00_concurrent) echo "configs/kitti_mono_orb.yaml --set dataset.sequence=00 --set backend.concurrent_mapping=true" ;;
     detector06) echo "configs/kitti06_detector_image.yaml" ;;
+    beslam00) echo "configs/kitti_beslam.yaml --set dataset.sequence=00" ;;
     demo) echo "configs/demo.yaml" ;;
     *) echo "bench-performance: unknown case $1" >&2; exit 2 ;;
   esac
