@@ -3,7 +3,8 @@
 # apt-get update either), so repeated runs and CI re-runs cost a second.
 #   scripts/install-deps.sh          what the build and the demo need (scripts/demo.sh)
 #   scripts/install-deps.sh --test   that and what the tests need: GoogleTest, clang (the sanitised build and
-#                                    the fuzz targets), clang-format, Chromium (the report's browser test)
+#                                    the fuzz targets), clang-format, Chromium (the report's browser test),
+#                                    pytest (the Python package's tests)
 set -euo pipefail
 
 packages=(
@@ -11,10 +12,12 @@ packages=(
   libeigen3-dev libopencv-dev libceres-dev libpcl-dev libyaml-cpp-dev
   libboost-dev libboost-filesystem-dev liboctomap-dev nlohmann-json3-dev
   libjs-three libjs-chart.js   # the HTML report's libraries
+  pybind11-dev python3-numpy   # the Python package (platform/python)
 )
 case "${1:-}" in
   "") ;;
-  --test) packages+=(libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev clang-format chromium) ;;
+  --test) packages+=(libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev clang-format chromium
+    python3-pytest) ;;
   *) echo "install-deps: unknown option '$1' (expected none or --test)" >&2; exit 2 ;;
 esac
 
