@@ -9,6 +9,7 @@
 
 #include "beslam/bench/bench.hpp"
 #include "beslam/common/error.hpp"
+#include "beslam/common/yaml_load.hpp"
 #include "beslam/pipeline/spec.hpp"
 #include "beslam/registry/registry.hpp"
 
@@ -116,13 +117,7 @@ Matrix loadMatrix(const std::string& path) {
   if (!fs::exists(path, ec)) throwAt(path, "no such matrix file");
   if (fs::is_directory(path, ec)) throwAt(path, "is a folder, not a matrix file");
   YAML::Node doc;
-  try {
-    doc = YAML::LoadFile(path);
-  } catch (const YAML::ParserException& e) {
-    throwAt(path, "YAML syntax error: " + e.msg, e.mark.line + 1);
-  } catch (const YAML::Exception& e) {
-    throwAt(path, "cannot read YAML: " + e.msg);
-  }
+  doc = loadYamlFile(path);  // duplicate keys, alias bombs and deep nesting are errors
   if (!doc.IsMap()) throwAt(path, "a matrix must be a map with pipelines, sequences and seeds", lineOf(doc));
   Reader r{path, fs::absolute(path).parent_path()};
   r.onlyKeys(doc, {"name", "seeds", "seed_key", "sequences", "pipelines"}, "matrix");

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "beslam/common/error.hpp"
+#include "beslam/common/yaml_load.hpp"
 #include "beslam/common/yaml_set.hpp"
 #include "dataset_fields.hpp"     // kDatasetFields, from sections/dataset.json
 #include "evaluation_fields.hpp"  // kEvaluationFields, from sections/evaluation.json
@@ -249,13 +250,7 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
   PipelineSpec spec;
   spec.path = path;
   spec.base_dir = fs::absolute(path).parent_path().string();
-  try {
-    spec.document = YAML::LoadFile(path);
-  } catch (const YAML::ParserException& e) {
-    throwAt(path, "YAML syntax error: " + e.msg, e.mark.line + 1);
-  } catch (const YAML::Exception& e) {
-    throwAt(path, "cannot read YAML: " + e.msg);
-  }
+  spec.document = loadYamlFile(path);  // duplicate keys, alias bombs and deep nesting are errors
   YAML::Node& doc = spec.document;
   if (doc.IsNull() || !doc.IsDefined()) throwAt(path, "the pipeline file is empty");
   if (!doc.IsMap()) throwAt(path, "a pipeline must be a map with dataset, backend, ... sections", doc.Mark().line + 1);
