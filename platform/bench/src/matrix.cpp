@@ -195,9 +195,12 @@ Matrix loadMatrix(const std::string& path) {
         pipeline::PipelineSpec spec = pipeline::loadPipeline(p.file, sets);
         if (!scanned) {
           for (const auto& extra : spec.plugin_paths) registry.addSearchPath(extra);
-          registry.scan();
           scanned = true;
         }
+        std::vector<std::string> ids;  // only the libraries the cell names are opened
+        for (const auto& [slot_name, slot] : spec.slots)
+          if (!slot.plugin_id.empty()) ids.push_back(slot.plugin_id);
+        registry.loadFor(ids);
         pipeline::resolvePlugins(spec, registry);
       } catch (const Error& e) {
         r.fail(doc["pipelines"][i], "pipeline '" + p.label + "' on sequence '" + s.label + "': " + e.what());

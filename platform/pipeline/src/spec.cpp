@@ -339,6 +339,12 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
       YAML::Node id = node["plugin"];
       if (!id.IsDefined() || !id.IsScalar()) fail(path, node, std::string(slot) + ".plugin", "missing plugin id");
       s.plugin_id = id.Scalar() == "none" ? "" : id.Scalar();
+      // Checked before the id is ever part of a file name: the registry opens <folder>/<id>.so.
+      if (!s.plugin_id.empty() && !registry::isPluginId(s.plugin_id))
+        fail(path, id, std::string(slot) + ".plugin",
+             "'" + (s.plugin_id.size() > 80 ? s.plugin_id.substr(0, 80) + "..." : s.plugin_id) +
+                 "' is not a plugin id (accepted: [a-z0-9_]+, the name of a library <id>.so in the plugin search "
+                 "path, e.g. backend_orb, or none)");
       s.settings = node;
     }
     spec.slots[slot] = std::move(s);
