@@ -44,14 +44,24 @@ struct Reader {
     return node.Scalar();
   }
 
+  // A name that becomes one folder name (and part of a job script): letters, digits, _ . - and not
+  // . or .. (so never a path of its own, nothing a shell would read).
+  std::string folderSafe(const YAML::Node& n, const std::string& what) const {
+    const std::string s = scalar(n, what);
+    static const std::regex ok("[A-Za-z0-9_.-]+");
+    if (!std::regex_match(s, ok) || s == "." || s == "..") {
+      std::string shown;
+      for (char c : s.substr(0, 80)) shown += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? '?' : c;
+      fail(n, what + ": '" + shown + (s.size() > 80 ? "..." : "") +
+                  "' is not a folder-safe name (letters, digits, _ . -; not . or ..)");
+    }
+    return s;
+  }
+
   std::string label(const YAML::Node& entry, const std::string& where) const {
     const YAML::Node n = entry["label"];
     if (!n.IsDefined()) fail(entry, where + ": 'label' is missing");
-    const std::string s = scalar(n, where + ".label");
-    static const std::regex ok("[A-Za-z0-9_.-]+");
-    if (!std::regex_match(s, ok) || s == "." || s == "..")
-      fail(n, where + ".label: '" + s + "' is not a folder-safe name (letters, digits, _ . -)");
-    return s;
+    return folderSafe(n, where + ".label");
   }
 
   // `set:` is a list of "key=value" strings or a map {key: value}.
@@ -124,7 +134,16 @@ Matrix loadMatrix(const std::string& path) {
 
   Matrix m;
   m.path = path;
-  m.name = doc["name"].IsDefined() ? r.scalar(doc["name"], "name") : fs::path(path).stem().string();
+  if (doc["name"].IsDefined()) {
+    m.name = r.folderSafe(doc["name"], "name");
+  } else {  // the file's stem names the default bench folder: the same rule
+    m.name = fs::path(path).stem().string();
+    static const std::regex ok("[A-Za-z0-9_.-]+");
+    if (!std::regex_match(m.name, ok) || m.name == "." || m.name == "..")
+      throwAt(path,
+              "the matrix has no name and its file name is not a folder-safe name: add name: (letters, "
+              "digits, _ . -)");
+  }
   if (doc["seed_key"].IsDefined()) m.seed_key = r.scalar(doc["seed_key"], "seed_key");
 
   const YAML::Node seeds = doc["seeds"];
