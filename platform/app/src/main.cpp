@@ -1,6 +1,7 @@
 // `beslam`: the command-line front of the host.
 //   beslam run PIPELINE.yaml [--set key=value]... [--out DIR] [--plugin-path DIR]... [--quiet]
 //              [--load-map FILE] [--save-map FILE] [--localise-only] [--allow-writable-plugin-dirs]
+//              [--overwrite]
 //   beslam plugins [--plugin-path DIR]... [--json] [--allow-writable-plugin-dirs]
 //   beslam eval --ref FILE --est FILE [...]
 //   beslam eval-motion --run DIR [...]
@@ -66,7 +67,9 @@ constexpr const char* kRunUsage =
     "usage: beslam run PIPELINE.yaml [options]\n"
     "\n"
     "  --set KEY=VALUE     override a pipeline value, e.g. --set dataset.sequence=00 (repeatable)\n"
-    "  --out DIR           output folder (default: output.dir of the pipeline)\n"
+    "  --out DIR           output folder (default: output.dir of the pipeline); --out=DIR works too.\n"
+    "                      Locked while the run writes; one holding a previous run's outputs is refused\n"
+    "  --overwrite         replace a previous run's outputs in the output folder (its own files only)\n"
     "  --plugin-path DIR   also look for plugins in DIR (repeatable; BESLAM_PLUGIN_PATH works too)\n"
     "  --allow-writable-plugin-dirs\n"
     "                      use plugin folders and libraries that group or others can write to (refused\n"
@@ -78,7 +81,10 @@ constexpr const char* kRunUsage =
     "  --localise-only     track against the loaded map without changing it (backend.localisation_only)\n"
     "\n"
     "Writes trajectory.tum/.kitti, trajectory_online.tum, keyframes.tum, pipeline.resolved.yaml,\n"
-    "timing.csv, summary.json, and objects.txt, masks/, map_points.ply where the pipeline makes them.\n";
+    "timing.csv, summary.json, and objects.txt, masks/, map_points.ply where the pipeline makes them.\n"
+    "trajectory.tum/.kitti grow as frames finish, so a run that fails or is killed keeps its tracked frames;\n"
+    "summary.json's status says how the run ended (completed, interrupted, failed: reason). A run with fewer\n"
+    "than output.min_tracked_share of its frames in the final trajectory exits 1 after writing its outputs.\n";
 
 constexpr const char* kPluginsUsage =
     "usage: beslam plugins [--plugin-path DIR]... [--json] [--allow-writable-plugin-dirs]\n"
@@ -97,7 +103,7 @@ std::string takeValue(const std::vector<std::string>& args, size_t& i) {
   return args[++i];
 }
 
-// BESLAM_DEBUG_SIGNAL_AT=FRAME:SIGNAL (e.g. 3:SIGTERM) makes the run send itself SIGNAL when frame FRAME
+// BESLAM_DEBUG_SIGNAL_AT=FRAME:SIGNAL (e.g. 3:SIGTERM, or 3:SIGKILL) makes the run send itself SIGNAL when frame FRAME
 // is done: the tests interrupt a run at a chosen frame through the real signal path, with no timing.
 std::function<void(int64_t)> debugSignalAt() {
   const char* value = std::getenv("BESLAM_DEBUG_SIGNAL_AT");
@@ -110,9 +116,10 @@ std::function<void(int64_t)> debugSignalAt() {
   } catch (const std::exception&) {
   }
   const std::string name = colon == std::string::npos ? "" : text.substr(colon + 1);
-  const int signal_number = name == "SIGINT" ? SIGINT : name == "SIGTERM" ? SIGTERM : 0;
+  // SIGKILL stands for a crash or a power cut: the run ends there, with no chance to write anything.
+  const int signal_number = name == "SIGINT" ? SIGINT : name == "SIGTERM" ? SIGTERM : name == "SIGKILL" ? SIGKILL : 0;
   if (frame < 0 || signal_number == 0)
-    throw UsageError("BESLAM_DEBUG_SIGNAL_AT must be FRAME:SIGINT or FRAME:SIGTERM, not '" + text + "'");
+    throw UsageError("BESLAM_DEBUG_SIGNAL_AT must be FRAME:SIGINT, FRAME:SIGTERM or FRAME:SIGKILL, not '" + text + "'");
   return [frame, signal_number](int64_t done) {
     if (done == frame) std::raise(signal_number);
   };
@@ -161,12 +168,16 @@ int runCommand(const std::vector<std::string>& args) {
       overrides.push_back(a.substr(6));
     else if (a == "--out")
       options.output_dir = takeValue(args, i);
+    else if (a.rfind("--out=", 0) == 0 && a.size() > 6)
+      options.output_dir = a.substr(6);
     else if (a == "--plugin-path")
       plugin_paths.push_back(takeValue(args, i));
     else if (a.rfind("--plugin-path=", 0) == 0)
       plugin_paths.push_back(a.substr(14));
     else if (a == "--allow-writable-plugin-dirs")
       allow_writable = true;
+    else if (a == "--overwrite")
+      options.overwrite = true;
     else if (a == "--quiet")
       options.progress = false;
     else if (a == "--verbose")

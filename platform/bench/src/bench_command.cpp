@@ -118,7 +118,8 @@ pid_t startCell(const std::string& binary, const std::string& bench_dir, const j
   makeDirectories(dir.string());
   std::vector<std::string> argv = {binary};
   for (const auto& a : cell.at("args")) argv.push_back(a.get<std::string>());
-  argv.insert(argv.end(), {"--out", dir.string()});
+  // Only unfinished cells are started: what a failed or interrupted attempt left there is replaced.
+  argv.insert(argv.end(), {"--out", dir.string(), "--overwrite"});
   std::vector<char*> cargv;
   for (auto& a : argv) cargv.push_back(a.data());
   cargv.push_back(nullptr);

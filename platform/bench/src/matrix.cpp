@@ -257,7 +257,9 @@ bool cellFinished(const std::string& run_dir) {
   if (!in) return false;
   try {
     const nlohmann::json j = nlohmann::json::parse(in);
-    // A run stopped by a signal writes its summary too, marked interrupted: not finished.
+    // A run stopped by a signal writes its summary too, marked interrupted: not finished; nor is a run
+    // whose status says it failed.
+    if (j.is_object() && j.contains("status") && j["status"] != "completed") return false;
     return j.is_object() && j.contains("frames") && j["frames"].is_number() && j.contains("tracked") &&
            !j.value("interrupted", false);
   } catch (const nlohmann::json::exception&) {

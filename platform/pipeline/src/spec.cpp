@@ -308,6 +308,7 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
   spec.output.samples = static_cast<int>(value(output, "samples").number);
   spec.output.octomap = value(output, "octomap").number != 0;
   spec.output.octomap_resolution = value(output, "octomap_resolution").number;
+  spec.output.min_tracked_share = value(output, "min_tracked_share").number;
 
   if (!doc["evaluation"].IsDefined() || doc["evaluation"].IsNull()) doc["evaluation"] = YAML::Node(YAML::NodeType::Map);
   const PluginConfig evaluation = validateSettings(doc["evaluation"], evaluationFields(), "evaluation", path, "");
