@@ -460,6 +460,23 @@ TEST_F(RunTest, ASampleFrameThatCannotBeWrittenIsAWarning) {
   EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
 }
 
+// Probe: a full disk while writing a cosmetic sample JPEG aborted the whole run. Here a file-size limit
+// stands for the full disk (SIGXFSZ ignored, so a write past 8 KiB fails with EFBIG as one on a full disk
+// fails with ENOSPC): the samples (noise JPEGs of about 20 KiB) cannot be written, which is one warning;
+// the trajectory and every other output (all smaller) are written and the run completes.
+TEST_F(RunTest, AFullDiskForTheSampleFramesIsAWarning) {
+  const Result r = beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_,
+                          "bash -c 'trap \"\" XFSZ; ulimit -f 8; exec \"$0\" \"$@\"' ");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("warning: sample frame skipped: " + (dir_ / "out/samples/").string()), std::string::npos)
+      << r.err;
+  EXPECT_NE(slurp(dir_ / "out/summary.json").find("\"status\": \"completed\""), std::string::npos);
+  EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
+  EXPECT_EQ(lines(slurp(dir_ / "out/trajectory.kitti")), kFrames);
+  EXPECT_FALSE(fs::exists(dir_ / "out/samples/000000.jpg"));
+}
+
 // Probe: two runs into one folder both exited 0 and left a mix. The folder is locked for a run (here the
 // test holds the lock, as a running beslam would): a second run fails at once with one line.
 TEST_F(RunTest, ALockedOutputFolderIsRefusedAtOnce) {
