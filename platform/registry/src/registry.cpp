@@ -430,9 +430,7 @@ const Plugin& Registry::find(const std::string& id, int32_t kind) const {
   if (!libraries.empty()) {
     message += "; libraries there:";
     for (const std::string& l : libraries) message += " " + printable(l);
-    message +=
-        "; a library that provides several plugins needs a file <id>.so for each further id (a symlink, "
-        "beslam_add_plugin ALSO_PROVIDES)";
+    message += " (each id is a file <id>.so: a symlink for a library's further plugins)";
   }
   message += ")";
   // A library refused for this reason may have been the one meant: say why each was refused.
