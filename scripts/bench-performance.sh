@@ -94,6 +94,7 @@ for i in "${!case_list[@]}"; do
       out="out/bench-performance/$(basename "$b")/$c/run$r"
       a=$args
       [ "$b" = "$base" ] && a=$base_args
+      rm -rf "$out"  # a fresh folder each time (a base build may not know --overwrite)
       t0=$(date +%s.%N)
       # shellcheck disable=SC2086
       "$b/bin/beslam" run $a --quiet --out "$out" >/dev/null

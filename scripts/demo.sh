@@ -2,7 +2,7 @@
 # The README's main job: installs what the build needs, builds the CLI and the plugins (not the tests:
 # scripts/test.sh builds those), renders the embedded synthetic default sequence on first use (cached in
 # build/synth-cache), runs the whole BE-SLAM pipeline on it (configs/demo.yaml) and prints the APE against
-# the rendered ground truth. Output: out/demo/.
+# the rendered ground truth. Output: out/demo/ (replaced on every run: --overwrite).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
@@ -13,4 +13,4 @@ if [ -f build/CMakeCache.txt ] && grep -q '^BESLAM_BUILD_TESTS:BOOL=ON' build/CM
 else
   scripts/build.sh -DBESLAM_BUILD_TESTS=OFF
 fi
-build/bin/beslam run configs/demo.yaml --out out/demo "$@"
+build/bin/beslam run configs/demo.yaml --out out/demo --overwrite "$@"

@@ -29,10 +29,10 @@ runs=()
 for s in $seeds; do
   run="$out/urban_loop-f$frames-s$s"
   runs+=("$run")
-  [ -f "$run/summary.json" ] && continue
+  [ -f "$run/summary.json" ] && ! grep -q '"status": "failed\|"interrupted": true' "$run/summary.json" && continue
   echo "long-run: seed $s, $frames frames -> $run"
   /usr/bin/time -v -o "$run.time" "$build/bin/beslam" run configs/demo.yaml \
     --set "dataset.synth_set=lidar.enabled=false,camera.colour=false,frames=$frames" --set backend.seed="$s" \
-    --out "$run" > "$run.out" 2> "$run.log"
+    --out "$run" --overwrite > "$run.out" 2> "$run.log"
 done
 scripts/long-run-figures.py "${runs[@]}"

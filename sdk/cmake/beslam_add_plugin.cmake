@@ -1,13 +1,16 @@
 # beslam_add_plugin(<target> SOURCES <src>... [LIBRARIES <lib>...] [INCLUDES <dir>...] [SETTINGS <json>...]
-#                   [NO_INSTALL])
+#                   [ALSO_PROVIDES <id>...] [NO_INSTALL])
 #
 # Builds one BE-SLAM plugin library: a MODULE linked against beslam::sdk, with hidden symbols (only the
 # two entry points are exported by BESLAM_EXPORT_PLUGINS), --no-undefined so a missing symbol fails at
 # link time rather than at load time, and no "lib" prefix. Output goes to BESLAM_PLUGIN_OUTPUT_DIR when
 # set (the BE-SLAM tree sets it to build/lib/beslam/plugins), else to <build>/plugins; installs to
-# <prefix>/lib/beslam/plugins, where the host looks by default (NO_INSTALL: never, for test fixtures). SETTINGS: the plugin's settings files
+# <prefix>/lib/beslam/plugins, where the host looks by default (NO_INSTALL: never, for test fixtures).
+# SETTINGS: the plugin's settings files
 # (beslam_plugin_settings.cmake has their format), turned at configure time into the header
 # "<target>_settings.hpp" with the plugin's `kSettings` (and its options struct, if the file declares it).
+# The host opens only the library named after a plugin id (<id>.so): a library that provides plugins
+# with other ids lists them in ALSO_PROVIDES, and gets a symlink <id>.so beside it (built and installed).
 #
 # A plugin uses the SDK alone: at the end of the configure step every plugin's link graph is walked, and a
 # plugin that links a host library (a target defined under the folder in the global property
@@ -16,7 +19,7 @@
 include(${CMAKE_CURRENT_LIST_DIR}/beslam_plugin_settings.cmake)
 
 function(beslam_add_plugin target)
-  cmake_parse_arguments(P "NO_INSTALL" "" "SOURCES;LIBRARIES;INCLUDES;SETTINGS" ${ARGN})
+  cmake_parse_arguments(P "NO_INSTALL" "" "SOURCES;LIBRARIES;INCLUDES;SETTINGS;ALSO_PROVIDES" ${ARGN})
   if(NOT P_SOURCES)
     message(FATAL_ERROR "beslam_add_plugin(${target}): SOURCES is required")
   endif()
@@ -51,10 +54,18 @@ function(beslam_add_plugin target)
     set_property(GLOBAL PROPERTY BESLAM_PLUGIN_CHECK_DEFERRED ON)
     cmake_language(DEFER DIRECTORY ${CMAKE_SOURCE_DIR} CALL beslam_check_plugin_links)
   endif()
+  include(GNUInstallDirs)
   if(NOT P_NO_INSTALL)
-    include(GNUInstallDirs)
     install(TARGETS ${target} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/beslam/plugins)
   endif()
+  foreach(id IN LISTS P_ALSO_PROVIDES)
+    add_custom_command(TARGET ${target} POST_BUILD
+      COMMAND ${CMAKE_COMMAND} -E create_symlink $<TARGET_FILE_NAME:${target}> ${out}/${id}.so VERBATIM)
+    if(NOT P_NO_INSTALL)
+      install(CODE "execute_process(COMMAND \${CMAKE_COMMAND} -E create_symlink $<TARGET_FILE_NAME:${target}>
+        \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_LIBDIR}/beslam/plugins/${id}.so\")")
+    endif()
+  endforeach()
 endfunction()
 
 # The names a link item stands for: generator expressions a target's link properties carry ($<LINK_ONLY:x>,

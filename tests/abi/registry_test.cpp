@@ -3,9 +3,12 @@
 #include "beslam/registry/registry.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <string>
 
@@ -102,7 +105,8 @@ TEST(Registry, RefusesMissingFileAndNonLibrary) {
     std::fputs("not an ELF file", f);
     std::fclose(f);
   }
-  EXPECT_NE(refusal(text).find("abi_text_file.so"), std::string::npos);
+  const std::string message = refusal(text);
+  EXPECT_NE(message.find("abi_text_file.so: not a shared library (no ELF header"), std::string::npos) << message;
 }
 
 TEST(Registry, ScanCollectsProblemsAndKeepsGoodPlugins) {
@@ -395,20 +399,146 @@ TEST(Registry, LoadForLoadsOnlyTheLibrariesNamedAfterThePlugins) {
             std::string::npos);
 }
 
-TEST(Registry, LoadForFallsBackToAFullScanForAPluginNamedOtherwise) {
+TEST(Registry, LoadForOpensOnlyTheFileNamedAfterTheId) {
   Registry registry;
-  registry.addSearchPath(FIXTURE_DIR);
-  registry.loadFor({"fixture_boxes"});  // provided by sdk_fixtures.so
+  registry.addSearchPath(FIXTURE_DIR);  // broken fixtures beside it: none of them is opened
+  registry.loadFor({"fixture_boxes"});  // fixture_boxes.so: a symlink to sdk_fixtures.so (ALSO_PROVIDES)
   EXPECT_NO_THROW(registry.find("fixture_boxes", BESLAM_KIND_DETECTOR));
-  EXPECT_EQ(registry.problems().size(), 5u);  // as scan() alone
+  EXPECT_TRUE(registry.problems().empty()) << registry.problems().front();
+  ASSERT_EQ(registry.loadedFiles().size(), 1u);
+  EXPECT_NE(registry.loadedFiles()[0].find("fixture_boxes.so"), std::string::npos);
 }
 
 TEST(Registry, LoadForReportsABrokenLibraryNamedAfterThePluginOnce) {
   Registry registry;
   registry.addSearchPath(FIXTURE_DIR);
-  registry.loadFor({"wrong_major"});  // wrong_major.so is refused, then the full scan meets it again
-  EXPECT_EQ(registry.problems().size(), 5u);
+  registry.loadFor({"wrong_major"});
+  EXPECT_EQ(registry.problems().size(), 1u);
   const std::string message = errorOf([&] { registry.find("wrong_major", BESLAM_KIND_DETECTOR); });
   EXPECT_NE(message.find("wrong_major.so"), std::string::npos) << message;
   EXPECT_NE(message.find("major versions must match"), std::string::npos) << message;
+}
+
+namespace {
+
+// A fresh folder of its own under the system's temporary folder, removed (made writable first) at the end.
+struct TempFolder {
+  std::filesystem::path path;
+  explicit TempFolder(const std::string& name)
+      : path(std::filesystem::temp_directory_path() /
+             ("beslam_registry_test_" + std::to_string(::getpid()) + "_" + name)) {
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+    std::filesystem::permissions(path, std::filesystem::perms(0755));
+  }
+  ~TempFolder() {
+    std::error_code ec;
+    std::filesystem::permissions(path, std::filesystem::perms(0755), ec);
+    std::filesystem::remove_all(path, ec);
+  }
+  // A copy of a real plugin library named `name`.so, with `mode`.
+  std::string copy(const std::string& name, std::filesystem::perms mode = std::filesystem::perms(0755)) const {
+    const auto to = path / (name + ".so");
+    std::filesystem::copy_file(std::string(PLUGIN_DIR) + "/backend_pose_replay.so", to);
+    std::filesystem::permissions(to, mode);
+    return to.string();
+  }
+};
+
+}  // namespace
+
+// Probe: an absolute path or ../ traversal as a plugin id must not form a path, let alone load a library.
+TEST(Registry, AnIdThatIsNotAPluginIdIsRefusedBeforeAnyPathIsFormed) {
+  TempFolder folder("ids");
+  folder.copy("trav");
+  for (const std::string& id :
+       {folder.path.string() + "/trav", std::string("../../../../") + folder.path.string() + "/trav",
+        std::string("Backend_Orb"), std::string("backend-orb"), std::string("")}) {
+    Registry registry;
+    registry.addSearchPath(FIXTURE_DIR);
+    const std::string message = errorOf([&] { registry.loadFor({id}); });
+    EXPECT_NE(message.find("is not a plugin id (accepted: [a-z0-9_]+"), std::string::npos) << message;
+    EXPECT_TRUE(registry.loadedFiles().empty()) << id;
+    EXPECT_TRUE(registry.plugins().empty()) << id;
+  }
+  EXPECT_TRUE(beslam::registry::isPluginId("backend_orb2"));
+  EXPECT_FALSE(beslam::registry::isPluginId("a.so"));
+}
+
+// Probe: a typo loads nothing at all (it used to load every library of every folder), and the error lists
+// the libraries there without opening them.
+TEST(Registry, ATypoLoadsNothing) {
+  Registry registry;
+  registry.addSearchPath(FIXTURE_DIR);
+  registry.addSearchPath(PLUGIN_DIR);
+  registry.loadFor({"backend_pose_replai"});
+  EXPECT_TRUE(registry.loadedFiles().empty());
+  EXPECT_TRUE(registry.problems().empty());
+  const std::string message = errorOf([&] { registry.find("backend_pose_replai", BESLAM_KIND_BACKEND); });
+  EXPECT_NE(message.find("unknown plugin 'backend_pose_replai'"), std::string::npos) << message;
+  EXPECT_NE(message.find("no backend_pose_replai.so in the search path"), std::string::npos) << message;
+  EXPECT_NE(message.find(" backend_pose_replay"), std::string::npos) << message;  // listed, not loaded
+}
+
+// Probe: a search folder anyone (or the group) can write to is refused with one line, also when it holds
+// a library named like a built-in that would otherwise be loaded first.
+TEST(Registry, AWritableFolderIsRefusedUnlessAllowed) {
+  for (const auto mode : {std::filesystem::perms(0777), std::filesystem::perms(0775)}) {
+    TempFolder folder("writable");
+    folder.copy("backend_pose_replay");
+    std::filesystem::permissions(folder.path, mode);
+    Registry registry;
+    registry.addSearchPath(folder.path.string());
+    registry.addSearchPath(PLUGIN_DIR);
+    const std::string message = errorOf([&] { registry.loadFor({"backend_pose_replay"}); });
+    EXPECT_NE(message.find(folder.path.string() + ": plugin folder is writable by"), std::string::npos) << message;
+    EXPECT_NE(message.find("--allow-writable-plugin-dirs"), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    EXPECT_TRUE(registry.loadedFiles().empty());
+
+    Registry listing;  // scan() lists the refusal and opens nothing there
+    listing.addSearchPath(folder.path.string());
+    listing.scan();
+    ASSERT_FALSE(listing.problems().empty());
+    EXPECT_NE(listing.problems()[0].find(folder.path.string() + ": plugin folder is writable"), std::string::npos)
+        << listing.problems()[0];
+    for (const std::string& file : listing.loadedFiles())
+      EXPECT_EQ(file.find(folder.path.string()), std::string::npos) << file;
+
+    Registry allowed;
+    allowed.allowWritable(true);
+    allowed.addSearchPath(folder.path.string());
+    allowed.loadFor({"backend_pose_replay"});
+    ASSERT_EQ(allowed.loadedFiles().size(), 1u);
+    EXPECT_EQ(allowed.loadedFiles()[0], (folder.path / "backend_pose_replay.so").string());
+  }
+}
+
+TEST(Registry, AWritableLibraryIsRefused) {
+  TempFolder folder("writable_file");
+  const std::string file = folder.copy("backend_pose_replay", std::filesystem::perms(0666));
+  const std::string message = refusal(file);
+  EXPECT_NE(message.find(file + ": plugin library is writable by others (mode 0666)"), std::string::npos) << message;
+  Registry registry;  // before the built-in folder: an error, not a reason to look further
+  registry.addSearchPath(folder.path.string());
+  const std::string first = errorOf([&] { registry.loadFor({"backend_pose_replay"}); });
+  EXPECT_NE(first.find(file + ": plugin library is writable"), std::string::npos) << first;
+  EXPECT_TRUE(registry.loadedFiles().empty());
+}
+
+// Probe: a text file named like a plugin library is "not a shared library", naming the file.
+TEST(Registry, AFakeLibraryIsNotASharedLibrary) {
+  TempFolder folder("fake");
+  const std::string fake = (folder.path / "fake_plugin.so").string();
+  {
+    FILE* f = std::fopen(fake.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs("#!/bin/sh\necho not a library\n", f);
+    std::fclose(f);
+  }
+  Registry registry;
+  registry.addSearchPath(folder.path.string());
+  registry.loadFor({"fake_plugin"});
+  const std::string message = errorOf([&] { registry.find("fake_plugin", BESLAM_KIND_DETECTOR); });
+  EXPECT_NE(message.find("refused " + fake + ": not a shared library (no ELF header"), std::string::npos) << message;
 }

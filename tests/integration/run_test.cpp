@@ -1,6 +1,8 @@
 // End-to-end runs of the `beslam` command on a tiny KITTI-layout sequence the test writes itself:
 // what a run writes, and that every bad input is one clear line and leaves earlier output intact.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -318,24 +320,37 @@ TEST_F(RunTest, NanFromDetectorStopsTheRunAndKeepsEarlierOutput) {
   ASSERT_FALSE(before.empty());
 
   const std::string bad = pipeline("detector: {plugin: fixture_boxes, emit_nan: true}\n");
-  const Result r = beslam("run " + bad + " --out " + (dir_ / "out").string(), dir_);
+  // Into the used folder: refused at once, the earlier run's outputs untouched.
+  Result r = beslam("run " + bad + " --out " + (dir_ / "out").string(), dir_);
   EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find((dir_ / "out").string() + ": holds a previous run's outputs (summary.json); pass --overwrite"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(slurp(dir_ / "out/trajectory.tum"), before);
+  // With --overwrite the run starts, fails on frame 0, and its summary says so.
+  r = beslam("run " + bad + " --overwrite --out " + (dir_ / "out").string(), dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("plugin fixture_boxes"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("frame 0"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("non-finite centre"), std::string::npos) << r.err;
-  EXPECT_EQ(slurp(dir_ / "out/trajectory.tum"), before);
+  const std::string summary = slurp(dir_ / "out/summary.json");
+  EXPECT_NE(summary.find("\"status\": \"failed: plugin fixture_boxes"), std::string::npos) << summary;
+  EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), 0);
 }
 
 // ABI 1.7 end to end: a backend that moves its metric world in frame 1's track() (backend_world_moved) has
 // the host tell the motion checker before frame 2's classify (fixture_all_static moves its track ids on by
 // one per change: 7 and 8 before, 8 and 9 after), and summary.json counts the move; its non-finite change in
-// frame 3 stops the run with one error naming the plugin, and the earlier run's outputs stay as they were.
+// frame 3 stops the run with one error naming the plugin; the earlier run's folder is refused as used.
 TEST_F(RunTest, AMovedWorldReachesTheMotionCheckerAndABadChangeIsNamed) {
   auto write = [&](int last) {
     const fs::path path = dir_ / "pipeline.yaml";
     std::ofstream(path) << "dataset: {type: kitti_odometry, root: data, sequence: \"00\", last: " << last << "}\n"
                         << "plugin_paths: [" << FIXTURE_DIR << "]\n"
                         << "backend: {plugin: backend_world_moved}\n"
+                        << "output: {min_tracked_share: 0}\n"  // the fixture keeps no trajectory
                         << "detector: {plugin: fixture_boxes, count: 2}\n"
                         << "motion_checker: {plugin: fixture_all_static}\n";
     return path.string();
@@ -358,7 +373,9 @@ TEST_F(RunTest, AMovedWorldReachesTheMotionCheckerAndABadChangeIsNamed) {
   EXPECT_EQ(jsonNumber(slurp(out / "summary.json"), "moves"), 1);
   const std::string objects = slurp(out / "objects.txt");
 
-  const Result bad = beslam("run " + write(-1) + " --out " + out.string(), dir_);
+  EXPECT_EQ(beslam("run " + write(-1) + " --out " + out.string(), dir_).code, 1);  // a used folder: refused
+  EXPECT_EQ(slurp(out / "objects.txt"), objects);
+  const Result bad = beslam("run " + write(-1) + " --out " + (dir_ / "bad").string(), dir_);
   EXPECT_EQ(bad.code, 1);
   EXPECT_NE(bad.err.find("plugin backend_world_moved: track moved the world by a non-finite change"), std::string::npos)
       << bad.err;
@@ -366,6 +383,8 @@ TEST_F(RunTest, AMovedWorldReachesTheMotionCheckerAndABadChangeIsNamed) {
   EXPECT_EQ(slurp(out / "objects.txt"), objects);
 }
 
+// Probe: an unreadable image at frame 3 stopped the run with a clear error, and frames 0-2 were lost. Now
+// the trajectory files keep them (beslam eval reads them) and summary.json says how the run ended.
 TEST_F(RunTest, TruncatedImageIsNamed) {
   const fs::path image = dir_ / "data/sequences/00/image_0/000003.png";
   const auto size = fs::file_size(image);
@@ -374,6 +393,232 @@ TEST_F(RunTest, TruncatedImageIsNamed) {
   EXPECT_EQ(r.code, 1);
   EXPECT_EQ(lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("000003.png"), std::string::npos) << r.err;
+  EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), 3);
+  EXPECT_EQ(lines(slurp(dir_ / "out/trajectory.kitti")), 3);
+  const std::string summary = slurp(dir_ / "out/summary.json");
+  EXPECT_NE(summary.find("\"status\": \"failed: "), std::string::npos) << summary;
+  EXPECT_NE(summary.find("000003.png"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"frames\": 3"), std::string::npos) << summary;
+  std::ofstream gt(dir_ / "gt.tum");
+  for (int i = 0; i < kFrames; ++i) gt << 0.1 * i << ' ' << 0.5 * i << " 0 " << 0.1 * i * i << " 0 0 0 1\n";
+  gt.close();
+  const Result e = beslam(
+      "eval --ref " + (dir_ / "gt.tum").string() + " --est " + (dir_ / "out/trajectory.tum").string() + " --format tum",
+      dir_);
+  EXPECT_EQ(e.code, 0) << e.err;
+  EXPECT_NE(e.out.find("pairs: 3"), std::string::npos) << e.out;
+}
+
+// SIGKILL (or a power cut) after frame 2: no summary, but every finished frame is in the trajectory files,
+// whole rows only, and beslam eval reads them. The kill comes from the run itself after a chosen frame
+// (BESLAM_DEBUG_SIGNAL_AT), so nothing depends on timing.
+TEST_F(RunTest, SigkillKeepsTheFinishedFrames) {
+  const Result r =
+      beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_, "BESLAM_DEBUG_SIGNAL_AT=2:SIGKILL ");
+  EXPECT_TRUE(r.code == -1 || r.code == 128 + SIGKILL) << "killed by a signal, not " << r.code << ": " << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out/summary.json"));
+  const std::string tum = slurp(dir_ / "out/trajectory.tum");
+  EXPECT_EQ(dataLines(tum), 3) << tum;
+  EXPECT_EQ(tum.back(), '\n');
+  EXPECT_EQ(lines(slurp(dir_ / "out/trajectory.kitti")), 3);
+  std::ofstream gt(dir_ / "gt.kitti");
+  for (int i = 0; i < 3; ++i) gt << "1 0 0 " << 0.5 * i << " 0 1 0 0 0 0 1 " << 0.1 * i * i << "\n";
+  gt.close();
+  const Result e = beslam("eval --ref " + (dir_ / "gt.kitti").string() + " --est " +
+                              (dir_ / "out/trajectory.kitti").string() + " --format kitti",
+                          dir_);
+  EXPECT_EQ(e.code, 0) << e.err;
+  EXPECT_NE(e.out.find("pairs: 3"), std::string::npos) << e.out;
+  // The folder holds a run's outputs now: a new run needs --overwrite, which replaces them.
+  EXPECT_EQ(beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_).code, 1);
+  const Result again = beslam("run " + pipeline() + " --overwrite --out " + (dir_ / "out").string(), dir_);
+  EXPECT_EQ(again.code, 0) << again.err;
+  EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
+}
+
+// A completed run's trajectory is the backend's final one, not the rows appended on the way, and
+// summary.json says it completed.
+TEST_F(RunTest, ACompletedRunSaysSo) {
+  const Result r = beslam("run " + pipeline() + " --out=" + (dir_ / "out").string(), dir_);  // --out=DIR
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(slurp(dir_ / "out/summary.json").find("\"status\": \"completed\""), std::string::npos);
+  EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
+  EXPECT_EQ(beslam("run " + pipeline() + " --out=", dir_).code, 2);
+}
+
+// A sample frame is cosmetic: one that cannot be written (here samples/ cannot be made: a file holds the
+// name, as a full disk would refuse it) is one warning, and the run completes.
+TEST_F(RunTest, ASampleFrameThatCannotBeWrittenIsAWarning) {
+  fs::create_directories(dir_ / "out");
+  std::ofstream(dir_ / "out/samples") << "in the way\n";
+  const Result r = beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("warning: sample frame skipped: " + (dir_ / "out/samples").string()), std::string::npos)
+      << r.err;
+  EXPECT_NE(slurp(dir_ / "out/summary.json").find("\"status\": \"completed\""), std::string::npos);
+  EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
+}
+
+// Probe: a full disk while writing a cosmetic sample JPEG aborted the whole run. Here a file-size limit
+// stands for the full disk (SIGXFSZ ignored, so a write past 8 KiB fails with EFBIG as one on a full disk
+// fails with ENOSPC): the samples (noise JPEGs of about 20 KiB) cannot be written, which is one warning;
+// the trajectory and every other output (all smaller) are written and the run completes.
+TEST_F(RunTest, AFullDiskForTheSampleFramesIsAWarning) {
+  const Result r = beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_,
+                          "bash -c 'trap \"\" XFSZ; ulimit -f 8; exec \"$0\" \"$@\"' ");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("warning: sample frame skipped: " + (dir_ / "out/samples/").string()), std::string::npos)
+      << r.err;
+  EXPECT_NE(slurp(dir_ / "out/summary.json").find("\"status\": \"completed\""), std::string::npos);
+  EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
+  EXPECT_EQ(lines(slurp(dir_ / "out/trajectory.kitti")), kFrames);
+  EXPECT_FALSE(fs::exists(dir_ / "out/samples/000000.jpg"));
+}
+
+// Probe: two runs into one folder both exited 0 and left a mix. The folder is locked for a run (here the
+// test holds the lock, as a running beslam would): a second run fails at once with one line.
+TEST_F(RunTest, ALockedOutputFolderIsRefusedAtOnce) {
+  fs::create_directories(dir_ / "out");
+  const int fd = ::open((dir_ / "out").c_str(), O_RDONLY | O_DIRECTORY);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+  const Result r = beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_);
+  ::close(fd);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find((dir_ / "out").string() + ": another beslam run is writing into this folder (locked)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(fs::is_empty(dir_ / "out"));
+  EXPECT_EQ(beslam("run " + pipeline() + " --out " + (dir_ / "out").string(), dir_).code, 0);  // once released
+}
+
+// Probe: rerunning into a used folder left the old map_points.ply and samples beside a summary that
+// contradicted them. A used folder is refused; --overwrite removes the earlier run's own files (and
+// nothing else) before the run.
+TEST_F(RunTest, AUsedOutputFolderNeedsOverwrite) {
+  const fs::path out = dir_ / "out";
+  ASSERT_EQ(
+      beslam("run " + pipeline("detector: {plugin: fixture_boxes}\noutput: {masks: true}\n") + " --out " + out.string(),
+             dir_)
+          .code,
+      0);
+  ASSERT_TRUE(fs::exists(out / "masks/000005.png"));
+  std::ofstream(out / "notes.txt") << "mine\n";
+  std::ofstream(out / "summary.json.tmp.123") << "stale";
+  const Result refused = beslam("run " + pipeline() + " --out " + out.string(), dir_);
+  EXPECT_EQ(refused.code, 1);
+  EXPECT_EQ(lines(refused.err), 1) << refused.err;
+  EXPECT_NE(refused.err.find("holds a previous run's outputs (summary.json); pass --overwrite to replace them"),
+            std::string::npos)
+      << refused.err;
+  EXPECT_TRUE(fs::exists(out / "masks/000005.png"));
+  const Result r = beslam("run " + pipeline() + " --overwrite --out " + out.string(), dir_);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(out / "masks"));  // this run makes none
+  EXPECT_FALSE(fs::exists(out / "objects.txt"));
+  EXPECT_FALSE(fs::exists(out / "summary.json.tmp.123"));
+  EXPECT_EQ(slurp(out / "notes.txt"), "mine\n");
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+}
+
+// output.min_tracked_share: a run with fewer of its frames in the final trajectory writes its outputs, then
+// exits 1 with one line naming the reason (backend_orb on noise tracks none of them).
+TEST_F(RunTest, ARunThatTracksTooLittleFails) {
+  const fs::path path = dir_ / "orb.yaml";
+  std::ofstream(path) << "dataset: {type: kitti_odometry, root: data, sequence: \"00\"}\n"
+                      << "backend: {plugin: backend_orb, features: 500}\n";
+  const Result r = beslam("run " + path.string() + " --out " + (dir_ / "out").string(), dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find((dir_ / "out/summary.json").string() + ": tracked 0 of 6 frames, fewer than "
+                                                              "output.min_tracked_share 0.5"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(slurp(dir_ / "out/summary.json").find("\"status\": \"failed: tracked 0 of 6 frames"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir_ / "out/timing.csv"));
+}
+
+// The plugin probes through the command: a path or ../ traversal as an id, a typo, a text file named .so,
+// a plugin folder anyone can write to. Each is one line, exit 1, and no library is loaded for it.
+TEST_F(RunTest, PluginProbesAreOneLineAndLoadNothing) {
+  for (const std::string& id : {(dir_ / "x/trav").string(), std::string("../../../../tmp/x/trav")}) {
+    const Result r = beslam(
+        "run " + pipeline() + " --verbose --set backend.plugin=" + id + " --out " + (dir_ / "o1").string(), dir_);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("(--set): backend.plugin: '" + id + "' is not a plugin id (accepted: [a-z0-9_]+"),
+              std::string::npos)
+        << r.err;
+  }
+  Result r = beslam(
+      "run " + pipeline() + " --verbose --set backend.plugin=backend_pose_replai --out " + (dir_ / "o2").string(),
+      dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err.find("beslam: loaded "), std::string::npos) << "a typo loads nothing: " << r.err;
+  EXPECT_NE(r.err.find("backend.plugin: unknown plugin 'backend_pose_replai'"), std::string::npos) << r.err;
+
+  const fs::path plugins = dir_ / "plugins";
+  fs::create_directories(plugins);
+  fs::permissions(plugins, fs::perms(0755));
+  std::ofstream(plugins / "fake_detector.so") << "this is text\n";
+  fs::permissions(plugins / "fake_detector.so", fs::perms(0644));
+  r = beslam("run " + pipeline("detector: {plugin: fake_detector}\n") + " --plugin-path " + plugins.string() +
+                 " --out " + (dir_ / "o3").string(),
+             dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find((plugins / "fake_detector.so").string() + ": not a shared library (no ELF header"),
+            std::string::npos)
+      << r.err;
+
+  fs::permissions(plugins, fs::perms(0777));
+  r = beslam("run " + pipeline() + " --plugin-path " + plugins.string() + " --out " + (dir_ / "o4").string(), dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find(plugins.string() + ": plugin folder is writable by others (mode 0777)"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("--allow-writable-plugin-dirs"), std::string::npos) << r.err;
+  r = beslam("run " + pipeline() + " --plugin-path " + plugins.string() + " --allow-writable-plugin-dirs --out " +
+                 (dir_ / "o5").string(),
+             dir_);
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = beslam("plugins --plugin-path " + plugins.string(), dir_);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("refused: " + plugins.string() + ": plugin folder is writable by others"), std::string::npos)
+      << r.out;
+  fs::permissions(plugins, fs::perms(0755));
+
+  // `beslam plugins` names every file it loaded.
+  r = beslam("plugins", dir_);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("loaded: "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("/backend_pose_replay.so\n"), std::string::npos) << r.out;
+}
+
+// Probes of bad input that gave a quiet wrong answer or a poor message, through the command.
+TEST_F(RunTest, BadInputsAreOneLineErrors) {
+  std::ofstream(dir_ / "dup.yaml") << "dataset: {type: kitti_odometry, root: data, sequence: \"00\"}\n"
+                                   << "backend:\n  plugin: backend_pose_replay\n  poses: data/poses/00.txt\n"
+                                   << "  poses: data/poses/01.txt\n";
+  Result r = beslam("run " + (dir_ / "dup.yaml").string() + " --out " + (dir_ / "o1").string(), dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("dup.yaml:5: duplicate key 'poses' (first at line 4"), std::string::npos) << r.err;
+
+  std::ofstream(dir_ / "a_file") << "x\n";
+  r = beslam(
+      "run " + pipeline() + " --set dataset.root=" + (dir_ / "a_file").string() + " --out " + (dir_ / "o2").string(),
+      dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("a_file: is a file, not a folder"), std::string::npos) << r.err;
+
+  std::ofstream(dir_ / "data/sequences/00/times.txt") << "0\n0.1\n0.1\n0.3\n0.4\n0.5\n";
+  r = beslam("run " + pipeline() + " --out " + (dir_ / "o3").string(), dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("times.txt:3: timestamp 0.1 is not after the previous one"), std::string::npos) << r.err;
 }
 
 TEST_F(RunTest, MissingDatasetIsNamed) {
@@ -419,7 +664,8 @@ TEST_F(RunTest, ExternalCommandRunsNextToTheBinary) {
 TEST_F(RunTest, MapFlagsReachTheOrbBackend) {
   const fs::path path = dir_ / "orb.yaml";
   std::ofstream(path) << "dataset: {type: kitti_odometry, root: data, sequence: \"00\"}\n"
-                      << "backend: {plugin: backend_orb, features: 500}\n";
+                      << "backend: {plugin: backend_orb, features: 500}\n"
+                      << "output: {min_tracked_share: 0}\n";  // noise: nothing to track, the flags are the point
   const fs::path map_file = dir_ / "noise.map";
   Result r =
       beslam("run " + path.string() + " --out " + (dir_ / "save").string() + " --save-map " + map_file.string(), dir_);

@@ -1,7 +1,8 @@
 // `beslam`: the command-line front of the host.
 //   beslam run PIPELINE.yaml [--set key=value]... [--out DIR] [--plugin-path DIR]... [--quiet]
-//              [--load-map FILE] [--save-map FILE] [--localise-only]
-//   beslam plugins [--plugin-path DIR]... [--json]
+//              [--load-map FILE] [--save-map FILE] [--localise-only] [--allow-writable-plugin-dirs]
+//              [--overwrite]
+//   beslam plugins [--plugin-path DIR]... [--json] [--allow-writable-plugin-dirs]
 //   beslam eval --ref FILE --est FILE [...]
 //   beslam eval-motion --run DIR [...]
 //   beslam eval-objects --run DIR [...]
@@ -66,8 +67,13 @@ constexpr const char* kRunUsage =
     "usage: beslam run PIPELINE.yaml [options]\n"
     "\n"
     "  --set KEY=VALUE     override a pipeline value, e.g. --set dataset.sequence=00 (repeatable)\n"
-    "  --out DIR           output folder (default: output.dir of the pipeline)\n"
+    "  --out DIR           output folder (default: output.dir of the pipeline); --out=DIR works too.\n"
+    "                      Locked while the run writes; one holding a previous run's outputs is refused\n"
+    "  --overwrite         replace a previous run's outputs in the output folder (its own files only)\n"
     "  --plugin-path DIR   also look for plugins in DIR (repeatable; BESLAM_PLUGIN_PATH works too)\n"
+    "  --allow-writable-plugin-dirs\n"
+    "                      use plugin folders and libraries that group or others can write to (refused\n"
+    "                      otherwise: whoever can write there chooses the code beslam runs)\n"
     "  --quiet             no progress line, warnings only\n"
     "  --verbose           plugins' info messages too\n"
     "  --load-map FILE     start from a saved map (backend.load_map; backend_orb)\n"
@@ -75,13 +81,18 @@ constexpr const char* kRunUsage =
     "  --localise-only     track against the loaded map without changing it (backend.localisation_only)\n"
     "\n"
     "Writes trajectory.tum/.kitti, trajectory_online.tum, keyframes.tum, pipeline.resolved.yaml,\n"
-    "timing.csv, summary.json, and objects.txt, masks/, map_points.ply where the pipeline makes them.\n";
+    "timing.csv, summary.json, and objects.txt, masks/, map_points.ply where the pipeline makes them.\n"
+    "trajectory.tum/.kitti grow as frames finish, so a run that fails or is killed keeps its tracked frames;\n"
+    "summary.json's status says how the run ended (completed, interrupted, failed: reason). A run with fewer\n"
+    "than output.min_tracked_share of its frames in the final trajectory exits 1 after writing its outputs.\n";
 
 constexpr const char* kPluginsUsage =
-    "usage: beslam plugins [--plugin-path DIR]... [--json]\n"
+    "usage: beslam plugins [--plugin-path DIR]... [--json] [--allow-writable-plugin-dirs]\n"
     "\n"
-    "Lists every plugin in the search path: id, kind, version, library and configuration schema,\n"
-    "and every library that was refused, with the reason.\n";
+    "Loads every library (*.so) in the search path and lists each file it loaded, every plugin (id, kind,\n"
+    "version, library and configuration schema) and every library that was refused, with the reason.\n"
+    "Folders and libraries that group or others can write to are refused unless\n"
+    "--allow-writable-plugin-dirs is given.\n";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -92,7 +103,7 @@ std::string takeValue(const std::vector<std::string>& args, size_t& i) {
   return args[++i];
 }
 
-// BESLAM_DEBUG_SIGNAL_AT=FRAME:SIGNAL (e.g. 3:SIGTERM) makes the run send itself SIGNAL when frame FRAME
+// BESLAM_DEBUG_SIGNAL_AT=FRAME:SIGNAL (e.g. 3:SIGTERM, or 3:SIGKILL) makes the run send itself SIGNAL when frame FRAME
 // is done: the tests interrupt a run at a chosen frame through the real signal path, with no timing.
 std::function<void(int64_t)> debugSignalAt() {
   const char* value = std::getenv("BESLAM_DEBUG_SIGNAL_AT");
@@ -105,9 +116,10 @@ std::function<void(int64_t)> debugSignalAt() {
   } catch (const std::exception&) {
   }
   const std::string name = colon == std::string::npos ? "" : text.substr(colon + 1);
-  const int signal_number = name == "SIGINT" ? SIGINT : name == "SIGTERM" ? SIGTERM : 0;
+  // SIGKILL stands for a crash or a power cut: the run ends there, with no chance to write anything.
+  const int signal_number = name == "SIGINT" ? SIGINT : name == "SIGTERM" ? SIGTERM : name == "SIGKILL" ? SIGKILL : 0;
   if (frame < 0 || signal_number == 0)
-    throw UsageError("BESLAM_DEBUG_SIGNAL_AT must be FRAME:SIGINT or FRAME:SIGTERM, not '" + text + "'");
+    throw UsageError("BESLAM_DEBUG_SIGNAL_AT must be FRAME:SIGINT, FRAME:SIGTERM or FRAME:SIGKILL, not '" + text + "'");
   return [frame, signal_number](int64_t done) {
     if (done == frame) std::raise(signal_number);
   };
@@ -145,6 +157,7 @@ int runCommand(const std::vector<std::string>& args) {
   }
   std::string pipeline_path;
   std::vector<std::string> overrides, plugin_paths;
+  bool allow_writable = false;
   beslam::pipeline::RunOptions options;
   options.progress = true;
   for (size_t i = 0; i < args.size(); ++i) {
@@ -155,8 +168,16 @@ int runCommand(const std::vector<std::string>& args) {
       overrides.push_back(a.substr(6));
     else if (a == "--out")
       options.output_dir = takeValue(args, i);
+    else if (a.rfind("--out=", 0) == 0 && a.size() > 6)
+      options.output_dir = a.substr(6);
     else if (a == "--plugin-path")
       plugin_paths.push_back(takeValue(args, i));
+    else if (a.rfind("--plugin-path=", 0) == 0)
+      plugin_paths.push_back(a.substr(14));
+    else if (a == "--allow-writable-plugin-dirs")
+      allow_writable = true;
+    else if (a == "--overwrite")
+      options.overwrite = true;
     else if (a == "--quiet")
       options.progress = false;
     else if (a == "--verbose")
@@ -178,16 +199,19 @@ int runCommand(const std::vector<std::string>& args) {
 
   beslam::pipeline::PipelineSpec spec = beslam::pipeline::loadPipeline(pipeline_path, overrides);
   beslam::registry::Registry registry;
+  registry.allowWritable(allow_writable);
   for (const auto& p : plugin_paths) registry.addSearchPath(p);
   for (const auto& p : spec.plugin_paths) registry.addSearchPath(p);
-  std::vector<std::string> plugin_ids;  // only the libraries the pipeline names (a full scan if one is not <id>.so)
+  std::vector<std::string> plugin_ids;  // only the libraries named after the pipeline's plugins (<id>.so)
   for (const auto& [slot_name, slot] : spec.slots)
     if (!slot.plugin_id.empty()) plugin_ids.push_back(slot.plugin_id);
   registry.loadFor(plugin_ids);
   // Refused libraries matter only if the pipeline names one of their plugins, and then the error
-  // says why they were refused; list them all with --verbose.
-  if (options.log_level <= BESLAM_LOG_INFO)
+  // says why they were refused; list them all, and every library loaded, with --verbose.
+  if (options.log_level <= BESLAM_LOG_INFO) {
+    for (const auto& file : registry.loadedFiles()) std::cerr << "beslam: loaded " << file << "\n";
     for (const auto& problem : registry.problems()) std::cerr << "beslam: skipped " << problem << "\n";
+  }
   beslam::pipeline::resolvePlugins(spec, registry);
   // SIGINT/SIGTERM end the run after the current frame, with every output written; a second one aborts.
   beslam::InterruptGuard interrupts;
@@ -271,6 +295,10 @@ int pluginsCommand(const std::vector<std::string>& args) {
   for (size_t i = 0; i < args.size(); ++i) {
     if (args[i] == "--plugin-path")
       registry.addSearchPath(takeValue(args, i));
+    else if (args[i].rfind("--plugin-path=", 0) == 0)
+      registry.addSearchPath(args[i].substr(14));
+    else if (args[i] == "--allow-writable-plugin-dirs")
+      registry.allowWritable(true);
     else if (args[i] == "--json")
       json_out = true;
     else
@@ -280,6 +308,7 @@ int pluginsCommand(const std::vector<std::string>& args) {
   if (json_out) {
     nlohmann::json j;
     j["search_paths"] = registry.searchPaths();
+    j["loaded"] = registry.loadedFiles();
     j["plugins"] = nlohmann::json::array();
     for (const auto& p : registry.plugins()) {
       nlohmann::json pj{{"id", p.id},
@@ -308,7 +337,9 @@ int pluginsCommand(const std::vector<std::string>& args) {
   }
   std::cout << "search path:";
   for (const auto& p : registry.searchPaths()) std::cout << ' ' << p;
-  std::cout << "\n\n";
+  std::cout << "\n";
+  for (const auto& file : registry.loadedFiles()) std::cout << "loaded: " << file << "\n";
+  std::cout << "\n";
   for (const auto& p : registry.plugins()) {
     std::cout << p.id << "  (" << beslam::registry::kindName(p.kind) << ", version " << p.version << ", ABI "
               << (p.abi_version >> 16) << "." << (p.abi_version & 0xffff) << ")\n"

@@ -66,6 +66,18 @@ std::string shellQuote(const std::string& s) {
   return o + "'";
 }
 
+// A path or name written into a line of the job script where no shell quoting applies (a comment, an
+// #SBATCH directive: sbatch reads double quotes only). It may hold no line break or other control
+// character, no double quote and no backslash.
+std::string scriptSafe(const std::string& s, const std::string& what) {
+  for (char c : s)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f || c == '"' || c == '\\')
+      throw Error(what + " '" + s.substr(0, 200) +
+                  "' holds a control character, a double quote or a backslash: it cannot be written into a job "
+                  "script (choose another folder)");
+  return s;
+}
+
 std::string clock(double seconds) {
   const long s = std::lround(std::max(0.0, seconds));
   std::ostringstream o;
@@ -106,7 +118,8 @@ pid_t startCell(const std::string& binary, const std::string& bench_dir, const j
   makeDirectories(dir.string());
   std::vector<std::string> argv = {binary};
   for (const auto& a : cell.at("args")) argv.push_back(a.get<std::string>());
-  argv.insert(argv.end(), {"--out", dir.string()});
+  // Only unfinished cells are started: what a failed or interrupted attempt left there is replaced.
+  argv.insert(argv.end(), {"--out", dir.string(), "--overwrite"});
   std::vector<char*> cargv;
   for (auto& a : argv) cargv.push_back(a.data());
   cargv.push_back(nullptr);
@@ -298,6 +311,10 @@ int runBenchCommand(const std::vector<std::string>& args, std::ostream& out, std
     if (out_dir.empty()) out_dir = "out/bench/" + m.name;
     out_dir = fs::absolute(out_dir).lexically_normal().string();
     if (out_dir.size() > 1 && out_dir.back() == '/') out_dir.pop_back();
+    if (emit == "slurm") {  // every value in the script is quoted where a shell reads it, checked where none does
+      scriptSafe(out_dir, "--out");
+      scriptSafe(m.name, "name");
+    }
     const std::vector<Cell> cells = makeCells(m, out_dir);
     const std::string binary = selfExe();
     const json bench = describe(m, cells, binary);
@@ -305,19 +322,20 @@ int runBenchCommand(const std::vector<std::string>& args, std::ostream& out, std
 
     if (emit == "slurm") {
       const std::string script = (fs::path(out_dir) / "bench.sbatch").string();
+      const std::string matrix = scriptSafe(fs::absolute(m.path).lexically_normal().string(), "matrix file");
       makeDirectories((fs::path(out_dir) / "slurm").string());
       std::ostringstream s;
       s << "#!/bin/bash\n"
-        << "# " << m.name << ": " << cells.size() << " cells of " << fs::absolute(m.path).lexically_normal().string()
+        << "# " << m.name << ": " << cells.size() << " cells of " << shellQuote(matrix)
         << ", one Slurm array task a cell.\n"
-        << "# Written by `beslam bench --emit slurm`. Submit:  sbatch " << script << "\n"
-        << "# then, when the array is done:                beslam bench --merge " << out_dir << "\n"
+        << "# Written by `beslam bench --emit slurm`. Submit:  sbatch " << shellQuote(script) << "\n"
+        << "# then, when the array is done:                beslam bench --merge " << shellQuote(out_dir) << "\n"
         << "# A task whose cell is already finished exits at once; resubmit to rerun failed cells.\n"
         << "# The binary, plugins, data and this folder must be at the same paths on every node.\n"
-        << "#SBATCH --job-name=beslam-" << m.name << "\n"
+        << "#SBATCH --job-name=\"beslam-" << m.name << "\"\n"
         << "#SBATCH --array=0-" << cells.size() - 1 << "\n"
         << "#SBATCH --cpus-per-task=1\n"
-        << "#SBATCH --output=" << out_dir << "/slurm/%A_%a.out\n"
+        << "#SBATCH --output=\"" << out_dir << "/slurm/%A_%a.out\"\n"
         << "set -euo pipefail\n"
         << ": \"${SLURM_ARRAY_TASK_ID:?not set: run this with sbatch, or set it to a cell number}\"\n"
         << "exec " << shellQuote(binary) << " bench --cell \"$SLURM_ARRAY_TASK_ID\" " << shellQuote(out_dir) << "\n";

@@ -9,6 +9,7 @@
 
 #include "beslam/bench/bench.hpp"
 #include "beslam/common/error.hpp"
+#include "beslam/common/yaml_load.hpp"
 #include "beslam/pipeline/spec.hpp"
 #include "beslam/registry/registry.hpp"
 
@@ -43,14 +44,24 @@ struct Reader {
     return node.Scalar();
   }
 
+  // A name that becomes one folder name (and part of a job script): letters, digits, _ . - and not
+  // . or .. (so never a path of its own, nothing a shell would read).
+  std::string folderSafe(const YAML::Node& n, const std::string& what) const {
+    const std::string s = scalar(n, what);
+    static const std::regex ok("[A-Za-z0-9_.-]+");
+    if (!std::regex_match(s, ok) || s == "." || s == "..") {
+      std::string shown;
+      for (char c : s.substr(0, 80)) shown += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) ? '?' : c;
+      fail(n, what + ": '" + shown + (s.size() > 80 ? "..." : "") +
+                  "' is not a folder-safe name (letters, digits, _ . -; not . or ..)");
+    }
+    return s;
+  }
+
   std::string label(const YAML::Node& entry, const std::string& where) const {
     const YAML::Node n = entry["label"];
     if (!n.IsDefined()) fail(entry, where + ": 'label' is missing");
-    const std::string s = scalar(n, where + ".label");
-    static const std::regex ok("[A-Za-z0-9_.-]+");
-    if (!std::regex_match(s, ok) || s == "." || s == "..")
-      fail(n, where + ".label: '" + s + "' is not a folder-safe name (letters, digits, _ . -)");
-    return s;
+    return folderSafe(n, where + ".label");
   }
 
   // `set:` is a list of "key=value" strings or a map {key: value}.
@@ -116,20 +127,23 @@ Matrix loadMatrix(const std::string& path) {
   if (!fs::exists(path, ec)) throwAt(path, "no such matrix file");
   if (fs::is_directory(path, ec)) throwAt(path, "is a folder, not a matrix file");
   YAML::Node doc;
-  try {
-    doc = YAML::LoadFile(path);
-  } catch (const YAML::ParserException& e) {
-    throwAt(path, "YAML syntax error: " + e.msg, e.mark.line + 1);
-  } catch (const YAML::Exception& e) {
-    throwAt(path, "cannot read YAML: " + e.msg);
-  }
+  doc = loadYamlFile(path);  // duplicate keys, alias bombs and deep nesting are errors
   if (!doc.IsMap()) throwAt(path, "a matrix must be a map with pipelines, sequences and seeds", lineOf(doc));
   Reader r{path, fs::absolute(path).parent_path()};
   r.onlyKeys(doc, {"name", "seeds", "seed_key", "sequences", "pipelines"}, "matrix");
 
   Matrix m;
   m.path = path;
-  m.name = doc["name"].IsDefined() ? r.scalar(doc["name"], "name") : fs::path(path).stem().string();
+  if (doc["name"].IsDefined()) {
+    m.name = r.folderSafe(doc["name"], "name");
+  } else {  // the file's stem names the default bench folder: the same rule
+    m.name = fs::path(path).stem().string();
+    static const std::regex ok("[A-Za-z0-9_.-]+");
+    if (!std::regex_match(m.name, ok) || m.name == "." || m.name == "..")
+      throwAt(path,
+              "the matrix has no name and its file name is not a folder-safe name: add name: (letters, "
+              "digits, _ . -)");
+  }
   if (doc["seed_key"].IsDefined()) m.seed_key = r.scalar(doc["seed_key"], "seed_key");
 
   const YAML::Node seeds = doc["seeds"];
@@ -200,9 +214,12 @@ Matrix loadMatrix(const std::string& path) {
         pipeline::PipelineSpec spec = pipeline::loadPipeline(p.file, sets);
         if (!scanned) {
           for (const auto& extra : spec.plugin_paths) registry.addSearchPath(extra);
-          registry.scan();
           scanned = true;
         }
+        std::vector<std::string> ids;  // only the libraries the cell names are opened
+        for (const auto& [slot_name, slot] : spec.slots)
+          if (!slot.plugin_id.empty()) ids.push_back(slot.plugin_id);
+        registry.loadFor(ids);
         pipeline::resolvePlugins(spec, registry);
       } catch (const Error& e) {
         r.fail(doc["pipelines"][i], "pipeline '" + p.label + "' on sequence '" + s.label + "': " + e.what());
@@ -240,7 +257,9 @@ bool cellFinished(const std::string& run_dir) {
   if (!in) return false;
   try {
     const nlohmann::json j = nlohmann::json::parse(in);
-    // A run stopped by a signal writes its summary too, marked interrupted: not finished.
+    // A run stopped by a signal writes its summary too, marked interrupted: not finished; nor is a run
+    // whose status says it failed.
+    if (j.is_object() && j.contains("status") && j["status"] != "completed") return false;
     return j.is_object() && j.contains("frames") && j["frames"].is_number() && j.contains("tracked") &&
            !j.value("interrupted", false);
   } catch (const nlohmann::json::exception&) {

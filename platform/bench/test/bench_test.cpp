@@ -288,6 +288,89 @@ TEST(BenchCommand, InterruptedCellIsRunAgain) {
   EXPECT_EQ(json::parse(readText(dir / "out/tables.json"))["finished"], 1);
 }
 
+// Probes: a matrix name with line breaks ran `touch` when the emitted job script was submitted; a name
+// like ../../../../tmp/escaped wrote bench.json and bench.sbatch outside the output folder. Names are
+// one folder-safe name now, refused before anything is written.
+TEST(BenchMatrix, HostileNamesAreRefused) {
+  const std::string rest = goodMatrix().substr(std::string("name: t\n").size());
+  expectError("name: \"x\\ntouch /tmp/INJECTED\\n#\"\n" + rest,
+              "name: 'x?touch /tmp/INJECTED?#' is not a folder-safe name");
+  expectError("name: ../../../../tmp/escaped\n" + rest, "name: '../../../../tmp/escaped' is not a folder-safe name");
+  expectError("name: ..\n" + rest, "is not a folder-safe name");
+  expectError("name: [a, b]\n" + rest, "name: expected a single value");
+
+  const fs::path dir = tempDir("hostile_name");
+  write(dir / "m.yaml", "name: ../../escaped\n" + rest);
+  const Result r = shell("cd " + dir.string() + " && " + kBeslam + " bench m.yaml --emit slurm", dir);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  EXPECT_FALSE(fs::exists(dir.parent_path().parent_path() / "escaped"));
+}
+
+namespace {
+
+std::vector<std::string> filesUnder(const fs::path& root) {
+  std::vector<std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(root)) files.push_back(e.path().string());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+}  // namespace
+
+// The emitted script is run by bash with an output folder whose name is full of shell syntax: every
+// value reaches beslam as one argument, nothing is executed, nothing is written outside the folder.
+TEST(BenchCommand, EmittedScriptQuotesEverything) {
+  const fs::path dir = tempDir("hostile_script");
+  write(dir / "m.yaml", goodMatrix());
+  const fs::path out = dir / "out $(touch INJECTED1) `touch INJECTED2` ;touch INJECTED3; 'q' $HOME *";
+  const std::string quoted_out =
+      "'" + std::string("out $(touch INJECTED1) `touch INJECTED2` ;touch INJECTED3; '\\''q'\\'' $HOME *") + "'";
+  fs::create_directories(dir / "cwd");
+  Result r = shell(
+      "cd " + (dir / "cwd").string() + " && " + kBeslam + " bench ../m.yaml --emit slurm --out ../" + quoted_out, dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const fs::path script = out / "bench.sbatch";
+  ASSERT_TRUE(fs::exists(script)) << r.out;
+  const auto before = filesUnder(dir);
+  // A stub sbatch runs the script as one array task would; the task's cell does not exist (99), so beslam
+  // answers with an error naming the folder it was given: intact, as one argument.
+  write(dir / "bin" / "sbatch", "#!/bin/sh\nSLURM_ARRAY_TASK_ID=99 exec bash \"$1\"\n");
+  fs::permissions(dir / "bin" / "sbatch", fs::perms::owner_all);
+  r = shell("cd " + (dir / "cwd").string() + " && PATH=" + (dir / "bin").string() + ":$PATH sbatch ../" + quoted_out +
+                "/bench.sbatch",
+            dir);
+  EXPECT_EQ(r.code, 1) << r.err << r.out;
+  EXPECT_NE(r.err.find("beslam: error: " + (out / "bench.json").string() + ": no cell 99"), std::string::npos) << r.err;
+  auto after = filesUnder(dir);
+  after.erase(std::remove_if(after.begin(), after.end(),
+                             [&](const std::string& f) {
+                               return f == (dir / "stdout.txt").string() || f == (dir / "stderr.txt").string() ||
+                                      f.rfind((dir / "bin").string(), 0) == 0;
+                             }),
+              after.end());
+  std::vector<std::string> expected = before;
+  expected.erase(std::remove_if(expected.begin(), expected.end(),
+                                [&](const std::string& f) {
+                                  return f == (dir / "stdout.txt").string() || f == (dir / "stderr.txt").string();
+                                }),
+                 expected.end());
+  EXPECT_EQ(after, expected);  // the task wrote nothing anywhere
+  for (const std::string& f : after) EXPECT_NE(fs::path(f).filename().string().rfind("INJECTED", 0), 0u) << f;
+  for (const char* f : {"INJECTED1", "INJECTED2", "INJECTED3"}) EXPECT_FALSE(fs::exists(dir / "cwd" / f)) << f;
+  const std::string text = readText(script);
+  EXPECT_NE(text.find("#SBATCH --output=\"" + out.string() + "/slurm/%A_%a.out\""), std::string::npos) << text;
+
+  // What no quoting can carry into a directive or a comment is refused: a line break in --out.
+  r = shell(
+      kBeslam + " bench " + (dir / "m.yaml").string() + " --emit slurm --out '" + dir.string() + "/a\ntouch INJECTED4'",
+      dir);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("cannot be written into a job script"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "a\ntouch INJECTED4"));
+}
+
 // Every shipped matrix loads: its files exist, and each cell's pipeline resolves with its overrides.
 TEST(BenchMatrix, ShippedMatricesLoad) {
   const fs::path root = fs::path(BESLAM_SOURCE_DIR) / "configs" / "bench";

@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "beslam/common/error.hpp"
+#include "beslam/common/yaml_load.hpp"
 
 namespace beslam {
 
@@ -45,7 +46,10 @@ void applySetOverride(YAML::Node& root, const std::string& assignment) {
 
   YAML::Node value;
   try {
+    checkYaml(text, "value");
     value = YAML::Load(text);
+  } catch (const Error& e) {
+    throw Error("--set " + assignment + ": " + e.what());
   } catch (const YAML::Exception& e) {
     throw Error("--set " + assignment + ": value is not valid YAML: " + e.msg);
   }

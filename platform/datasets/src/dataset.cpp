@@ -80,7 +80,10 @@ bool isFile(const std::string& path) {
 }
 
 void requireDirectory(const std::string& path, const std::string& what) {
-  if (!isDirectory(path)) throwAt(path, "missing " + what + " folder");
+  if (isDirectory(path)) return;
+  std::error_code ec;
+  if (fs::exists(path, ec)) throwAt(path, "is a file, not a folder (expected the " + what + " folder)");
+  throwAt(path, "missing " + what + " folder");
 }
 
 void requireFile(const std::string& path, const std::string& what) {

@@ -1,7 +1,9 @@
 #include "beslam/datasets/kitti_calib.hpp"
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <string_view>
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
@@ -31,6 +33,15 @@ const CalibEntry* find(const std::map<std::string, CalibEntry>& entries, const s
     return &it->second;
   }
   return nullptr;
+}
+
+// A number of any kind, finite or not ("nan", "-inf", "1e999"): an unnamed row that starts with one is
+// a row of numbers, never a row named "nan" (which would shift every later row's name: P1 read as P0).
+bool looksNumeric(std::string_view token) {
+  const std::string text(token);
+  char* end = nullptr;
+  std::strtod(text.c_str(), &end);
+  return !text.empty() && end == text.c_str() + text.size();
 }
 
 const CalibEntry& require(const std::map<std::string, CalibEntry>& entries, const std::string& path,
@@ -96,7 +107,7 @@ std::map<std::string, CalibEntry> readCalibEntries(const std::string& path, cons
         tokens.front() = head.substr(colon + 1);  // "P0:7.1e+02"
       else
         first_value = 1;
-    } else if (parseDouble(head, probe)) {
+    } else if (parseDouble(head, probe) || looksNumeric(head)) {
       if (bare_rows >= bare_names.size())
         throwAt(path,
                 "unnamed row " + std::to_string(bare_rows + 1) + " (expected at most " +
@@ -118,7 +129,10 @@ std::map<std::string, CalibEntry> readCalibEntries(const std::string& path, cons
       for (std::size_t t = first_value; t < tokens.size(); ++t) {
         double v = 0;
         if (!parseDouble(tokens[t], v))
-          throwAt(path, "'" + std::string(tokens[t]) + "' in " + name + " is not a number", line_no);
+          throwAt(path,
+                  "'" + std::string(tokens[t]) + "' in " + name + " is not a " +
+                      (looksNumeric(tokens[t]) ? "finite number" : "number"),
+                  line_no);
         entry.values.push_back(v);
       }
       if (entry.values.empty()) throwAt(path, name + " has no values", line_no);
@@ -193,6 +207,9 @@ KittiCalib readRawCalib(const std::string& cam_to_cam_path, const std::string& v
 
 Camera cameraFromProjection(const Matrix34d& P, int width, int height, const std::string& what) {
   const double fx = P(0, 0), fy = P(1, 1);
+  if (!(std::isfinite(fx) && fx > 0) || !(std::isfinite(fy) && fy > 0))
+    throw Error(what + ": focal lengths must be finite and positive (fx " + std::to_string(fx) + ", fy " +
+                std::to_string(fy) + ")");
   const double tol = 1e-9 * std::max(1.0, std::abs(fx));
   if (!(fx > 0) || !(fy > 0) || std::abs(P(0, 1)) > tol || std::abs(P(1, 0)) > tol || std::abs(P(2, 0)) > 1e-12 ||
       std::abs(P(2, 1)) > 1e-12 || std::abs(P(2, 2) - 1.0) > 1e-12)

@@ -21,6 +21,12 @@ std::vector<double> readTimes(const std::string& path) {
     double t = 0;
     if (tokens.size() != 1 || !parseDouble(tokens[0], t))
       throwAt(path, "expected one timestamp in seconds, got '" + std::string(lines[i]) + "'", static_cast<int>(i + 1));
+    if (!times.empty() && !(t > times.back()))
+      throwAt(path,
+              "timestamp " + std::string(tokens[0]) +
+                  " is not after the previous one (timestamps must increase "
+                  "strictly, one line a frame in frame order)",
+              static_cast<int>(i + 1));
     times.push_back(t);
   }
   return times;

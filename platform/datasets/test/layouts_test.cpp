@@ -174,6 +174,9 @@ TEST(KittiOdometry, LayoutErrors) {
   DatasetOptions bad = o;
   bad.root = fx.dir / "nowhere";
   EXPECT_BESLAM_ERROR(openDataset(bad), bad.root, "missing KITTI odometry root folder");
+  writeText(fx.dir / "a_file", "not a folder\n");  // probe: a root that is a file said the folder is missing
+  bad.root = fx.dir / "a_file";
+  EXPECT_BESLAM_ERROR(openDataset(bad), bad.root, "is a file, not a folder (expected the KITTI odometry root folder)");
   bad = o;
   bad.sequence = "11";
   EXPECT_BESLAM_ERROR(openDataset(bad), fx.dir / "sequences/11", "missing KITTI odometry sequence folder");
@@ -217,6 +220,11 @@ TEST(KittiOdometry, LayoutErrors) {
   EXPECT_BESLAM_ERROR(openDataset(o), seq + "/times.txt", "3 timestamps", "5 images");
   writeText(seq + "/times.txt", "0\n0.1\nzero\n0.3\n0.4\n");
   EXPECT_BESLAM_ERROR(openDataset(o), seq + "/times.txt:3:", "'zero'");
+  // Probe: two frames swapped, or one repeated, gave APE 3.30 m instead of 0.043 m without a word.
+  writeText(seq + "/times.txt", "0\n0.2\n0.1\n0.3\n0.4\n");
+  EXPECT_BESLAM_ERROR(openDataset(o), seq + "/times.txt:3:", "timestamp 0.1 is not after the previous one");
+  writeText(seq + "/times.txt", "0\n0.1\n0.1\n0.3\n0.4\n");
+  EXPECT_BESLAM_ERROR(openDataset(o), seq + "/times.txt:3:", "must increase strictly");
   std::filesystem::remove(seq + "/times.txt");
   EXPECT_BESLAM_ERROR(openDataset(o), seq + "/times.txt", "missing timestamps file");
   writeText(seq + "/times.txt", times);

@@ -1,9 +1,17 @@
 #include "run_outputs.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <iomanip>
+#include <iostream>
 #include <ostream>
+#include <sstream>
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
@@ -123,7 +131,111 @@ void evaluate(const PipelineSpec& spec, datasets::Dataset& dataset, const std::v
 
 nlohmann::json orNull(bool present, const nlohmann::json& value) { return present ? value : nlohmann::json(nullptr); }
 
+// What a run writes into its folder (and --overwrite removes): files, then folders.
+const char* const kRunFiles[] = {
+    "summary.json",           "trajectory.tum", "trajectory.kitti", "trajectory_online.tum", "keyframes.tum",
+    "pipeline.resolved.yaml", "timing.csv",     "objects.txt",      "objects.json",          "map.ply",
+    "map_points.ply",         "static_map.bt"};
+const char* const kRunFolders[] = {"masks", "samples", "objects"};
+
+std::string share(double value) {
+  std::ostringstream s;
+  s << value;
+  return s.str();
+}
+
 }  // namespace
+
+OutputLock::OutputLock(const std::string& out_dir) {
+  fd_ = ::open(out_dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd_ < 0) throwAt(out_dir, std::string("cannot open the output folder: ") + std::strerror(errno));
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int e = errno;
+    ::close(fd_);
+    fd_ = -1;
+    if (e == EWOULDBLOCK)
+      throwAt(out_dir, "another beslam run is writing into this folder (locked); wait for it or choose another --out");
+    throwAt(out_dir, std::string("cannot lock the output folder: ") + std::strerror(e));
+  }
+}
+
+OutputLock::~OutputLock() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void claimOutputFolder(const std::string& out_dir, bool overwrite) {
+  const fs::path dir(out_dir);
+  std::error_code ec;
+  std::string used;
+  for (const char* f : {"summary.json", "trajectory.tum", "trajectory.kitti"})
+    if (used.empty() && fs::exists(dir / f, ec)) used = f;
+  if (used.empty()) return;
+  if (!overwrite)
+    throwAt(out_dir,
+            "holds a previous run's outputs (" + used + "); pass --overwrite to replace them, or choose another --out");
+  for (const char* f : kRunFiles)
+    if (fs::remove(dir / f, ec); ec) throwAt((dir / f).string(), "cannot remove (--overwrite): " + ec.message());
+  for (const char* f : kRunFolders)
+    if (fs::remove_all(dir / f, ec); ec) throwAt((dir / f).string(), "cannot remove (--overwrite): " + ec.message());
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {  // a killed run's temporaries
+    const std::string name = it->path().filename().string();
+    for (const char* f : kRunFiles)
+      if (name.rfind(std::string(f) + ".tmp.", 0) == 0) fs::remove(it->path(), ec);
+  }
+}
+
+TrajectoryJournal::TrajectoryJournal(const std::string& out_dir)
+    : tum_path_((fs::path(out_dir) / "trajectory.tum").string()),
+      kitti_path_((fs::path(out_dir) / "trajectory.kitti").string()) {
+  tum_ = ::open(tum_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
+  if (tum_ < 0) throwAt(tum_path_, std::string("cannot create: ") + std::strerror(errno));
+  kitti_ = ::open(kitti_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
+  if (kitti_ < 0) throwAt(kitti_path_, std::string("cannot create: ") + std::strerror(errno));
+  append(tum_, tum_path_, formats::kTumHeader);
+}
+
+TrajectoryJournal::~TrajectoryJournal() { close(); }
+
+void TrajectoryJournal::close() {
+  if (tum_ >= 0) ::close(tum_);
+  if (kitti_ >= 0) ::close(kitti_);
+  tum_ = kitti_ = -1;
+}
+
+void TrajectoryJournal::add(double stamp, const Eigen::Isometry3d& T_world_cam) {
+  append(tum_, tum_path_, formats::tumRow(stamp, T_world_cam));
+  append(kitti_, kitti_path_, formats::kittiRow(T_world_cam));
+}
+
+void TrajectoryJournal::append(int fd, const std::string& path, const std::string& row) {
+  if (fd < 0) return;
+  size_t done = 0;
+  while (done < row.size()) {
+    const ssize_t n = ::write(fd, row.data() + done, row.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      std::cerr << "warning: " << path << ": cannot append the frame's pose (" << std::strerror(errno)
+                << "); the trajectory is written again at the end of the run\n";
+      close();
+      return;
+    }
+    done += static_cast<size_t>(n);
+  }
+}
+
+void writeFailureSummary(const PipelineSpec& spec, const std::string& out_dir, const DatasetRecord& dataset_record,
+                         const RunSummary& summary, int64_t frames, const std::string& reason) {
+  nlohmann::json json;
+  json["pipeline"] = spec.path;
+  json["dataset"] = dataset_record.description;
+  json["status"] = "failed: " + reason;
+  json["frames"] = frames;
+  json["interrupted"] = false;
+  json["last_frame"] = orNull(frames > 0, summary.last_frame);
+  json["tracked_when_seen"] = summary.tracked_online;
+  json["trajectory"] = "trajectory.tum and trajectory.kitti hold the poses of the tracked frames done, as tracked";
+  writeFileAtomic((fs::path(out_dir) / "summary.json").string(), json.dump(2) + "\n");
+}
 
 void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const DatasetRecord& dataset_record,
                      datasets::Dataset& dataset, registry::BackendInstance& backend, const RunRecord& record,
@@ -145,6 +257,12 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
       else
         summary.untracked.push_back(index);
   }
+  summary.status = summary.interrupted ? "interrupted" : "completed";
+  if (!summary.interrupted && summary.frames > 0 &&
+      static_cast<double>(summary.tracked) < spec.output.min_tracked_share * static_cast<double>(summary.frames))
+    summary.status = "failed: tracked " + std::to_string(summary.tracked) + " of " + std::to_string(summary.frames) +
+                     " frames, fewer than output.min_tracked_share " + share(spec.output.min_tracked_share) +
+                     " (lower it for a pipeline that tracks part of a sequence)";
   writeTrajectory(out_dir, "trajectory", final_poses, true);
   writeTrajectory(out_dir, "trajectory_online", online_poses, false);
   writeTrajectory(out_dir, "keyframes", keyframe_poses, false);
@@ -195,6 +313,7 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
         fs::absolute(fs::path(dataset_record.kitti_root) / "sequences" / dataset_record.kitti_sequence).string();
     json["dataset_sequence"] = dataset_record.kitti_sequence;
   }
+  json["status"] = summary.status;
   json["frames"] = summary.frames;
   json["interrupted"] = summary.interrupted;
   json["last_frame"] = orNull(!record.frame_indices.empty(), summary.last_frame);

@@ -44,9 +44,52 @@ struct DatasetRecord {
   std::string kitti_root, kitti_sequence;  // set for KITTI-layout data: truth files live there
 };
 
+// The run's hold on its output folder: an exclusive flock on the folder itself (no file of its own),
+// released when the process ends however it ends. Throws beslam::Error naming the folder when another
+// run holds it.
+class OutputLock {
+ public:
+  explicit OutputLock(const std::string& out_dir);
+  ~OutputLock();
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+// A folder holding a previous run's outputs (summary.json or a trajectory) is refused with one error,
+// unless `overwrite`: then that run's own files (kRunFiles) and stale temporary files are removed, and
+// nothing else in the folder.
+void claimOutputFolder(const std::string& out_dir, bool overwrite);
+
+// trajectory.tum and trajectory.kitti written row by row as frames finish (each row one write(2), so a
+// killed process leaves whole rows). writeRunOutputs later replaces both with the final trajectory. A
+// failed write is a warning (the journal stops; the run goes on).
+class TrajectoryJournal {
+ public:
+  explicit TrajectoryJournal(const std::string& out_dir);
+  ~TrajectoryJournal();
+  TrajectoryJournal(const TrajectoryJournal&) = delete;
+  TrajectoryJournal& operator=(const TrajectoryJournal&) = delete;
+  void add(double stamp, const Eigen::Isometry3d& T_world_cam);
+  void close();
+
+ private:
+  void append(int fd, const std::string& path, const std::string& row);
+  std::string tum_path_, kitti_path_;
+  int tum_ = -1, kitti_ = -1;
+};
+
+// summary.json of a run that failed after it started: how far it got and why it ended.
+void writeFailureSummary(const PipelineSpec& spec, const std::string& out_dir, const DatasetRecord& dataset_record,
+                         const RunSummary& summary, int64_t frames, const std::string& reason);
+
 // Writes every end-of-run file into `out_dir` and completes `summary` (frames, tracked, keyframes,
-// map points, APE); static_map.bt too when `static_map` is given. Throws beslam::Error naming the file
-// on a write failure.
+// map points, APE, status); static_map.bt too when `static_map` is given. The trajectories come first,
+// then the map and the rest. A run not interrupted that tracks fewer than output.min_tracked_share of its
+// frames gets status "failed: ..." (the caller throws). Throws beslam::Error naming the file on a write
+// failure.
 void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const DatasetRecord& dataset_record,
                      datasets::Dataset& dataset, registry::BackendInstance& backend, const RunRecord& record,
                      static_map::StaticMapBuilder* static_map, RunSummary& summary);

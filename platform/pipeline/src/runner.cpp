@@ -209,11 +209,12 @@ class Run {
   Run(const PipelineSpec& spec, const RunOptions& options) : spec_(spec), options_(options), log_(options.log_level) {
     out_dir_ = !options.output_dir.empty() ? options.output_dir : spec.output.dir;
     if (out_dir_.empty()) throwAt(spec.path, "no output folder: set output.dir or pass --out DIR");
-    openDataset();
     makeDirectories(out_dir_);
+    lock_ = std::make_unique<detail::OutputLock>(out_dir_);  // before anything is read or removed
+    detail::claimOutputFolder(out_dir_, options.overwrite);
+    openDataset();
     if (spec.output.masks) makeDirectories((fs::path(out_dir_) / "masks").string());
     sample_positions_ = detail::samplePositions(dataset_->size(), spec.output.samples);
-    if (!sample_positions_.empty()) makeDirectories((fs::path(out_dir_) / "samples").string());
     createPlugins();
     if (spec.output.octomap) {
       static_map::Options o;
@@ -224,6 +225,28 @@ class Run {
   }
 
   RunSummary execute() {
+    journal_ = std::make_unique<detail::TrajectoryJournal>(out_dir_);
+    try {
+      runFrames();
+      journal_->close();  // the final trajectory replaces it
+      detail::writeRunOutputs(spec_, out_dir_, dataset_record_, *dataset_, *backend_, record_, static_map_.get(),
+                              summary_);
+    } catch (const std::exception& e) {
+      // What is done stays: the journal's poses, and a summary that says how far the run got and why it ended.
+      try {
+        detail::writeFailureSummary(spec_, out_dir_, dataset_record_, summary_,
+                                    static_cast<int64_t>(record_.frame_indices.size()), e.what());
+      } catch (const std::exception&) {  // the first error is the one to report
+      }
+      throw;
+    }
+    if (summary_.status.rfind("failed: ", 0) == 0)
+      throwAt((fs::path(out_dir_) / "summary.json").string(), summary_.status.substr(8));
+    return summary_;
+  }
+
+ private:
+  void runFrames() {
     const bool tty = options_.progress && isatty(STDERR_FILENO);
     const size_t n = dataset_->size();
     // What may run ahead of the backend: loading and detection always (they see the frame only); the
@@ -253,6 +276,8 @@ class Run {
       if (!mask_ahead_) mask(f);
       if (f.mask_marked) ++summary_.frames_with_masks;
       track(f);
+      if (f.tracked.result.state == BESLAM_TRACKING_OK)
+        journal_->add(f.frame.timestamp, formats::toIsometry(f.tracked.result.T_world_cam));
       reconstruct(f);
       write(f);
       // A frame's total is its share of the loop's wall time: with prefetching, its load, detection and
@@ -283,12 +308,8 @@ class Run {
       if (!last.empty()) backend_->addLandmarks(last);
     }
     backend_->finish();
-    detail::writeRunOutputs(spec_, out_dir_, dataset_record_, *dataset_, *backend_, record_, static_map_.get(),
-                            summary_);
-    return summary_;
   }
 
- private:
   void openDataset() {
     datasets::DatasetOptions dopt;
     dopt.type = spec_.dataset.type;
@@ -563,12 +584,7 @@ class Run {
       if (!cv::imencode(".png", labels, png)) throwAt(path, "cannot encode mask");
       writeFileAtomic(path, std::string(png.begin(), png.end()));
     }
-    if (sample_positions_.count(f.position)) {
-      const cv::Mat& image = f.frame.color.empty() ? f.frame.gray : f.frame.color;
-      detail::writeSampleFrame(
-          (fs::path(out_dir_) / "samples" / (std::to_string(1000000 + f.frame.index).substr(1) + ".jpg")).string(),
-          detail::drawSampleFrame(image, f.mask, f.tracked.keypoints, f.boxes, camera_));
-    }
+    if (sample_positions_.count(f.position)) writeSample(f);
     if (static_map_) {
       static_map_->addBoxes(f.frame.index, f.boxes);
       const auto T_cam_lidar = dataset_->T_cam_lidar();
@@ -578,10 +594,36 @@ class Run {
     }
   }
 
+  // A sample frame is cosmetic: a frame without an image (a dataset of detections and poses only) has none,
+  // and a failure to draw or write one is a warning, never the end of the run.
+  void writeSample(const FrameState& f) {
+    const cv::Mat& image = f.frame.color.empty() ? f.frame.gray : f.frame.color;
+    const std::string path =
+        (fs::path(out_dir_) / "samples" / (std::to_string(1000000 + f.frame.index).substr(1) + ".jpg")).string();
+    std::string problem;
+    if (image.empty()) {
+      problem = "frame " + std::to_string(f.frame.index) + " has no image (the dataset has none)";
+    } else {
+      try {  // samples/ is made with the first sample (a dataset without images gets none)
+        makeDirectories((fs::path(out_dir_) / "samples").string());
+        detail::writeSampleFrame(path, detail::drawSampleFrame(image, f.mask, f.tracked.keypoints, f.boxes, camera_));
+      } catch (const std::exception& e) {
+        problem = e.what();
+      }
+    }
+    if (!problem.empty() && !sample_warned_ && options_.log_level <= BESLAM_LOG_WARNING) {
+      std::cerr << "warning: sample frame skipped: " << problem << " (further sample frames are skipped quietly)\n";
+      sample_warned_ = true;
+    }
+  }
+
   const PipelineSpec& spec_;
   const RunOptions& options_;
   registry::HostLog log_;
   std::string out_dir_, abs_out_dir_;
+  std::unique_ptr<detail::OutputLock> lock_;            // held for the run's whole life
+  std::unique_ptr<detail::TrajectoryJournal> journal_;  // the tracked frames' poses, as they finish
+  bool sample_warned_ = false;
   std::unique_ptr<datasets::Dataset> dataset_;
   detail::DatasetRecord dataset_record_;
   beslam_camera camera_{};

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "beslam/common/error.hpp"
+#include "beslam/common/yaml_load.hpp"
 #include "beslam/common/yaml_set.hpp"
 #include "dataset_fields.hpp"     // kDatasetFields, from sections/dataset.json
 #include "evaluation_fields.hpp"  // kEvaluationFields, from sections/evaluation.json
@@ -249,13 +250,7 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
   PipelineSpec spec;
   spec.path = path;
   spec.base_dir = fs::absolute(path).parent_path().string();
-  try {
-    spec.document = YAML::LoadFile(path);
-  } catch (const YAML::ParserException& e) {
-    throwAt(path, "YAML syntax error: " + e.msg, e.mark.line + 1);
-  } catch (const YAML::Exception& e) {
-    throwAt(path, "cannot read YAML: " + e.msg);
-  }
+  spec.document = loadYamlFile(path);  // duplicate keys, alias bombs and deep nesting are errors
   YAML::Node& doc = spec.document;
   if (doc.IsNull() || !doc.IsDefined()) throwAt(path, "the pipeline file is empty");
   if (!doc.IsMap()) throwAt(path, "a pipeline must be a map with dataset, backend, ... sections", doc.Mark().line + 1);
@@ -313,6 +308,7 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
   spec.output.samples = static_cast<int>(value(output, "samples").number);
   spec.output.octomap = value(output, "octomap").number != 0;
   spec.output.octomap_resolution = value(output, "octomap_resolution").number;
+  spec.output.min_tracked_share = value(output, "min_tracked_share").number;
 
   if (!doc["evaluation"].IsDefined() || doc["evaluation"].IsNull()) doc["evaluation"] = YAML::Node(YAML::NodeType::Map);
   const PluginConfig evaluation = validateSettings(doc["evaluation"], evaluationFields(), "evaluation", path, "");
@@ -344,6 +340,12 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
       YAML::Node id = node["plugin"];
       if (!id.IsDefined() || !id.IsScalar()) fail(path, node, std::string(slot) + ".plugin", "missing plugin id");
       s.plugin_id = id.Scalar() == "none" ? "" : id.Scalar();
+      // Checked before the id is ever part of a file name: the registry opens <folder>/<id>.so.
+      if (!s.plugin_id.empty() && !registry::isPluginId(s.plugin_id))
+        fail(path, id, std::string(slot) + ".plugin",
+             "'" + (s.plugin_id.size() > 80 ? s.plugin_id.substr(0, 80) + "..." : s.plugin_id) +
+                 "' is not a plugin id (accepted: [a-z0-9_]+, the name of a library <id>.so in the plugin search "
+                 "path, e.g. backend_orb, or none)");
       s.settings = node;
     }
     spec.slots[slot] = std::move(s);

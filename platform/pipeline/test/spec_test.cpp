@@ -199,3 +199,35 @@ TEST_F(PipelineSpecTest, BlackFramesAreParsedAndBadOnesNameTheFileAndKey) {
   expectError(kGood, {path, "dataset.black_frames", "'x' is not a frame number"}, {"dataset.black_frames=x"});
   expectError(kGood, {path, "dataset.black_frames", "does not come after"}, {"dataset.black_frames=10-20,15"});
 }
+
+// Probe: `--set backend.plugin=/tmp/x/trav` (or ../../ traversal) used to become a file path the registry
+// loaded. An id is [a-z0-9_]+, checked here with the key and line, before any path is formed.
+TEST_F(PipelineSpecTest, PluginIdsThatAreNotIdsNameTheKey) {
+  expectError(kGood, {"pipeline.yaml (--set): backend.plugin: '/tmp/x/trav' is not a plugin id (accepted: [a-z0-9_]+"},
+              {"backend.plugin=/tmp/x/trav"});
+  expectError(kGood, {"backend.plugin: '../../../../tmp/x/trav' is not a plugin id"},
+              {"backend.plugin=../../../../tmp/x/trav"});
+  expectError(std::string(kGood) + "detector: {plugin: Detector-Image}\n",
+              {"pipeline.yaml:9: detector.plugin: 'Detector-Image' is not a plugin id"});
+  EXPECT_NO_THROW(loadPipeline(write(std::string(kGood) + "detector: {plugin: none}\n")));
+}
+
+// Probe: `features: 20000` then `features: 100` kept the first silently (and both in pipeline.resolved.yaml).
+TEST_F(PipelineSpecTest, DuplicateKeysNameBothLines) {
+  expectError(std::string(kGood) + "  poses: other.txt\n", {"pipeline.yaml:9: duplicate key 'poses' (first at line 8"});
+}
+
+// Probes: a 1.2 KB alias bomb hung the loader; 100,000-deep nesting said only "bad file".
+TEST_F(PipelineSpecTest, AliasBombsAndDeepNestingAreOneError) {
+  std::string bomb = std::string(kGood) + "description: &a [x, x, x, x, x, x, x, x, x]\n";
+  std::string previous = "a";
+  for (const char* name : {"b", "c", "d", "e", "f", "g", "h", "i"}) {
+    bomb += std::string("x") + name + ": &" + name + " [";
+    for (int k = 0; k < 9; ++k) bomb += std::string(k ? ", " : "") + "*" + previous;
+    bomb += "]\n";
+    previous = name;
+  }
+  expectError(bomb, {"pipeline.yaml:", "nodes once its aliases (*name) are expanded"});
+  expectError(std::string(kGood) + "description: " + std::string(100000, '[') + std::string(100000, ']') + "\n",
+              {"pipeline.yaml:9: nested deeper than 64 levels"});
+}

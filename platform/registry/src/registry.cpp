@@ -1,5 +1,7 @@
 #include "beslam/registry/registry.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <boost/dll/library_info.hpp>
 #include <boost/dll/runtime_symbol_info.hpp>
@@ -7,7 +9,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "beslam/common/error.hpp"
@@ -115,16 +119,48 @@ bool tableComplete(int32_t kind, const void* table) {
   }
 }
 
-bool validId(const char* id) {
-  if (id == nullptr || *id == '\0') return false;
-  for (const char* c = id; *c; ++c)
-    if (!((*c >= 'a' && *c <= 'z') || (*c >= '0' && *c <= '9') || *c == '_')) return false;
-  return true;
-}
+bool validId(const char* id) { return id != nullptr && isPluginId(id); }
 
 std::string str(const char* s) { return s ? s : ""; }
 
+// A name as it may be printed in one line: control characters escaped, at most 80 characters.
+std::string printable(const std::string& text) {
+  std::string out;
+  for (unsigned char c : text.substr(0, 80)) {
+    if (c < 0x20 || c == 0x7f) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02x", c);
+      out += hex;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return text.size() > 80 ? out + "..." : out;
+}
+
+constexpr const char* kAllowWritable = "--allow-writable-plugin-dirs";
+
+// Empty when group and others cannot write to `path` (followed through symlinks) or it does not exist,
+// else why it is refused.
+std::string writableProblem(const fs::path& path, const char* what) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return {};
+  if ((st.st_mode & (S_IWGRP | S_IWOTH)) == 0) return {};
+  char mode[8];
+  std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
+  return path.string() + ": " + what + " is writable by " + ((st.st_mode & S_IWOTH) ? "others" : "its group") +
+         " (mode " + mode + "), so anyone who can write there chooses the code beslam runs; refused (chmod go-w " +
+         path.string() + ", or pass " + kAllowWritable + ")";
+}
+
 }  // namespace
+
+bool isPluginId(const std::string& id) {
+  if (id.empty()) return false;
+  for (char c : id)
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_')) return false;
+  return true;
+}
 
 struct Registry::Impl {
   std::vector<std::string> extra_paths;
@@ -132,8 +168,26 @@ struct Registry::Impl {
   std::vector<Plugin> plugins;
   std::vector<std::string> problems;
   std::map<std::string, std::string> loaded_files;  // canonical path -> path
+  std::vector<std::string> load_order;              // paths as given, in load order
+  bool allow_writable = false;
 
   void load(const std::string& path);
+  // Throws when the library `path` may not be loaded: it (through a symlink, its target) or a folder
+  // holding it is writable by group or others, unless allowed.
+  void checkFile(const std::string& path) const {
+    if (allow_writable) return;
+    std::error_code ec;
+    const fs::path canonical = fs::canonical(path, ec), given = fs::absolute(path, ec);
+    for (const auto& [where, what] : {std::pair<fs::path, const char*>{canonical, "plugin library"},
+                                      {canonical.parent_path(), "plugin folder"},
+                                      {given.parent_path(), "plugin folder"}})
+      if (std::string problem = writableProblem(where, what); !problem.empty()) throw Error(problem);
+  }
+  // Throws when `folder` may not be searched (writable by group or others, unless allowed).
+  void checkFolder(const std::string& folder) const {
+    if (allow_writable) return;
+    if (const std::string problem = writableProblem(folder, "plugin folder"); !problem.empty()) throw Error(problem);
+  }
   void addProblem(const std::string& problem) {  // once: loadFor() and a scan() after it may meet the same file
     if (std::find(problems.begin(), problems.end(), problem) == problems.end()) problems.push_back(problem);
   }
@@ -145,6 +199,8 @@ Registry::~Registry() {
 }
 
 void Registry::addSearchPath(const std::string& folder) { impl_->extra_paths.push_back(folder); }
+void Registry::allowWritable(bool allow) { impl_->allow_writable = allow; }
+std::vector<std::string> Registry::loadedFiles() const { return impl_->load_order; }
 
 std::vector<std::string> Registry::searchPaths() const {
   std::vector<std::string> paths = impl_->extra_paths;
@@ -173,9 +229,20 @@ void Registry::scan() {
   for (const std::string& folder : searchPaths()) {
     std::error_code ec;
     if (!fs::is_directory(folder, ec)) continue;
+    try {
+      impl_->checkFolder(folder);
+    } catch (const Error& e) {
+      impl_->addProblem(e.what());
+      continue;
+    }
     std::vector<fs::path> files;
-    for (const auto& entry : fs::directory_iterator(folder, ec))
-      if (entry.is_regular_file() && entry.path().extension() == ".so") files.push_back(entry.path());
+    const fs::path here = fs::canonical(folder, ec);
+    for (const auto& entry : fs::directory_iterator(folder, ec)) {
+      if (!entry.is_regular_file() || entry.path().extension() != ".so") continue;
+      std::error_code link_ec;  // an alias (<id>.so -> a library beside it) lists its library once, by its name
+      if (entry.is_symlink() && fs::canonical(entry.path(), link_ec).parent_path() == here) continue;
+      files.push_back(entry.path());
+    }
     std::sort(files.begin(), files.end());
     for (const fs::path& file : files) {
       try {
@@ -191,23 +258,30 @@ void Registry::loadFor(const std::vector<std::string>& ids) {
   const auto provided = [this](const std::string& id) {
     return std::any_of(impl_->plugins.begin(), impl_->plugins.end(), [&](const Plugin& p) { return p.id == id; });
   };
+  for (const std::string& id : ids)  // before any path is formed from one
+    if (!isPluginId(id))
+      throw Error("plugin id '" + printable(id) + "' is not a plugin id (accepted: [a-z0-9_]+, e.g. backend_orb)");
   const std::vector<std::string> folders = searchPaths();
-  bool all_found = true;
+  for (const std::string& folder : folders) {
+    std::error_code ec;
+    if (fs::is_directory(folder, ec)) impl_->checkFolder(folder);
+  }
   for (const std::string& id : ids) {
     for (const std::string& folder : folders) {
       if (provided(id)) break;
       std::error_code ec;
       const fs::path file = fs::path(folder) / (id + ".so");
-      if (!fs::is_regular_file(file, ec)) continue;
+      if (!fs::exists(file, ec)) continue;
+      impl_->checkFile(file.string());  // a writable library is an error, not a reason to look further
       try {
         impl_->load(file.string());
       } catch (const Error& e) {
         impl_->addProblem(e.what());
+        continue;
       }
+      if (!provided(id)) impl_->addProblem(file.string() + ": does not provide plugin '" + id + "'");
     }
-    all_found = all_found && provided(id);
   }
-  if (!all_found) scan();
 }
 
 void Registry::loadLibrary(const std::string& path) { impl_->load(path); }
@@ -215,8 +289,18 @@ void Registry::loadLibrary(const std::string& path) { impl_->load(path); }
 void Registry::Impl::load(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throwAt(path, "no such plugin library");
+  if (!fs::is_regular_file(path, ec)) throwAt(path, "not a shared library (not a regular file)");
   const std::string canonical = fs::canonical(path, ec).string();
   if (loaded_files.count(canonical)) return;
+  checkFile(path);
+  {  // what is no ELF file at all gets a clear word before the ELF reader sees it
+    char magic[4] = {};
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throwAt(path, "cannot open the plugin library");
+    in.read(magic, sizeof magic);
+    if (in.gcount() != 4 || magic[0] != 0x7f || magic[1] != 'E' || magic[2] != 'L' || magic[3] != 'F')
+      throwAt(path, "not a shared library (no ELF header; a plugin is a .so built with beslam_add_plugin)");
+  }
 
   // Check the entry points are there before running any of the library's code.
   try {
@@ -314,6 +398,7 @@ void Registry::Impl::load(const std::string& path) {
   }
   libraries.push_back(std::move(lib));
   loaded_files[canonical] = path;
+  load_order.push_back(path);
   for (Plugin& p : found) plugins.push_back(std::move(p));
 }
 
@@ -331,11 +416,22 @@ const Plugin& Registry::find(const std::string& id, int32_t kind) const {
     }
     if (kind == 0 || p.kind == kind) known += (known.empty() ? "" : ", ") + p.id;
   }
-  std::string message = "unknown plugin '" + id + "'";
-  message += known.empty() ? std::string(" (no plugins of that kind found") : " (known: " + known;
-  message += "; searched ";
+  std::string message = "unknown plugin '" + printable(id) + "'";
+  message += known.empty() ? std::string(" (no plugins of that kind loaded") : " (known: " + known;
+  message += "; no " + printable(id) + ".so in the search path ";
   const auto paths = searchPaths();
-  for (size_t i = 0; i < paths.size(); ++i) message += (i ? ":" : "") + paths[i];
+  std::set<std::string> libraries;  // listed, not loaded: what the id may have meant
+  for (size_t i = 0; i < paths.size(); ++i) {
+    message += (i ? ":" : "") + paths[i];
+    std::error_code ec;
+    for (fs::directory_iterator it(paths[i], ec), end; !ec && it != end; it.increment(ec))
+      if (it->path().extension() == ".so") libraries.insert(it->path().stem().string());
+  }
+  if (!libraries.empty()) {
+    message += "; libraries there:";
+    for (const std::string& l : libraries) message += " " + printable(l);
+    message += " (each id is a file <id>.so: a symlink for a library's further plugins)";
+  }
   message += ")";
   // A library refused for this reason may have been the one meant: say why each was refused.
   for (const std::string& problem : impl_->problems) message += "; refused " + problem;

@@ -166,12 +166,18 @@ json timingData(const fs::path& csv) {
     std::stringstream ss(line);
     for (std::string c; std::getline(ss, c, ',');) cols.push_back(c);
   }
+  if (cols.empty() || cols.front() != "frame")
+    throwAt(csv.string(), "not a timing.csv: the header must start with 'frame' (as beslam run writes it)", 1);
   std::vector<std::vector<double>> values(cols.size());
   std::vector<double> frame, total;
   const auto total_it = std::find(cols.begin(), cols.end(), "total_ms");
   const int ti = total_it == cols.end() ? -1 : static_cast<int>(total_it - cols.begin());
   for (int row = 2; std::getline(in, line); ++row) {
     if (line.empty()) continue;
+    const size_t fields = static_cast<size_t>(std::count(line.begin(), line.end(), ',')) + 1;
+    if (fields != cols.size())
+      throwAt(csv.string(),
+              "a row of " + std::to_string(fields) + " fields under a header of " + std::to_string(cols.size()), row);
     std::stringstream ss(line);
     int c = 0;
     for (std::string f; std::getline(ss, f, ','); ++c) {
@@ -212,7 +218,7 @@ Eigen::Matrix3d rotY(double a) {
 
 // The report data of one run (folder `run`): see the header for what it holds.
 json runData(const fs::path& run, const std::string& label, size_t max_points, const fs::path& samples_out,
-             const std::string& samples_rel) {
+             const std::string& samples_rel, std::vector<std::string>* warnings = nullptr) {
   const fs::path summary_path = run / "summary.json";
   json summary;
   try {
@@ -221,6 +227,16 @@ json runData(const fs::path& run, const std::string& label, size_t max_points, c
     throwAt(summary_path.string(), std::string("not a run summary: ") + e.what());
   }
   json d = {{"label", label}, {"dir", fs::absolute(run).lexically_normal().string()}};
+  if (warnings) {  // what the page will not show, said once here rather than by empty plots
+    if (summary.contains("status") && summary["status"].is_string() && summary["status"] != "completed")
+      warnings->push_back(summary_path.string() + ": the run did not complete (" +
+                          summary["status"].get<std::string>() + "); the report shows what it left");
+    if (!fs::exists(run / "trajectory.tum"))
+      warnings->push_back((run / "trajectory.tum").string() +
+                          ": missing; the trajectory, APE and scale plots are empty");
+    if (!fs::exists(run / "timing.csv"))
+      warnings->push_back((run / "timing.csv").string() + ": missing; the timing plot is empty");
+  }
   for (const char* k : {"pipeline", "dataset", "frames", "tracked", "keyframes", "median_frame_ms", "ape", "detections",
                         "world", "map_points", "plugins", "frames_with_masks", "untracked_frames"})
     if (summary.contains(k)) d["summary"][k] = summary[k];
@@ -464,14 +480,16 @@ void writePage(const fs::path& out, const std::string& title, const json& tables
 
 }  // namespace
 
-void writeRunReport(const std::string& run_dir, const std::string& out_dir) {
+std::vector<std::string> writeRunReport(const std::string& run_dir, const std::string& out_dir) {
   const fs::path run(run_dir);
   if (!fs::is_directory(run)) throwAt(run_dir, "no such run folder");
   const fs::path out = out_dir.empty() ? run / "report" : fs::path(out_dir);
   std::string label = fs::absolute(run).lexically_normal().filename().string();
   if (label.empty()) label = fs::absolute(run).lexically_normal().parent_path().filename().string();
-  const json d = runData(run, label, 200000, out / "samples" / "0", "samples/0");
+  std::vector<std::string> warnings;
+  const json d = runData(run, label, 200000, out / "samples" / "0", "samples/0", &warnings);
   writePage(out, "BE-SLAM run " + label, nullptr, {d});
+  return warnings;
 }
 
 void writeBenchReport(const std::string& bench_dir) {
@@ -526,7 +544,7 @@ int runReportCommand(const std::vector<std::string>& args, std::ostream& out, st
     return 2;
   }
   try {
-    writeRunReport(run, out_dir);
+    for (const std::string& w : writeRunReport(run, out_dir)) err << "beslam report: warning: " << w << "\n";
   } catch (const Error& e) {
     err << "beslam: error: " << e.what() << "\n";
     return 1;

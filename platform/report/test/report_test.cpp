@@ -193,6 +193,43 @@ TEST(Report, ErrorsNameTheFile) {
   EXPECT_FALSE(fs::exists(dir / "rep" / "index.html"));
 }
 
+// Probes: a run without a trajectory, or one that failed, drew empty plots without a word; a garbled
+// timing.csv too. The first are warnings naming the file, the last an error naming file and line.
+TEST(Report, WhatTheReportCannotShowIsSaid) {
+  const fs::path dir = tempDir("cannot_show");
+  const fs::path run = makeRun(dir);
+  fs::remove(run / "trajectory.tum");
+  {
+    json s = json::parse(readText(run / "summary.json"));
+    s["status"] = "failed: frame 3: cannot read image";
+    std::ofstream(run / "summary.json") << s.dump(1);
+  }
+  const std::vector<std::string> warnings = beslam::report::writeRunReport(run.string(), (dir / "rep1").string());
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[0],
+            (run / "summary.json").string() +
+                ": the run did not complete (failed: frame 3: cannot read image); the report shows what it "
+                "left");
+  EXPECT_EQ(warnings[1],
+            (run / "trajectory.tum").string() + ": missing; the trajectory, APE and scale plots are empty");
+  std::ostringstream out, err;
+  EXPECT_EQ(beslam::report::runReportCommand({run.string(), "--out", (dir / "rep2").string()}, out, err), 0);
+  EXPECT_NE(err.str().find("beslam report: warning: " + (run / "trajectory.tum").string() + ": missing"),
+            std::string::npos)
+      << err.str();
+  EXPECT_TRUE(fs::exists(dir / "rep2" / "index.html"));
+
+  std::ofstream(run / "timing.csv") << "frame,load_ms,total_ms\n0,1.0,2.0\n1,3.0\n";
+  std::ostringstream out2, err2;
+  EXPECT_EQ(beslam::report::runReportCommand({run.string(), "--out", (dir / "rep3").string()}, out2, err2), 1);
+  EXPECT_EQ(err2.str(),
+            "beslam: error: " + (run / "timing.csv").string() + ":3: a row of 2 fields under a header of 3\n");
+  std::ofstream(run / "timing.csv") << "<html>not a table</html>\n";
+  std::ostringstream out3, err3;
+  EXPECT_EQ(beslam::report::runReportCommand({run.string(), "--out", (dir / "rep4").string()}, out3, err3), 1);
+  EXPECT_NE(err3.str().find((run / "timing.csv").string() + ":1: not a timing.csv"), std::string::npos) << err3.str();
+}
+
 // Headless Chromium, as a person would open the report: a real (short) BE-SLAM run on synthetic data.
 // BESLAM_REPORT_RUN=DIR uses an existing run folder instead (how docs/images/report.png was made).
 TEST(ReportBrowser, ChromiumDrawsPlotsAndThe3DView) {

@@ -10,6 +10,7 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
+#include "beslam/common/yaml_load.hpp"
 #include "beslam/common/yaml_set.hpp"
 #include "beslam/sim/synth.hpp"
 #include "presets.hpp"
@@ -241,7 +242,7 @@ SynthConfig synthConfigFromYaml(const YAML::Node& root, const std::string& sourc
 SynthConfig loadSynthConfig(const std::string& path, const std::vector<std::string>& set_overrides) {
   YAML::Node root;
   try {
-    root = YAML::Load(readFile(path));
+    root = loadYamlFile(path);  // duplicate keys, alias bombs and deep nesting are errors
   } catch (const YAML::Exception& e) {
     throwAt(path, "invalid YAML: " + e.msg, e.mark.line + 1);
   }

@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <ostream>
+#include <sstream>
 #include <string_view>
 
 #include "beslam/formats/error.hpp"
@@ -127,17 +128,37 @@ Trajectory readTum(const std::string& path) {
   return trajectory;
 }
 
+std::string kittiRow(const Eigen::Isometry3d& T_world_cam) {
+  std::ostringstream out;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      if (r != 0 || c != 0) out << ' ';
+      putNumber(out, T_world_cam.matrix()(r, c));
+    }
+  }
+  out << '\n';
+  return out.str();
+}
+
+std::string tumRow(double stamp, const Eigen::Isometry3d& T_world_cam) {
+  Eigen::Quaterniond q_world_cam(T_world_cam.linear());
+  q_world_cam.normalize();
+  if (q_world_cam.w() < 0.0) q_world_cam.coeffs() *= -1.0;  // one canonical sign
+  const Eigen::Vector3d t = T_world_cam.translation();
+  const double values[8] = {stamp,           t.x(),           t.y(),           t.z(),
+                            q_world_cam.x(), q_world_cam.y(), q_world_cam.z(), q_world_cam.w()};
+  std::ostringstream out;
+  for (int k = 0; k < 8; ++k) {
+    if (k != 0) out << ' ';
+    putNumber(out, values[k]);
+  }
+  out << '\n';
+  return out.str();
+}
+
 void writeKitti(const std::string& path, const Trajectory& trajectory) {
   writeFileAtomic(path, [&](std::ostream& out) {
-    for (const Eigen::Isometry3d& T_world_cam : trajectory.poses) {
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 4; ++c) {
-          if (r != 0 || c != 0) out << ' ';
-          putNumber(out, T_world_cam.matrix()(r, c));
-        }
-      }
-      out << '\n';
-    }
+    for (const Eigen::Isometry3d& T_world_cam : trajectory.poses) out << kittiRow(T_world_cam);
   });
 }
 
@@ -147,21 +168,8 @@ void writeTum(const std::string& path, const Trajectory& trajectory) {
                       std::to_string(trajectory.poses.size()) + " poses");
   }
   writeFileAtomic(path, [&](std::ostream& out) {
-    out << "# timestamp tx ty tz qx qy qz qw\n";
-    for (std::size_t i = 0; i < trajectory.size(); ++i) {
-      const Eigen::Isometry3d& T_world_cam = trajectory.poses[i];
-      Eigen::Quaterniond q_world_cam(T_world_cam.linear());
-      q_world_cam.normalize();
-      if (q_world_cam.w() < 0.0) q_world_cam.coeffs() *= -1.0;  // one canonical sign
-      const Eigen::Vector3d t = T_world_cam.translation();
-      const double values[8] = {trajectory.stamps[i], t.x(),           t.y(),           t.z(),
-                                q_world_cam.x(),      q_world_cam.y(), q_world_cam.z(), q_world_cam.w()};
-      for (int k = 0; k < 8; ++k) {
-        if (k != 0) out << ' ';
-        putNumber(out, values[k]);
-      }
-      out << '\n';
-    }
+    out << kTumHeader;
+    for (std::size_t i = 0; i < trajectory.size(); ++i) out << tumRow(trajectory.stamps[i], trajectory.poses[i]);
   });
 }
 

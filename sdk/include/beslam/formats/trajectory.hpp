@@ -35,6 +35,12 @@ Trajectory readTum(const std::string& path);
 void writeKitti(const std::string& path, const Trajectory& trajectory);
 void writeTum(const std::string& path, const Trajectory& trajectory);
 
+// One row of each format, as the writers print it (with its line end), for files written row by row;
+// a TUM file starts with kTumHeader.
+std::string kittiRow(const Eigen::Isometry3d& T_world_cam);
+std::string tumRow(double stamp, const Eigen::Isometry3d& T_world_cam);
+inline constexpr const char* kTumHeader = "# timestamp tx ty tz qx qy qz qw\n";
+
 // Format by name: "kitti" or "tum"; throws beslam::Error on any other name.
 Trajectory read(const std::string& path, const std::string& format);
 

@@ -46,6 +46,9 @@ struct RunOptions {
   std::function<bool()> stop_requested;
   std::function<std::string()> stop_reason;  // e.g. "SIGTERM", for summary.json
   std::function<void(int64_t)> after_frame;  // called with each finished frame's index
+  // A folder holding a previous run's outputs (summary.json, a trajectory) is refused unless this is set;
+  // then that run's own files are removed first (nothing else in the folder).
+  bool overwrite = false;
 };
 
 struct RunSummary {
@@ -88,10 +91,16 @@ struct RunSummary {
   int64_t map_points = 0, map_points_static = 0;  // final map; on static objects (trusted)
   // Objects the reconstructor left at the end (objects.json) and how many have a mesh; -1: no reconstructor.
   int64_t objects_reconstructed = -1, objects_with_mesh = 0;
+  // How the run ended, as summary.json says: "completed", "interrupted" or "failed: <reason>".
+  std::string status;
 };
 
 // Runs a loaded and resolved pipeline (resolvePlugins). Throws beslam::Error (naming the file or plugin)
-// on failure.
+// on failure. The output folder is locked for the run (a second run into it fails at once). Every tracked
+// frame's pose is appended to trajectory.tum and trajectory.kitti as the frame finishes, so a run that
+// fails or is killed keeps them; a completed run replaces both with the backend's final trajectory. A
+// run that fails after its first frame writes summary.json with status "failed: <reason>"; one that
+// tracks fewer than output.min_tracked_share of its frames writes every output, then throws.
 RunSummary run(const PipelineSpec& spec, const RunOptions& options);
 
 }  // namespace beslam::pipeline

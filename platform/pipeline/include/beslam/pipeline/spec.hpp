@@ -75,6 +75,7 @@ struct OutputSpec {
   int samples = 6;                  // frames drawn to samples/ (0: none)
   bool octomap = false;             // static_map.bt
   double octomap_resolution = 0.2;  // metres
+  double min_tracked_share = 0.5;   // fewer frames in the final trajectory fail the run (0: never)
 };
 
 struct EvaluationSpec {

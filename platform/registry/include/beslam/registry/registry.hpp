@@ -3,10 +3,15 @@
 // Search paths, in order: those added by the caller (pipeline `plugin_paths`, --plugin-path), the
 // colon-separated BESLAM_PLUGIN_PATH environment variable, then the folders beside the executable
 // (<exe>/../lib/beslam/plugins: the build tree and the install prefix). A library is checked before any
-// of its code runs (the entry symbols must exist), then its ABI major version, then each descriptor
-// (struct size, kind, id, create/destroy, the kind's function table). Anything wrong is a
-// beslam::Error naming the library file and the cause; scan() collects such errors instead of throwing.
-// A Registry must outlive every instance created from its plugins.
+// of its code runs (a regular file with an ELF header, not writable by group or others, in a folder not
+// writable by group or others; the entry symbols must exist), then its ABI major version, then each
+// descriptor (struct size, kind, id, create/destroy, the kind's function table). Anything wrong is a
+// beslam::Error naming the library file (or folder) and the cause; scan() collects such errors instead of
+// throwing. A Registry must outlive every instance created from its plugins.
+//
+// What runs: loadFor() opens only <folder>/<id>.so for the ids it is given (an id is checked against
+// [a-z0-9_]+ before any path is formed), never every library of a folder; a library that provides several
+// plugins is reached through a file named after each id (a symlink: beslam_add_plugin's ALSO_PROVIDES).
 #pragma once
 
 #include <memory>
@@ -44,6 +49,7 @@ int32_t kindFromName(const std::string& name);        // 0 if unknown
 const char* configTypeName(int32_t type);             // "bool", "int", ...
 ConfigField fieldOf(const beslam_config_field& raw);  // a C schema entry as the host keeps it
 const char* statusName(beslam_status status);
+bool isPluginId(const std::string& id);  // [a-z0-9_]+
 
 class Registry {
  public:
@@ -53,19 +59,23 @@ class Registry {
   Registry& operator=(const Registry&) = delete;
 
   void addSearchPath(const std::string& folder);
+  // Lets search folders and plugin files that group or others can write to be used (refused by default:
+  // anyone who can write there chooses the code the host runs). --allow-writable-plugin-dirs.
+  void allowWritable(bool allow);
   std::vector<std::string> searchPaths() const;  // the effective list, in order
 
-  // Loads every shared library (*.so) in the search paths; later duplicates of an id are reported.
+  // Loads every shared library (*.so) in the search paths, to list them (`beslam plugins`); later
+  // duplicates of an id are reported. A writable folder or file is a problem, and is not opened.
   void scan();
-  // Loads what a pipeline needs, quickly: for each id, the first search path holding a library named
-  // after it (<id>.so, as every built-in plugin is) gives it; if any id is not found that way (a
-  // library named otherwise, or providing several plugins), a full scan() follows. A library named
-  // after a plugin is therefore preferred to one of another name earlier in the path. Loading every
-  // library costs 0.3-0.5 s of start-up (their dependencies: PCL, OpenCV DNN); `beslam plugins` and
-  // anything listing or checking all plugins still call scan().
+  // Loads what a pipeline needs and nothing else: for each id, <folder>/<id>.so of the first search
+  // folder holding one (a library that does not provide the id is a problem find() names). Throws
+  // beslam::Error for an id that is not [a-z0-9_]+ (before any path is formed) and for a writable folder
+  // or library met on the way. An id found nowhere is left for find() to report.
   void loadFor(const std::vector<std::string>& ids);
   // Loads one library explicitly; throws beslam::Error naming the file on any problem.
   void loadLibrary(const std::string& path);
+  // The library files loaded so far, in load order (as given, not resolved through symlinks).
+  std::vector<std::string> loadedFiles() const;
 
   const std::vector<Plugin>& plugins() const;
   const std::vector<std::string>& problems() const;  // "FILE: cause" for libraries scan() refused

@@ -1,0 +1,26 @@
+// YAML files as every host reader loads them: checked event by event before yaml-cpp builds the node
+// tree, so that what yaml-cpp would take silently or could not finish is one error naming the file and
+// line instead: a key given twice in one map (yaml-cpp keeps the first and drops the second without a
+// word), nesting deeper than kMaxYamlDepth, and a document larger than kMaxYamlNodes nodes once its
+// aliases are expanded (a "billion laughs" file of a kilobyte expands to billions of nodes: every reader
+// that walks it would hang). Syntax errors are "FILE:LINE: YAML syntax error: ...".
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstddef>
+#include <string>
+
+namespace beslam {
+
+constexpr std::size_t kMaxYamlDepth = 64;
+constexpr std::size_t kMaxYamlNodes = 1'000'000;
+
+// Throws beslam::Error naming `file` (and the line) when `text` breaks one of the rules above.
+void checkYaml(const std::string& text, const std::string& file);
+// checkYaml, then the node tree of the first document.
+YAML::Node loadYaml(const std::string& text, const std::string& file);
+// loadYaml of the file's contents; a file that cannot be read is an error naming it.
+YAML::Node loadYamlFile(const std::string& path);
+
+}  // namespace beslam
