@@ -156,12 +156,13 @@ def _binary():
 _PROGRESS = re.compile(rb"(beslam synth: frame|frame) (\d+)/(\d+)")
 
 
-def run(pipeline, out, overrides=None, progress=None, extra_args=()):
+def run(pipeline, out, overrides=None, progress=None, overwrite=False, extra_args=()):
     """Runs `beslam run PIPELINE --out OUT --set KEY=VALUE...` (the command itself, so the run is exactly the
     command line's) and returns the finished run as a Run. overrides: {key: value} or ["key=value", ...];
     progress: called as progress(stage, done, total) with stage "render" (a synthetic sequence being made)
-    or "frames", while the run goes on. Raises RuntimeError with the command's error lines when it fails."""
-    args = [_binary(), "run", os.fspath(pipeline), "--out", os.fspath(out)]
+    or "frames", while the run goes on; overwrite: replace an earlier run in `out` (the command refuses a used
+    folder otherwise). Raises RuntimeError with the command's error lines when it fails."""
+    args = [_binary(), "run", os.fspath(pipeline), "--out", os.fspath(out)] + (["--overwrite"] if overwrite else [])
     items = overrides.items() if isinstance(overrides, dict) else [tuple(o.split("=", 1)) for o in overrides or []]
     for key, value in items:
         if isinstance(value, bool):

@@ -100,6 +100,9 @@ def test_run_reports_progress_and_opens_its_folder(tmp_path):
     assert score["ape"]["trans"]["rmse"] < 1e-9
     again = beslam.open_run(tmp_path / "out")
     assert np.array_equal(again.poses, run.poses)
+    with pytest.raises(RuntimeError, match="overwrite"):  # a used folder is refused without it
+        beslam.run(pipeline, tmp_path / "out")
+    assert beslam.run(pipeline, tmp_path / "out", overwrite=True).summary["frames"] == 8
 
 
 def test_a_failed_run_and_a_missing_folder_are_one_clear_error(tmp_path):
