@@ -310,6 +310,7 @@ class Run {
     dopt.last = spec_.dataset.last;
     dopt.step = spec_.dataset.step;
     dopt.ego_poses = spec_.dataset.ego_poses;
+    dopt.calibration = spec_.dataset.calibration;
     dataset_ = datasets::openDataset(dopt);
     if (!spec_.dataset.black_frames.empty()) {
       try {
