@@ -241,7 +241,8 @@ std::vector<std::string> datasetTypes() {
 }
 
 std::unique_ptr<Dataset> openDataset(const DatasetOptions& options) {
-  if (options.root.empty()) throw Error("dataset options: root is empty");
+  if (options.root.empty())
+    throw Error("dataset.root is empty: give the dataset's folder (a video: its file), e.g. --set dataset.root=PATH");
   if (options.type == "kitti_odometry") return detail::openKittiOdometry(options);
   if (options.type == "kitti_tracking") return detail::openKittiTracking(options);
   if (options.type == "kitti_raw") return detail::openKittiRaw(options);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <mutex>
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <sstream>
@@ -14,6 +15,19 @@
 
 namespace beslam::datasets::detail {
 namespace {
+
+// OpenCV's own log lines (each backend that declines a file says so on stderr) off while it lives: a file
+// that no backend opens is then one error line.
+class QuietOpenCvLog {
+ public:
+  QuietOpenCvLog() : previous_(cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT)) {}
+  ~QuietOpenCvLog() { cv::utils::logging::setLogLevel(previous_); }
+  QuietOpenCvLog(const QuietOpenCvLog&) = delete;
+  QuietOpenCvLog& operator=(const QuietOpenCvLog&) = delete;
+
+ private:
+  cv::utils::logging::LogLevel previous_;
+};
 
 class VideoDataset final : public Dataset {
  public:
@@ -88,6 +102,7 @@ std::unique_ptr<Dataset> openVideo(const DatasetOptions& options) {
 
   cv::VideoCapture capture;
   try {
+    const QuietOpenCvLog quiet;
     capture.open(options.root);
   } catch (const cv::Exception& e) {
     throwAt(options.root, std::string("OpenCV cannot open the video: ") + e.what());
