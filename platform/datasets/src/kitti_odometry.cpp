@@ -72,9 +72,9 @@ std::unique_ptr<Dataset> openKittiOdometry(const DatasetOptions& options) {
       gt_text = ", ground truth";
     }
   }
-  c.description = "KITTI odometry " + options.sequence + " (" + std::to_string(c.frames.size()) + " frames, " +
-                  folder_of(cam) + camera_text + rangeText(options, c.frames, images.size()) +
-                  (has_lidar ? ", velodyne" : "") + gt_text + ")";
+  c.description = (options.name.empty() ? "KITTI odometry " + options.sequence : options.name) + " (" +
+                  std::to_string(c.frames.size()) + " frames, " + folder_of(cam) + camera_text +
+                  rangeText(options, c.frames, images.size()) + (has_lidar ? ", velodyne" : "") + gt_text + ")";
   return std::make_unique<LoadedDataset>(std::move(c));
 }
 

@@ -302,6 +302,7 @@ class Run {
       dopt.root = sim::ensureSequence(spec_.dataset.root, source.config, source.name,
                                       options_.progress && isatty(STDERR_FILENO) ? &std::cerr : nullptr);
       dopt.sequence = source.config.sequence;
+      dopt.name = "synthetic " + source.name;  // not "KITTI odometry 00": rendered, only laid out like KITTI
     }
     dopt.camera = spec_.dataset.camera;
     dopt.load_color = spec_.dataset.color;

@@ -59,6 +59,8 @@ struct DatasetOptions {
                             // frame of the sequence, taken as T_world_cam of the chosen camera (ground truth or
                             // a reference estimate); for kitti_odometry it replaces poses/NN.txt. Not accepted
                             // for kitti_object and tum.
+  std::string name;         // kitti_odometry: what describe() calls the sequence instead of "KITTI odometry NN"
+                            // (a `beslam synth` rendering in KITTI's layout: "synthetic urban_loop")
   bool undistort = true;    // tum: undistort fr1/fr2 images with the published distortion of their defaults
   double gt_max_dt = 0.02;  // tum: ground truth is interpolated between samples bracketing a frame; with no
                             // bracket, the nearest sample within this many seconds is used, else none
