@@ -229,8 +229,12 @@ int runCommand(const std::vector<std::string>& args) {
   if (s.has_ape)
     std::cout << "APE translation RMSE " << s.ape_trans_rmse << " m (" << spec.evaluation.alignment << ", scale "
               << s.ape_alignment_scale << "), RPE translation RMSE " << s.rpe_trans_rmse << " m\n";
-  if (s.has_ape)
+  // SE(3) APE measures a trajectory in metres: printed only for a metric map (else it is the map's unit
+  // against metres, a number without meaning).
+  if (s.has_ape && s.metric_from_frame >= 0)
     std::cout << "APE (both alignments): Sim(3) " << s.ape_sim3_rmse << " m, SE(3) " << s.ape_se3_rmse << " m\n";
+  else if (s.has_ape)
+    std::cout << "APE Sim(3) " << s.ape_sim3_rmse << " m; no SE(3) APE: the map has no scale (monocular unit)\n";
   if (!s.evaluation_error.empty()) std::cout << "no APE: " << s.evaluation_error << "\n";
   if (s.metric_from_frame >= 0)
     std::cout << "map in metres from frame " << s.metric_from_frame << " (camera height " << s.camera_height << " m)"

@@ -7,9 +7,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "beslam/common/error.hpp"
+#include "beslam/common/file_io.hpp"
 #include "beslam/datasets/image_io.hpp"
 #include "beslam/datasets/velodyne.hpp"
 #include "dataset_impl.hpp"
+#include "parse_util.hpp"
 
 namespace beslam::datasets {
 namespace detail {
@@ -36,20 +38,38 @@ Frame LoadedDataset::load(std::size_t i) const {
     throwAt(entry.image_path, "image is " + std::to_string(image.gray.cols) + "x" + std::to_string(image.gray.rows) +
                                   ", expected " + std::to_string(c_.camera.width) + "x" +
                                   std::to_string(c_.camera.height) + " like the sequence's first image");
-  if (!c_.undistort_map1.empty()) {
-    cv::Mat gray;
-    cv::remap(image.gray, gray, c_.undistort_map1, c_.undistort_map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-    image.gray = gray;
-    if (!image.color.empty()) {
-      cv::Mat color;
-      cv::remap(image.color, color, c_.undistort_map1, c_.undistort_map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-      image.color = color;
-    }
-  }
-  frame.gray = image.gray;
-  frame.color = image.color;
+  frame.gray = remapped(image.gray, c_.undistort_map1, c_.undistort_map2);
+  frame.color = remapped(image.color, c_.undistort_map1, c_.undistort_map2);
   if (c_.load_lidar && !entry.lidar_path.empty()) frame.lidar_xyzi = readVelodyneBin(entry.lidar_path);
   return frame;
+}
+
+cv::Mat remapped(const cv::Mat& image, const cv::Mat& map1, const cv::Mat& map2) {
+  if (map1.empty() || image.empty()) return image;
+  cv::Mat out;
+  cv::remap(image, out, map1, map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  return out;
+}
+
+std::vector<double> readTimes(const std::string& path) {
+  const std::string text = readFile(path);
+  std::vector<double> times;
+  const auto lines = splitLines(text);
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    if (isBlank(lines[i])) continue;
+    const auto tokens = splitWhitespace(lines[i]);
+    double t = 0;
+    if (tokens.size() != 1 || !parseDouble(tokens[0], t))
+      throwAt(path, "expected one timestamp in seconds, got '" + std::string(lines[i]) + "'", static_cast<int>(i + 1));
+    if (!times.empty() && !(t > times.back()))
+      throwAt(path,
+              "timestamp " + std::string(tokens[0]) +
+                  " is not after the previous one (timestamps must increase "
+                  "strictly, one line a frame in frame order)",
+              static_cast<int>(i + 1));
+    times.push_back(t);
+  }
+  return times;
 }
 
 std::string joinPath(const std::string& a, const std::string& b) { return (fs::path(a) / b).string(); }
@@ -196,19 +216,50 @@ void fillImageSize(Camera& camera, const std::string& first_image) {
   camera.height = size.height;
 }
 
+std::string useCalibration(DatasetContents& c, const CameraCalibration& calibration, const cv::Size& image_size,
+                           const std::string& image) {
+  const Camera& cam = calibration.camera;
+  if (image_size.width != cam.width || image_size.height != cam.height)
+    throwAt(calibration.source, "width x height is " + std::to_string(cam.width) + "x" + std::to_string(cam.height) +
+                                    " but " + image + " is " + std::to_string(image_size.width) + "x" +
+                                    std::to_string(image_size.height) + " (the camera file must describe the images)");
+  c.camera = cam;
+  c.undistort_map1.release();
+  c.undistort_map2.release();
+  if (calibration.distorted()) undistortionMaps(calibration, c.undistort_map1, c.undistort_map2);
+  if (calibration.height_over_road) c.camera_height = *calibration.height_over_road;
+  return ", camera file " + std::filesystem::path(calibration.source).filename().string() + " (" +
+         calibration.modelText() + (calibration.distorted() ? ", undistorted" : "") + ")";
+}
+
+std::string applyCameraFile(DatasetContents& c, const DatasetOptions& options) {
+  if (options.calibration.empty()) return {};
+  const CameraCalibration calibration = readCameraFile(options.calibration);
+  if (c.frames.empty() || c.frames.front().image_path.empty()) {  // an image-less sequence: nothing to check
+    const cv::Size size(calibration.camera.width, calibration.camera.height);
+    return useCalibration(c, calibration, size, "the sequence");
+  }
+  const std::string& first = c.frames.front().image_path;
+  return useCalibration(c, calibration, readImageSize(first), first);
+}
+
 }  // namespace detail
 
 std::vector<std::string> datasetTypes() {
-  return {"kitti_odometry", "kitti_tracking", "kitti_raw", "kitti_object", "tum"};
+  return {"kitti_odometry", "kitti_tracking", "kitti_raw", "kitti_object", "tum", "images", "video", "euroc"};
 }
 
 std::unique_ptr<Dataset> openDataset(const DatasetOptions& options) {
-  if (options.root.empty()) throw Error("dataset options: root is empty");
+  if (options.root.empty())
+    throw Error("dataset.root is empty: give the dataset's folder (a video: its file), e.g. --set dataset.root=PATH");
   if (options.type == "kitti_odometry") return detail::openKittiOdometry(options);
   if (options.type == "kitti_tracking") return detail::openKittiTracking(options);
   if (options.type == "kitti_raw") return detail::openKittiRaw(options);
   if (options.type == "kitti_object") return detail::openKittiObject(options);
   if (options.type == "tum") return detail::openTum(options);
+  if (options.type == "images") return detail::openImageFolder(options);
+  if (options.type == "video") return detail::openVideo(options);
+  if (options.type == "euroc") return detail::openEuroc(options);
   std::string list;
   for (const auto& t : datasetTypes()) list += (list.empty() ? "" : ", ") + t;
   throw Error("dataset options: unknown dataset type '" + options.type + "' (expected one of " + list + ")");

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "beslam/datasets/camera_file.hpp"
 #include "beslam/datasets/dataset.hpp"
 
 namespace beslam::datasets::detail {
@@ -29,8 +30,11 @@ struct DatasetContents {
   std::optional<double> camera_height;  // metres over the road
   std::vector<FrameEntry> frames;
   bool load_color = false, load_lidar = false;
-  cv::Mat undistort_map1, undistort_map2;  // applied to gray and color when not empty (TUM fr1/fr2)
+  cv::Mat undistort_map1, undistort_map2;  // applied to gray and color when not empty (a camera file, TUM fr1/fr2)
 };
+
+// image remapped with the maps (the image itself when they are empty).
+cv::Mat remapped(const cv::Mat& image, const cv::Mat& map1, const cv::Mat& map2);
 
 class LoadedDataset final : public Dataset {
  public:
@@ -50,6 +54,10 @@ class LoadedDataset final : public Dataset {
 };
 
 std::string joinPath(const std::string& a, const std::string& b);
+
+// A times.txt: one time in seconds a line (blank lines skipped), strictly increasing; throws "path:line: ..."
+// on anything else.
+std::vector<double> readTimes(const std::string& path);
 
 // KITTI's cameras sit 1.65 m over the road (Geiger et al. 2013, the recording platform); a sequence that
 // `beslam synth` rendered says its own in sequence_dir/manifest.yaml (config.camera.mount_height).
@@ -85,8 +93,17 @@ trajectory::Trajectory selectPoses(const std::string& path, std::size_t sequence
 // ", frames 10-20 step 2" when the selection is not the whole sequence; "" otherwise.
 std::string rangeText(const DatasetOptions& options, const std::vector<FrameEntry>& frames, std::size_t total);
 
-// Width/height of the first frame's image into camera (kept if camera_override gave non-zero sizes).
+// Width/height of the first frame's image into camera (kept if already non-zero).
 void fillImageSize(Camera& camera, const std::string& first_image);
+
+// The camera of `calibration` into c: c.camera, the undistortion maps when it is distorted, and the camera
+// height when it has height_over_road. `image_size` (of `image`, named in the error) must be the file's size.
+// Returns the text for the dataset's description: ", camera file cam.yaml (pinhole, radial-tangential)".
+std::string useCalibration(DatasetContents& c, const CameraCalibration& calibration, const cv::Size& image_size,
+                           const std::string& image);
+// With options.calibration set: the camera file replaces the layout's camera (useCalibration, checked against
+// the first frame's image when the frames have images); "" and nothing changed otherwise.
+std::string applyCameraFile(DatasetContents& c, const DatasetOptions& options);
 
 // Each layout reader (one file each).
 std::unique_ptr<Dataset> openKittiOdometry(const DatasetOptions& options);
@@ -94,5 +111,8 @@ std::unique_ptr<Dataset> openKittiTracking(const DatasetOptions& options);
 std::unique_ptr<Dataset> openKittiRaw(const DatasetOptions& options);
 std::unique_ptr<Dataset> openKittiObject(const DatasetOptions& options);
 std::unique_ptr<Dataset> openTum(const DatasetOptions& options);
+std::unique_ptr<Dataset> openImageFolder(const DatasetOptions& options);
+std::unique_ptr<Dataset> openVideo(const DatasetOptions& options);
+std::unique_ptr<Dataset> openEuroc(const DatasetOptions& options);
 
 }  // namespace beslam::datasets::detail

@@ -78,14 +78,14 @@ std::unique_ptr<Dataset> openKittiObject(const DatasetOptions& options) {
     }
     c.frames.push_back(std::move(f));
   }
-  if (options.camera_override) c.camera = *options.camera_override;
   fillImageSize(c.camera, c.frames.front().image_path);
+  const std::string camera_text = applyCameraFile(c, options);
   if (c.frames.size() == 1) c.label_path = c.frames.front().label_path;
   c.load_color = options.load_color;
   c.load_lidar = options.load_lidar;
   c.description = "KITTI object " + (options.sequence.empty() ? std::string("training") : options.sequence) + " (" +
                   std::to_string(c.frames.size()) + (c.frames.size() == 1 ? " frame, " : " frames, ") + folder_of(cam) +
-                  rangeText(options, c.frames, images.size()) + (has_lidar ? ", velodyne" : "") + ")";
+                  camera_text + rangeText(options, c.frames, images.size()) + (has_lidar ? ", velodyne" : "") + ")";
   return std::make_unique<LoadedDataset>(std::move(c));
 }
 

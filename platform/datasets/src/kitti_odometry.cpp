@@ -9,30 +9,6 @@
 #include "parse_util.hpp"
 
 namespace beslam::datasets::detail {
-namespace {
-
-std::vector<double> readTimes(const std::string& path) {
-  const std::string text = readFile(path);
-  std::vector<double> times;
-  const auto lines = splitLines(text);
-  for (std::size_t i = 0; i < lines.size(); ++i) {
-    if (isBlank(lines[i])) continue;
-    const auto tokens = splitWhitespace(lines[i]);
-    double t = 0;
-    if (tokens.size() != 1 || !parseDouble(tokens[0], t))
-      throwAt(path, "expected one timestamp in seconds, got '" + std::string(lines[i]) + "'", static_cast<int>(i + 1));
-    if (!times.empty() && !(t > times.back()))
-      throwAt(path,
-              "timestamp " + std::string(tokens[0]) +
-                  " is not after the previous one (timestamps must increase "
-                  "strictly, one line a frame in frame order)",
-              static_cast<int>(i + 1));
-    times.push_back(t);
-  }
-  return times;
-}
-
-}  // namespace
 
 std::unique_ptr<Dataset> openKittiOdometry(const DatasetOptions& options) {
   requireDirectory(options.root, "KITTI odometry root");
@@ -75,9 +51,9 @@ std::unique_ptr<Dataset> openKittiOdometry(const DatasetOptions& options) {
       f.lidar_path = joinPath(velodyne_dir, std::filesystem::path(images[p].second).stem().string() + ".bin");
     c.frames.push_back(std::move(f));
   }
-  c.camera = options.camera_override ? *options.camera_override
-                                     : cameraFromProjection(*P, 0, 0, calib_path + ": P" + std::to_string(cam));
+  c.camera = cameraFromProjection(*P, 0, 0, calib_path + ": P" + std::to_string(cam));
   fillImageSize(c.camera, c.frames.front().image_path);
+  const std::string camera_text = applyCameraFile(c, options);
   if (has_lidar) c.T_cam_lidar = T_cami_velo(calib, cam);
   c.load_color = options.load_color;
   c.load_lidar = options.load_lidar;
@@ -96,9 +72,9 @@ std::unique_ptr<Dataset> openKittiOdometry(const DatasetOptions& options) {
       gt_text = ", ground truth";
     }
   }
-  c.description = "KITTI odometry " + options.sequence + " (" + std::to_string(c.frames.size()) + " frames, " +
-                  folder_of(cam) + rangeText(options, c.frames, images.size()) + (has_lidar ? ", velodyne" : "") +
-                  gt_text + ")";
+  c.description = (options.name.empty() ? "KITTI odometry " + options.sequence : options.name) + " (" +
+                  std::to_string(c.frames.size()) + " frames, " + folder_of(cam) + camera_text +
+                  rangeText(options, c.frames, images.size()) + (has_lidar ? ", velodyne" : "") + gt_text + ")";
   return std::make_unique<LoadedDataset>(std::move(c));
 }
 

@@ -97,16 +97,17 @@ std::unique_ptr<Dataset> openKittiRaw(const DatasetOptions& options) {
     if (has_lidar) f.lidar_path = joinPath(velodyne_dir, std::filesystem::path(f.image_path).stem().string() + ".bin");
     c.frames.push_back(std::move(f));
   }
-  c.camera = options.camera_override ? *options.camera_override
-                                     : cameraFromProjection(*P, 0, 0, cam_to_cam + ": P_rect_0" + std::to_string(cam));
+  c.camera = cameraFromProjection(*P, 0, 0, cam_to_cam + ": P_rect_0" + std::to_string(cam));
   fillImageSize(c.camera, c.frames.front().image_path);
+  const std::string camera_text = applyCameraFile(c, options);
   if (has_lidar) c.T_cam_lidar = T_cami_velo(calib, cam);
   if (!options.ego_poses.empty()) c.ground_truth = selectPoses(options.ego_poses, images.size(), c.frames);
   c.load_color = options.load_color;
   c.load_lidar = options.load_lidar;
   c.description = "KITTI raw " + options.sequence + " (" + std::to_string(c.frames.size()) + " frames, " +
-                  folder_of(cam) + rangeText(options, c.frames, images.size()) + (has_lidar ? ", velodyne" : "") +
-                  (options.ego_poses.empty() ? "" : ", poses " + options.ego_poses) + ")";
+                  folder_of(cam) + camera_text + rangeText(options, c.frames, images.size()) +
+                  (has_lidar ? ", velodyne" : "") + (options.ego_poses.empty() ? "" : ", poses " + options.ego_poses) +
+                  ")";
   return std::make_unique<LoadedDataset>(std::move(c));
 }
 

@@ -3,7 +3,7 @@
 // Ground truth only from options.ego_poses (KITTI format, T_world_cam of the chosen camera, one per frame).
 // A sequence without an image folder (detections and poses only, like the shared tracking excerpt) is
 // accepted when ego_poses is given: one frame per pose row, no images (Frame::gray empty), camera 2 with
-// KITTI's usual 1242x375 unless camera_override says otherwise.
+// KITTI's usual 1242x375 unless a camera file (options.calibration) says otherwise.
 #include <filesystem>
 
 #include "beslam/common/error.hpp"
@@ -62,20 +62,20 @@ std::unique_ptr<Dataset> openKittiTracking(const DatasetOptions& options) {
     c.frames.push_back(std::move(f));
   }
   const auto& P = *calib.P[static_cast<std::size_t>(cam)];
-  c.camera = options.camera_override ? *options.camera_override
-                                     : cameraFromProjection(P, 0, 0, calib_path + ": P" + std::to_string(cam));
+  c.camera = cameraFromProjection(P, 0, 0, calib_path + ": P" + std::to_string(cam));
   if (image_less) {
-    if (c.camera.width <= 0 || c.camera.height <= 0) c.camera.width = 1242, c.camera.height = 375;
+    c.camera.width = 1242, c.camera.height = 375;
   } else {
     fillImageSize(c.camera, c.frames.front().image_path);
   }
+  const std::string camera_text = applyCameraFile(c, options);
   if (has_lidar) c.T_cam_lidar = T_cami_velo(calib, cam);
   if (has_labels) c.label_path = label_path;
   if (!options.ego_poses.empty()) c.ground_truth = selectPoses(options.ego_poses, images.size(), c.frames);
   c.load_color = options.load_color;
   c.load_lidar = options.load_lidar;
   c.description = "KITTI tracking " + options.sequence + " (" + std::to_string(c.frames.size()) + " frames, " +
-                  (image_less ? std::string("no images") : folder_of(cam)) +
+                  (image_less ? std::string("no images") : folder_of(cam)) + camera_text +
                   rangeText(options, c.frames, images.size()) + (has_lidar ? ", velodyne" : "") +
                   (has_labels ? ", labels" : "") + (options.ego_poses.empty() ? "" : ", poses " + options.ego_poses) +
                   ")";

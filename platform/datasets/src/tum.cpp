@@ -98,14 +98,14 @@ std::unique_ptr<Dataset> openTum(const DatasetOptions& options) {
   if (normal.filename().empty()) normal = normal.parent_path();
   const std::string folder = normal.filename().string();
   std::string intrinsics_text;
-  if (options.camera_override) {
-    c.camera = *options.camera_override;
-    intrinsics_text = "intrinsics from options";
+  if (!options.calibration.empty()) {
+    intrinsics_text = applyCameraFile(c, options).substr(2);  // without the leading ", "
   } else {
     const auto defaults = tumDefaultIntrinsics(folder);
     if (!defaults)
       throwAt(options.root,
-              "cannot tell fr1/fr2/fr3 from the folder name for default intrinsics; give camera_override");
+              "cannot tell fr1/fr2/fr3 from the folder name for default intrinsics; give your camera as "
+              "dataset.calibration: a camera file (docs/datasets.md, \"Your own camera\")");
     c.camera = defaults->camera;
     intrinsics_text = defaults->name + " default intrinsics";
     const bool distorted =

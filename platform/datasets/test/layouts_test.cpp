@@ -83,6 +83,27 @@ TEST(KittiOdometry, OpensAndLoads) {
   EXPECT_TRUE(openDataset(fx.options())->load(0).lidar_xyzi.empty());
 }
 
+// A camera file replaces P0's intrinsics (and KITTI's 1.65 m); `name` renames the sequence (a synth rendering).
+TEST(KittiOdometry, CameraFileAndName) {
+  OdometryFixture fx;
+  DatasetOptions o = fx.options();
+  o.name = "synthetic urban_loop";
+  writeText(fx.dir / "cam.yaml", "model: pinhole\nwidth: " + std::to_string(kW) + "\nheight: " + std::to_string(kH) +
+                                     "\nfx: 650\nfy: 650\ncx: 20\ncy: 10\nheight_over_road: 2.5\n");
+  o.calibration = fx.dir / "cam.yaml";
+  const auto ds = openDataset(o);
+  EXPECT_EQ(ds->describe(),
+            "synthetic urban_loop (5 frames, image_0, camera file cam.yaml (pinhole), velodyne, ground truth)");
+  EXPECT_DOUBLE_EQ(ds->camera().fx, 650);
+  EXPECT_DOUBLE_EQ(ds->camera().cx, 20);
+  EXPECT_DOUBLE_EQ(*ds->cameraHeight(), 2.5);
+  EXPECT_DOUBLE_EQ(*openDataset(fx.options())->cameraHeight(), 1.65);
+  EXPECT_EQ(cv::norm(ds->load(3).gray, test::pattern(kW, kH, 1, 3), cv::NORM_INF), 0);  // no distortion: as read
+  writeText(fx.dir / "cam.yaml",
+            "model: pinhole\nwidth: 99\nheight: " + std::to_string(kH) + "\nfx: 650\nfy: 650\ncx: 20\ncy: 10\n");
+  EXPECT_BESLAM_ERROR(openDataset(o), fx.dir / "cam.yaml", "width x height is 99x", "the camera file must describe");
+}
+
 TEST(KittiOdometry, FrameRangeAndColourCamera) {
   OdometryFixture fx(7);
   DatasetOptions o = fx.options();

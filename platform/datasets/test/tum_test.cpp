@@ -99,22 +99,19 @@ TEST(Tum, OpensWithDefaultsAndGroundTruth) {
   EXPECT_EQ(last->groundTruth()->size(), 0u);  // 33 ms past the last ground-truth sample
 }
 
-TEST(Tum, CameraOverrideAndErrors) {
+TEST(Tum, CameraFileAndErrors) {
   TempDir dir;
   const std::string root = makeTum(dir, "my_recording", 64, 48);
   DatasetOptions o;
   o.type = "tum";
   o.root = root;
-  EXPECT_BESLAM_ERROR(openDataset(o), root, "camera_override");
-  Camera camera;
-  camera.fx = camera.fy = 50;
-  camera.cx = 32;
-  camera.cy = 24;
-  o.camera_override = camera;
+  EXPECT_BESLAM_ERROR(openDataset(o), root, "dataset.calibration");
+  writeText(dir / "cam.yaml", "model: pinhole\nwidth: 64\nheight: 48\nfx: 50\nfy: 50\ncx: 32\ncy: 24\n");
+  o.calibration = dir / "cam.yaml";
   auto ds = openDataset(o);
-  EXPECT_EQ(ds->camera().width, 64);  // size taken from the images
+  EXPECT_EQ(ds->camera().width, 64);
   EXPECT_DOUBLE_EQ(ds->camera().fx, 50);
-  EXPECT_NE(ds->describe().find("intrinsics from options"), std::string::npos);
+  EXPECT_NE(ds->describe().find("camera file cam.yaml (pinhole)"), std::string::npos) << ds->describe();
   EXPECT_EQ(ds->load(0).gray.size(), cv::Size(64, 48));
 
   std::filesystem::remove_all(root + "/rgb");

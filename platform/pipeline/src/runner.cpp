@@ -323,6 +323,7 @@ class Run {
       dopt.root = sim::ensureSequence(spec_.dataset.root, source.config, source.name,
                                       options_.progress && isatty(STDERR_FILENO) ? &std::cerr : nullptr);
       dopt.sequence = source.config.sequence;
+      dopt.name = "synthetic " + source.name;  // not "KITTI odometry 00": rendered, only laid out like KITTI
     }
     dopt.camera = spec_.dataset.camera;
     dopt.load_color = spec_.dataset.color;
@@ -331,6 +332,7 @@ class Run {
     dopt.last = spec_.dataset.last;
     dopt.step = spec_.dataset.step;
     dopt.ego_poses = spec_.dataset.ego_poses;
+    dopt.calibration = spec_.dataset.calibration;
     dataset_ = datasets::openDataset(dopt);
     if (!spec_.dataset.black_frames.empty()) {
       try {

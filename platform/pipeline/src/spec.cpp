@@ -288,6 +288,7 @@ static PipelineSpec loadPipelineUnguarded(const std::string& path, const std::ve
   spec.dataset.lidar = value(dataset, "lidar").number != 0;
   spec.dataset.color = value(dataset, "color").number != 0;
   spec.dataset.ego_poses = value(dataset, "ego_poses").text;
+  spec.dataset.calibration = value(dataset, "calibration").text;
   spec.dataset.camera_height = value(dataset, "camera_height").number;
   spec.dataset.synth_set = value(dataset, "synth_set").text;
   if (const std::string black = value(dataset, "black_frames").text; !black.empty()) {

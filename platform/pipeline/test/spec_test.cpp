@@ -75,6 +75,24 @@ TEST_F(PipelineSpecTest, SetOverridesApply) {
   EXPECT_EQ(spec.slots.at("detector").plugin_id, "x");
 }
 
+// Your own camera (docs/datasets.md): the camera file and the new dataset types, from the file and from --set.
+TEST_F(PipelineSpecTest, CameraFileAndOwnDataTypes) {
+  EXPECT_TRUE(loadPipeline(write(kGood)).dataset.calibration.empty());
+  const auto spec =
+      loadPipeline(write(kGood), {"dataset.type=images", "dataset.root=frames", "dataset.calibration=cam.yaml"});
+  EXPECT_EQ(spec.dataset.type, "images");
+  EXPECT_EQ(spec.dataset.calibration, (dir_ / "cam.yaml").string());  // relative to the pipeline file
+  EXPECT_EQ(spec.document["dataset"]["calibration"].as<std::string>(), (dir_ / "cam.yaml").string());
+  for (const char* type : {"video", "euroc"})
+    EXPECT_EQ(loadPipeline(write(kGood), {std::string("dataset.type=") + type}).dataset.type, type);
+  const auto in_file = loadPipeline(
+      write("dataset: {type: video, root: a.mp4, calibration: /cams/mine.yaml}\nbackend: {plugin: backend_orb}\n"));
+  EXPECT_EQ(in_file.dataset.root, (dir_ / "a.mp4").string());
+  EXPECT_EQ(in_file.dataset.calibration, "/cams/mine.yaml");
+  expectError(kGood, {"dataset.type: 'webcam' is not one of", "images|video|euroc"}, {"dataset.type=webcam"});
+  expectError(kGood, {"dataset.camera_override: unknown key", "calibration"}, {"dataset.camera_override.fx=700"});
+}
+
 TEST_F(PipelineSpecTest, SyntaxErrorNamesFileAndLine) {
   expectError("dataset:\n  type: kitti_odometry\n  root: [unclosed\nbackend: {plugin: a}\n",
               {"pipeline.yaml:", "YAML syntax error"});

@@ -39,23 +39,28 @@ struct Frame {
 };
 
 struct DatasetOptions {
-  std::string type;             // "kitti_odometry" | "kitti_tracking" | "kitti_raw" | "kitti_object" | "tum"
+  std::string type;             // "kitti_odometry" | "kitti_tracking" | "kitti_raw" | "kitti_object" | "tum" |
+                                // "images" | "video" | "euroc"
   std::string root;             // .../kitti/odometry, .../kitti/tracking/training, .../kitti/raw (holds the date
-                                // folders), .../kitti/object/training, or a TUM sequence folder
+                                // folders), .../kitti/object/training, a TUM sequence folder, a folder of
+                                // images, a video file, or an EuRoC/ASL folder (holding mav0/)
   std::string sequence;         // "06", "0007", "2011_09_26_drive_0001_sync"; kitti_object: "000008" for one
-                                // frame or "" for every index file; unused for tum
+                                // frame or "" for every index file; unused for tum, images, video, euroc
   std::string camera = "auto";  // kitti: "image_0" (grey left) | "image_2" (colour left) | "image_1" |
                                 // "image_3" | "auto" (image_0 if present, else image_2)
   bool load_color = false, load_lidar = false;
   std::int64_t first = 0, last = -1, step = 1;  // frame numbers, last inclusive, -1 = to the end
 
   // Additions.
-  std::optional<Camera> camera_override;  // tum: intrinsics to use instead of the fr1/fr2/fr3 defaults
-                                          // (used as is: no undistortion); kitti: replaces P_i's intrinsics
+  std::string calibration;  // a camera file (camera_file.hpp), any type: replaces the layout's camera (KITTI's
+                            // P_i intrinsics, TUM's fr1/fr2/fr3 defaults, EuRoC's sensor.yaml); required for
+                            // images and video. Distorted images are undistorted onto the same K.
   std::string ego_poses;    // kitti_tracking / kitti_raw / kitti_odometry: a KITTI-format pose file, one row per
                             // frame of the sequence, taken as T_world_cam of the chosen camera (ground truth or
                             // a reference estimate); for kitti_odometry it replaces poses/NN.txt. Not accepted
                             // for kitti_object and tum.
+  std::string name;         // kitti_odometry: what describe() calls the sequence instead of "KITTI odometry NN"
+                            // (a `beslam synth` rendering in KITTI's layout: "synthetic urban_loop")
   bool undistort = true;    // tum: undistort fr1/fr2 images with the published distortion of their defaults
   double gt_max_dt = 0.02;  // tum: ground truth is interpolated between samples bracketing a frame; with no
                             // bracket, the nearest sample within this many seconds is used, else none
@@ -76,7 +81,8 @@ class Dataset {
   virtual std::optional<trajectory::Trajectory> groundTruth() const = 0;
   virtual std::string labelPath() const { return {}; }  // tracking labels file if present (oracle detectors)
   // The rig: the chosen camera's height over the road in metres, where the layout knows it (KITTI's
-  // cameras: 1.65 m; a `beslam synth` sequence: camera.mount_height from its manifest.yaml; TUM: none).
+  // cameras: 1.65 m; a `beslam synth` sequence: camera.mount_height from its manifest.yaml; TUM: none; a camera
+  // file's height_over_road replaces it).
   virtual std::optional<double> cameraHeight() const { return std::nullopt; }
   // The sequence frame number of frame i of the selected range (what load(i).index will be), without
   // reading the frame.

@@ -62,6 +62,7 @@ struct SlotSpec {
 // rendered there once (keyed by a hash of the full config) and then read as KITTI odometry.
 struct DatasetSpec {
   std::string type, root, sequence, camera, ego_poses, synth_set;
+  std::string calibration;  // a camera file (datasets/camera_file.hpp), "" for the layout's own camera
   int64_t first = 0, last = -1, step = 1;
   bool lidar = false, color = false;
   double camera_height = 0;              // metres over the road; 0: the dataset's own value (Dataset::cameraHeight)
