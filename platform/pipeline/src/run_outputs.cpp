@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <iomanip>
@@ -144,6 +145,30 @@ std::string share(double value) {
   return s.str();
 }
 
+// Why a run tracked too little, from what the host saw: the frames in the backend's final trajectory (sorted),
+// the frames processed in order, and the backend's summed "features" counter (its keypoints a frame).
+std::string trackingFailureReason(const std::vector<int64_t>& in_final, const std::vector<int64_t>& frames,
+                                  const std::map<std::string, double>& counters) {
+  if (in_final.empty()) {
+    const auto features = counters.find("features");
+    if (features != counters.end() && !frames.empty()) {
+      const double per_frame = features->second / static_cast<double>(frames.size());
+      if (per_frame < 100)
+        return "never initialised: too few features (" + share(std::round(per_frame)) +
+               " a frame; a blank, dark or mostly masked image)";
+      return "never initialised with " + share(std::round(per_frame)) +
+             " features a frame: too little parallax or too few matches between frames (a camera that barely "
+             "moves, or one too fast for its frame rate)";
+    }
+    return "never initialised";
+  }
+  // The first frame after the first tracked one that the final trajectory lacks, with nothing tracked after.
+  const int64_t last_tracked = in_final.back();
+  for (int64_t index : frames)
+    if (index > last_tracked) return "lost at frame " + std::to_string(index) + ", not found again";
+  return "initialised only at frame " + std::to_string(in_final.front());
+}
+
 }  // namespace
 
 OutputLock::OutputLock(const std::string& out_dir) {
@@ -246,22 +271,22 @@ void writeRunOutputs(const PipelineSpec& spec, const std::string& out_dir, const
   const auto online_poses = backend.trajectory(BESLAM_TRAJECTORY_ONLINE);
   const auto keyframe_poses = backend.trajectory(BESLAM_TRAJECTORY_KEYFRAMES);
   summary.keyframes = static_cast<int64_t>(keyframe_poses.size());
-  {  // a frame counts as tracked when the backend's final trajectory has it (an initialisation
-     // reference frame gets its pose once the map exists)
-    std::vector<int64_t> in_final;
-    for (const auto& p : final_poses) in_final.push_back(p.frame_index);
-    std::sort(in_final.begin(), in_final.end());
-    for (int64_t index : record.frame_indices)
-      if (std::binary_search(in_final.begin(), in_final.end(), index))
-        ++summary.tracked;
-      else
-        summary.untracked.push_back(index);
-  }
+  // A frame counts as tracked when the backend's final trajectory has it (an initialisation reference frame
+  // gets its pose once the map exists).
+  std::vector<int64_t> in_final;
+  for (const auto& p : final_poses) in_final.push_back(p.frame_index);
+  std::sort(in_final.begin(), in_final.end());
+  for (int64_t index : record.frame_indices)
+    if (std::binary_search(in_final.begin(), in_final.end(), index))
+      ++summary.tracked;
+    else
+      summary.untracked.push_back(index);
   summary.status = summary.interrupted ? "interrupted" : "completed";
   if (!summary.interrupted && summary.frames > 0 &&
       static_cast<double>(summary.tracked) < spec.output.min_tracked_share * static_cast<double>(summary.frames))
     summary.status = "failed: tracked " + std::to_string(summary.tracked) + " of " + std::to_string(summary.frames) +
-                     " frames, fewer than output.min_tracked_share " + share(spec.output.min_tracked_share) +
+                     " frames (" + trackingFailureReason(in_final, record.frame_indices, record.counter_sums) +
+                     "), fewer than output.min_tracked_share " + share(spec.output.min_tracked_share) +
                      " (lower it for a pipeline that tracks part of a sequence)";
   writeTrajectory(out_dir, "trajectory", final_poses, true);
   writeTrajectory(out_dir, "trajectory_online", online_poses, false);
