@@ -8,8 +8,8 @@
 
 #include <string>
 
-#include "beslam/formats/error.hpp"
 #include "beslam/eval/eval.hpp"
+#include "beslam/formats/error.hpp"
 #include "beslam/trajectory/trajectory.hpp"
 
 namespace py = pybind11;
