@@ -978,38 +978,36 @@ void World::objectTris(const Object& o, double t, std::vector<Tri>& out) const {
   addBox(out, {-0.1f, -0.09f, headb}, {0.11f, 0.09f, H}, M_PED_SKIN, o.style);
 }
 
-void World::placeObjects(Rng& rng) {
-  const auto& oc = config.objects;
-  const auto& wc = config.world;
-  const double hw = roadHalfWidth();
-  const int steps = config.frames * 4;
-  const double dt = 1.0 / (config.rate_hz * 4);
-  const double T = config.frames / config.rate_hz;
-  const double egoSpeed = config.ego.speed_kmh / 3.6;
-
+// The state placeObjects' stages share: the footprints over time of the ego and of every object accepted
+// so far (an object is placed only where its footprints overlap none of them).
+struct World::Placement {
   struct Track {
     std::vector<Footprint> fp;
   };
+  Placement(World& world, Rng& r) : w(world), rng(r) {}
+
+  World& w;
+  Rng& rng;
+  int steps = 0;
+  double dt = 0;
   std::vector<Track> tracks;  // accepted objects' footprints over time (static: one entry)
   Track egoTrack;
-  for (int i = 0; i <= steps; ++i) {
-    const Pose2 e = egoPose(i * dt);
-    const double c = std::cos(e.yaw), s = std::sin(e.yaw);
-    // The ego's body plus a safety zone ahead: nothing comes closer than about 8 m in front.
-    egoTrack.fp.push_back({e.x + c * 2.25, e.y + s * 2.25, c, s, 5.75, 1.15});
-  }
-  auto footprints = [&](const Object& o) {
+  int next_id = 1;
+
+  // The object's footprints at every step (static: one entry).
+  Track footprints(const Object& o) const {
     Track tr;
     const bool ped = o.info.behaviour == Behaviour::Pedestrian;
     const double hl = ped ? 0.35 : o.info.length / 2 + 0.3, hwid = ped ? 0.35 : o.info.width / 2 + 0.2;
     const int n = o.kind == Object::Kind::Static ? 0 : steps;
     for (int i = 0; i <= n; ++i) {
-      const Pose2 p = objectPose(o, i * dt);
+      const Pose2 p = w.objectPose(o, i * dt);
       tr.fp.push_back({p.x, p.y, std::cos(p.yaw), std::sin(p.yaw), hl, hwid});
     }
     return tr;
-  };
-  auto collides = [&](const Track& a, bool checkEgo) {
+  }
+  // Whether track a overlaps an accepted object's (or, with checkEgo, the ego's) at any step.
+  bool collides(const Track& a, bool checkEgo) const {
     auto at = [](const Track& t, int i) -> const Footprint& { return t.fp.size() == 1 ? t.fp[0] : t.fp[i]; };
     for (int i = 0; i <= steps; ++i) {
       if (checkEgo && overlap(at(a, i), egoTrack.fp[i])) return true;
@@ -1025,53 +1023,16 @@ void World::placeObjects(Rng& rng) {
       for (const auto& b : tracks)
         if (b.fp.size() == 1 && overlap(a.fp[0], b.fp[0])) return true;
     return false;
-  };
-
-  int next_id = 1;
-  auto newCar = [&](Behaviour b) {
-    Object o;
-    o.info.behaviour = b;
-    const double r = rng.uniform();
-    double l, w, h;
-    if (r < 0.30)
-      o.shape = CarShape::Sedan, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.74, 1.85), h = rng.uniform(1.40, 1.50),
-      o.info.shape = "sedan";
-    else if (r < 0.52)
-      o.shape = CarShape::Hatchback, l = rng.uniform(3.8, 4.25), w = rng.uniform(1.68, 1.78),
-      h = rng.uniform(1.45, 1.55), o.info.shape = "hatchback";
-    else if (r < 0.70)
-      o.shape = CarShape::Wagon, l = rng.uniform(4.55, 4.9), w = rng.uniform(1.76, 1.85), h = rng.uniform(1.45, 1.55),
-      o.info.shape = "wagon";
-    else if (r < 0.87)
-      o.shape = CarShape::Suv, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.84, 1.95), h = rng.uniform(1.65, 1.80),
-      o.info.shape = "suv";
-    else
-      o.shape = CarShape::Van, l = rng.uniform(4.8, 5.4), w = rng.uniform(1.9, 2.0), h = rng.uniform(1.9, 2.2),
-      o.info.shape = "van";
-    o.info.type = o.shape == CarShape::Van ? "Van" : "Car";
-    CarStyle cs;
-    static const float colours[][3] = {{0.85f, 0.85f, 0.86f}, {0.08f, 0.08f, 0.09f}, {0.55f, 0.56f, 0.58f},
-                                       {0.62f, 0.08f, 0.07f}, {0.10f, 0.18f, 0.45f}, {0.75f, 0.75f, 0.72f},
-                                       {0.15f, 0.32f, 0.18f}, {0.80f, 0.55f, 0.10f}, {0.35f, 0.22f, 0.15f},
-                                       {0.30f, 0.45f, 0.62f}, {0.92f, 0.90f, 0.82f}, {0.45f, 0.05f, 0.20f}};
-    const auto& c = colours[rng.index(12)];
-    cs.colour = Vec3f(c[0], c[1], c[2]) * static_cast<float>(rng.uniform(0.9, 1.08));
-    cs.seed = static_cast<std::uint32_t>(rng.next());
-    cs.metallic = static_cast<float>(rng.uniform(0.0, 1.0));
-    cs.plate_seed = static_cast<int>(rng.next() & 0x7fffffff);
-    o.style = static_cast<int>(car_styles.size());
-    o.mesh = buildCarMesh(o.shape, l, w, h, o.style, cs);
-    car_styles.push_back(cs);
-    o.info.length = l, o.info.width = w + 0.008, o.info.height = h;
-    return o;
-  };
-  auto accept = [&](Object& o, const Track& tr) {
+  }
+  // Gives o the next track id and moves it into the world.
+  void accept(Object& o, const Track& tr) {
     o.info.track_id = next_id++;
-    objects.push_back(std::move(o));
+    w.objects.push_back(std::move(o));
     tracks.push_back(tr);
-  };
+  }
   // Accepts o and counts it in `placed` where its track is free; else undoes what making it added.
-  auto place = [&](Object& o, int& placed, const auto& undo) {
+  template <class Undo>
+  bool place(Object& o, int& placed, const Undo& undo) {
     const Track tr = footprints(o);
     if (collides(tr, true)) {
       undo();
@@ -1080,29 +1041,78 @@ void World::placeObjects(Rng& rng) {
     accept(o, tr);
     ++placed;
     return true;
-  };
+  }
+};
+
+// A car of a random shape, size and colour with behaviour b (its style appended to car_styles).
+Object World::newCar(Placement& pl, Behaviour b) {
+  Rng& rng = pl.rng;
+  Object o;
+  o.info.behaviour = b;
+  const double r = rng.uniform();
+  double l, w, h;
+  if (r < 0.30)
+    o.shape = CarShape::Sedan, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.74, 1.85), h = rng.uniform(1.40, 1.50),
+    o.info.shape = "sedan";
+  else if (r < 0.52)
+    o.shape = CarShape::Hatchback, l = rng.uniform(3.8, 4.25), w = rng.uniform(1.68, 1.78), h = rng.uniform(1.45, 1.55),
+    o.info.shape = "hatchback";
+  else if (r < 0.70)
+    o.shape = CarShape::Wagon, l = rng.uniform(4.55, 4.9), w = rng.uniform(1.76, 1.85), h = rng.uniform(1.45, 1.55),
+    o.info.shape = "wagon";
+  else if (r < 0.87)
+    o.shape = CarShape::Suv, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.84, 1.95), h = rng.uniform(1.65, 1.80),
+    o.info.shape = "suv";
+  else
+    o.shape = CarShape::Van, l = rng.uniform(4.8, 5.4), w = rng.uniform(1.9, 2.0), h = rng.uniform(1.9, 2.2),
+    o.info.shape = "van";
+  o.info.type = o.shape == CarShape::Van ? "Van" : "Car";
+  CarStyle cs;
+  static const float colours[][3] = {{0.85f, 0.85f, 0.86f}, {0.08f, 0.08f, 0.09f}, {0.55f, 0.56f, 0.58f},
+                                     {0.62f, 0.08f, 0.07f}, {0.10f, 0.18f, 0.45f}, {0.75f, 0.75f, 0.72f},
+                                     {0.15f, 0.32f, 0.18f}, {0.80f, 0.55f, 0.10f}, {0.35f, 0.22f, 0.15f},
+                                     {0.30f, 0.45f, 0.62f}, {0.92f, 0.90f, 0.82f}, {0.45f, 0.05f, 0.20f}};
+  const auto& c = colours[rng.index(12)];
+  cs.colour = Vec3f(c[0], c[1], c[2]) * static_cast<float>(rng.uniform(0.9, 1.08));
+  cs.seed = static_cast<std::uint32_t>(rng.next());
+  cs.metallic = static_cast<float>(rng.uniform(0.0, 1.0));
+  cs.plate_seed = static_cast<int>(rng.next() & 0x7fffffff);
+  o.style = static_cast<int>(car_styles.size());
+  o.mesh = buildCarMesh(o.shape, l, w, h, o.style, cs);
+  car_styles.push_back(cs);
+  o.info.length = l, o.info.width = w + 0.008, o.info.height = h;
+  return o;
+}
+
+// Picks a random loop route; kind 0: the ego's loop, same direction; 1: ego's loop, opposite; 2: other.
+int World::randomRoute(Placement& pl, int kind, int lane, bool& clockwise) {
+  Rng& rng = pl.rng;
+  const auto& wc = config.world;
   const int ex = wc.blocks_x / 2, ey = wc.blocks_y / 2;
-  const double parkLat = hw - 1.1;  // parking lane centre from the street centreline
   const bool highway = wc.type == "highway";
+  int i0 = ex, j0 = ey, i1 = ex + 1, j1 = ey + 1;
+  clockwise = config.ego.clockwise;
+  if (kind == 1) clockwise = !clockwise;
+  if (kind == 2 && !highway) {
+    do {
+      i0 = rng.index(wc.blocks_x), i1 = i0 + 1 + rng.index(wc.blocks_x - i0);
+      j0 = rng.index(wc.blocks_y), j1 = j0 + 1 + rng.index(wc.blocks_y - j0);
+    } while (wc.blocks_x * wc.blocks_y > 1 && i0 == ex && j0 == ey && i1 == ex + 1 && j1 == ey + 1);
+    clockwise = rng.chance(0.5);
+  }
+  if (highway) i0 = 0, j0 = 0, i1 = wc.blocks_x, j1 = wc.blocks_y;
+  const double lat = (lane + 0.5) * wc.lane_width;
+  return addRoute(i0, j0, i1, j1, clockwise, lat);
+}
 
-  // Picks a random loop route; kind 0: the ego's loop, same direction; 1: ego's loop, opposite; 2: other.
-  auto randomRoute = [&](int kind, int lane, bool& clockwise) {
-    int i0 = ex, j0 = ey, i1 = ex + 1, j1 = ey + 1;
-    clockwise = config.ego.clockwise;
-    if (kind == 1) clockwise = !clockwise;
-    if (kind == 2 && !highway) {
-      do {
-        i0 = rng.index(wc.blocks_x), i1 = i0 + 1 + rng.index(wc.blocks_x - i0);
-        j0 = rng.index(wc.blocks_y), j1 = j0 + 1 + rng.index(wc.blocks_y - j0);
-      } while (wc.blocks_x * wc.blocks_y > 1 && i0 == ex && j0 == ey && i1 == ex + 1 && j1 == ey + 1);
-      clockwise = rng.chance(0.5);
-    }
-    if (highway) i0 = 0, j0 = 0, i1 = wc.blocks_x, j1 = wc.blocks_y;
-    const double lat = (lane + 0.5) * wc.lane_width;
-    return addRoute(i0, j0, i1, j1, clockwise, lat);
-  };
-
-  // Stop-and-go cars first: they reserve their parking spots.
+// Stop-and-go cars (placed first: they reserve their parking spots); returns how many were placed.
+int World::placeStopAndGo(Placement& pl) {
+  Rng& rng = pl.rng;
+  const auto& oc = config.objects;
+  const auto& wc = config.world;
+  const double hw = roadHalfWidth();
+  const double T = config.frames / config.rate_hz;
+  const double parkLat = hw - 1.1;  // parking lane centre from the street centreline
   int placed_sg = 0;
   for (int n = 0; n < oc.stop_and_go; ++n) {
     for (int attempt = 0; attempt < 60; ++attempt) {
@@ -1111,10 +1121,10 @@ void World::placeObjects(Rng& rng) {
         paths.resize(np, paths.front());
         car_styles.resize(ns);
       };
-      Object o = newCar(Behaviour::StopAndGo);
+      Object o = newCar(pl, Behaviour::StopAndGo);
       bool cw;
       const int kind = attempt < 30 ? rng.index(2) : 2;
-      const int route = randomRoute(kind, wc.lanes_per_direction - 1, cw);
+      const int route = randomRoute(pl, kind, wc.lanes_per_direction - 1, cw);
       const Path& rp = paths[route];
       const double v = rng.uniform(oc.driving_speed_kmh_min, oc.driving_speed_kmh_max) / 3.6;
       const bool pullOut = rng.chance(0.5);
@@ -1159,11 +1169,19 @@ void World::placeObjects(Rng& rng) {
         rollback();
         continue;
       }
-      if (place(o, placed_sg, rollback)) break;
+      if (pl.place(o, placed_sg, rollback)) break;
     }
   }
+  return placed_sg;
+}
 
-  // Parked cars in the parking lanes, mostly along the ego's loop.
+// Parked cars in the parking lanes, mostly along the ego's loop; returns how many were placed.
+int World::placeParked(Placement& pl) {
+  Rng& rng = pl.rng;
+  const auto& oc = config.objects;
+  const auto& wc = config.world;
+  const double hw = roadHalfWidth();
+  const double parkLat = hw - 1.1;  // parking lane centre from the street centreline
   int placed_parked = 0;
   if (wc.parking_lanes && !segments_.empty()) {
     std::vector<int> egoSegs;
@@ -1171,7 +1189,7 @@ void World::placeObjects(Rng& rng) {
       if (segments_[i].ego) egoSegs.push_back(static_cast<int>(i));
     for (int n = 0; n < oc.parked; ++n) {
       for (int attempt = 0; attempt < 80; ++attempt) {
-        Object o = newCar(Behaviour::Parked);
+        Object o = newCar(pl, Behaviour::Parked);
         const int si = (!egoSegs.empty() && rng.chance(0.75)) ? egoSegs[rng.index(static_cast<int>(egoSegs.size()))]
                                                               : rng.index(static_cast<int>(segments_.size()));
         const Segment& seg = segments_[si];
@@ -1188,17 +1206,24 @@ void World::placeObjects(Rng& rng) {
         o.x = xy.x(), o.y = xy.y();
         o.yaw = std::atan2(seg.dir.y(), seg.dir.x()) + (side ? M_PI : 0.0) + rng.uniform(-0.03, 0.03);
         // Keep the kerb side tight; jitter the lateral position a little.
-        if (place(o, placed_parked, [&] { car_styles.pop_back(); })) break;
+        if (pl.place(o, placed_parked, [&] { car_styles.pop_back(); })) break;
       }
     }
   }
+  return placed_parked;
+}
 
-  // Driving cars: loops in and against the ego direction (overtaking where there is a second lane), and
-  // round other blocks, which cross the ego's streets.
+// Driving cars: loops in and against the ego direction (overtaking where there is a second lane), and
+// round other blocks, which cross the ego's streets; returns how many were placed.
+int World::placeDriving(Placement& pl) {
+  Rng& rng = pl.rng;
+  const auto& oc = config.objects;
+  const auto& wc = config.world;
+  const double egoSpeed = config.ego.speed_kmh / 3.6;
   int placed_driving = 0;
   for (int n = 0; n < oc.driving; ++n) {
     for (int attempt = 0; attempt < 80; ++attempt) {
-      Object o = newCar(Behaviour::Driving);
+      Object o = newCar(pl, Behaviour::Driving);
       const int kind = n % 3 == 0 ? 0 : (n % 3 == 1 ? 1 : 2);
       int lane = rng.index(wc.lanes_per_direction);
       double v = rng.uniform(oc.driving_speed_kmh_min, oc.driving_speed_kmh_max) / 3.6;
@@ -1207,7 +1232,7 @@ void World::placeObjects(Rng& rng) {
       else if (kind == 0)
         v = egoSpeed;  // same lane as the ego: keeps its distance
       bool cw;
-      const int route = randomRoute(kind, lane, cw);
+      const int route = randomRoute(pl, kind, lane, cw);
       o.path = route;
       o.kind = Object::Kind::Loop;
       o.profile = Profile(paths[route], v, 2.5, 1.5, -1, -1);
@@ -1216,11 +1241,21 @@ void World::placeObjects(Rng& rng) {
         paths.pop_back();
         car_styles.pop_back();
       };
-      if (place(o, placed_driving, undo)) break;
+      if (pl.place(o, placed_driving, undo)) break;
     }
   }
+  return placed_driving;
+}
 
-  // Pedestrians: walking round blocks on the pavement, or crossing streets at the crosswalks.
+// Pedestrians: walking round blocks on the pavement, or crossing streets at the crosswalks; returns how
+// many were placed.
+int World::placePedestrians(Placement& pl) {
+  Rng& rng = pl.rng;
+  const auto& oc = config.objects;
+  const auto& wc = config.world;
+  const double hw = roadHalfWidth();
+  const int ex = wc.blocks_x / 2, ey = wc.blocks_y / 2;
+  const bool highway = wc.type == "highway";
   int placed_peds = 0;
   for (int n = 0; n < oc.pedestrians && !highway; ++n) {
     for (int attempt = 0; attempt < 80; ++attempt) {
@@ -1268,7 +1303,7 @@ void World::placeObjects(Rng& rng) {
         o.wait_a = rng.uniform(2, 10), o.wait_b = rng.uniform(2, 10);
         o.phase = rng.uniform(0, 60);
       }
-      if (!place(o, placed_peds, [&] {
+      if (!pl.place(o, placed_peds, [&] {
             if (added_path) paths.pop_back();
           }))
         continue;
@@ -1276,6 +1311,23 @@ void World::placeObjects(Rng& rng) {
       break;
     }
   }
+  return placed_peds;
+}
+
+void World::placeObjects(Rng& rng) {
+  Placement pl(*this, rng);
+  pl.steps = config.frames * 4;
+  pl.dt = 1.0 / (config.rate_hz * 4);
+  for (int i = 0; i <= pl.steps; ++i) {
+    const Pose2 e = egoPose(i * pl.dt);
+    const double c = std::cos(e.yaw), s = std::sin(e.yaw);
+    // The ego's body plus a safety zone ahead: nothing comes closer than about 8 m in front.
+    pl.egoTrack.fp.push_back({e.x + c * 2.25, e.y + s * 2.25, c, s, 5.75, 1.15});
+  }
+  const int placed_sg = placeStopAndGo(pl);
+  const int placed_parked = placeParked(pl);
+  const int placed_driving = placeDriving(pl);
+  const int placed_peds = placePedestrians(pl);
   count_stop_and_go = placed_sg, count_parked = placed_parked, count_driving = placed_driving,
   count_pedestrians = placed_peds;
 }

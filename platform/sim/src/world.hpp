@@ -250,6 +250,14 @@ class World {
   void buildUrban(Rng& rng);
   void buildHighway(Rng& rng);
   void placeObjects(Rng& rng);
+  // placeObjects' stages (world.cpp); Placement holds the footprints of what is placed so far.
+  struct Placement;
+  Object newCar(Placement& pl, Behaviour b);
+  int randomRoute(Placement& pl, int kind, int lane, bool& clockwise);
+  int placeStopAndGo(Placement& pl);
+  int placeParked(Placement& pl);
+  int placeDriving(Placement& pl);
+  int placePedestrians(Placement& pl);
   // Closed route round street lines i0..i1 x j0..j1, `lateral` metres right of the centreline.
   int addRoute(int i0, int j0, int i1, int j1, bool clockwise, double lateral);
   double roadHalfWidth() const;
