@@ -356,28 +356,35 @@ World::World(const SynthConfig& cfg) : config(cfg) {
 // ---------------------------------------------------------------------------------------------------
 // Urban street grid.
 
-void World::buildUrban(Rng& rng) {
+// A block of the urban grid (pavement from x0, y0 to x1, y1) and which of its sides carry buildings.
+struct World::Block {
+  double x0, y0, x1, y1;
+  bool sides[4];
+};
+
+// The road surface of one street segment from `start` along the unit axis `dir`, in 20 m tiles.
+void World::addStreetTiles(int street, Vec2d start, Vec2d dir, double len) {
+  const double hw = roadHalfWidth();
+  const Vec2d left(-dir.y(), dir.x());
+  const int n = std::max(1, static_cast<int>(std::ceil(len / 20.0)));
+  for (int k = 0; k < n; ++k) {
+    const double a = len * k / n, b = len * (k + 1) / n;
+    Chunk ch;
+    const Vec2d p0 = start + dir * a - left * hw, p1 = start + dir * b - left * hw;
+    const Vec2d p2 = start + dir * b + left * hw, p3 = start + dir * a + left * hw;
+    const Vec3f ua = v3(dir.x(), dir.y(), 0), va = v3(left.x(), left.y(), 0);
+    addQuad(ch.tris, v3(p0.x(), p0.y(), 0), v3(p1.x(), p1.y(), 0), v3(p2.x(), p2.y(), 0), v3(p3.x(), p3.y(), 0), M_ROAD,
+            street, ua, static_cast<float>(-dir.dot(start)), va, static_cast<float>(-left.dot(start)));
+    ch.finish();
+    chunks.push_back(std::move(ch));
+  }
+}
+
+// Streets (one segment between two intersections, horizontal then vertical) and intersections.
+void World::buildStreets(Rng& rng) {
   const auto& wc = config.world;
   const double hw = roadHalfWidth();
-  const double pw = wc.pavement_width;
   const int ex = wc.blocks_x / 2, ey = wc.blocks_y / 2;
-  const float kerb = static_cast<float>(kKerb);
-
-  auto addStreetTiles = [&](int street, Vec2d start, Vec2d dir, double len) {
-    const Vec2d left(-dir.y(), dir.x());
-    const int n = std::max(1, static_cast<int>(std::ceil(len / 20.0)));
-    for (int k = 0; k < n; ++k) {
-      const double a = len * k / n, b = len * (k + 1) / n;
-      Chunk ch;
-      const Vec2d p0 = start + dir * a - left * hw, p1 = start + dir * b - left * hw;
-      const Vec2d p2 = start + dir * b + left * hw, p3 = start + dir * a + left * hw;
-      const Vec3f ua = v3(dir.x(), dir.y(), 0), va = v3(left.x(), left.y(), 0);
-      addQuad(ch.tris, v3(p0.x(), p0.y(), 0), v3(p1.x(), p1.y(), 0), v3(p2.x(), p2.y(), 0), v3(p3.x(), p3.y(), 0),
-              M_ROAD, street, ua, static_cast<float>(-dir.dot(start)), va, static_cast<float>(-left.dot(start)));
-      ch.finish();
-      chunks.push_back(std::move(ch));
-    }
-  };
 
   // One street and its segment from `start` along the unit axis `dir` (length in metres, between two
   // intersections); `ego` where the ego's loop runs along it.
@@ -416,12 +423,12 @@ void World::buildUrban(Rng& rng) {
       ch.finish();
       chunks.push_back(std::move(ch));
     }
+}
 
-  // Blocks: the grid's blocks plus four border strips facing the outer streets.
-  struct Block {
-    double x0, y0, x1, y1;
-    bool sides[4];
-  };
+// Blocks: the grid's blocks plus four border strips facing the outer streets.
+std::vector<World::Block> World::urbanBlocks() const {
+  const auto& wc = config.world;
+  const double hw = roadHalfWidth();
   std::vector<Block> blocks;
   for (int i = 0; i < wc.blocks_x; ++i)
     for (int j = 0; j < wc.blocks_y; ++j)
@@ -432,210 +439,246 @@ void World::buildUrban(Rng& rng) {
   blocks.push_back({gx0 - B, gy1, gx1 + B, gy1 + B, {true, false, false, false}});  // north strip
   blocks.push_back({gx0 - B, gy0, gx0, gy1, {false, true, false, false}});          // west strip
   blocks.push_back({gx1, gy0, gx1 + B, gy1, {false, false, false, true}});          // east strip
+  return blocks;
+}
 
+// Pavement top of a block, tiled.
+void World::addPavement(const Block& bk) {
+  const float kerb = static_cast<float>(kKerb);
+  const int nx = std::max(1, static_cast<int>(std::ceil((bk.x1 - bk.x0) / 20.0)));
+  const int ny = std::max(1, static_cast<int>(std::ceil((bk.y1 - bk.y0) / 20.0)));
+  for (int a = 0; a < nx; ++a)
+    for (int b = 0; b < ny; ++b) {
+      Chunk ch;
+      const float xa = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * a / nx),
+                  xb = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * (a + 1) / nx);
+      const float ya = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * b / ny),
+                  yb = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * (b + 1) / ny);
+      addQuad(ch.tris, {xa, ya, kerb}, {xb, ya, kerb}, {xb, yb, kerb}, {xa, yb, kerb}, M_PAVEMENT, 0, {1, 0, 0}, 0,
+              {0, 1, 0}, 0);
+      ch.finish();
+      chunks.push_back(std::move(ch));
+    }
+}
+
+// Kerb face of a block side from corner S along d (length L).
+void World::addKerbFace(const Vec2d& S, const Vec2d& d, double L) {
+  const float kerb = static_cast<float>(kKerb);
+  Chunk ch;
+  const int m = std::max(1, static_cast<int>(std::ceil(L / 20.0)));
+  for (int q = 0; q < m; ++q) {
+    const Vec2d a = S + d * (L * q / m), b = S + d * (L * (q + 1) / m);
+    addQuad(ch.tris, v3(a.x(), a.y(), 0), v3(b.x(), b.y(), 0), v3(b.x(), b.y(), kerb), v3(a.x(), a.y(), kerb), M_KERB,
+            0, v3(d.x(), d.y(), 0), static_cast<float>(-d.dot(S)), {0, 0, 1}, 0);
+  }
+  ch.finish();
+  chunks.push_back(std::move(ch));
+}
+
+// Style of a random building's facades (colours, bricks, floors, windows, shop front); `height` gets its
+// height in metres.
+Facade World::randomFacade(Rng& rng, int building, double& height) const {
+  const auto& wc = config.world;
+  Facade f;
+  f.building = building;
+  f.base = rng.chance(0.45) ? 0 : 1 + rng.index(2);
+  static const float palette[][3] = {{0.55f, 0.30f, 0.22f}, {0.70f, 0.58f, 0.42f}, {0.80f, 0.76f, 0.66f},
+                                     {0.62f, 0.64f, 0.62f}, {0.74f, 0.52f, 0.38f}, {0.50f, 0.52f, 0.58f},
+                                     {0.85f, 0.80f, 0.60f}, {0.66f, 0.44f, 0.40f}, {0.78f, 0.72f, 0.78f}};
+  const auto& pc = palette[rng.index(9)];
+  const float jit = static_cast<float>(rng.uniform(0.85, 1.12));
+  f.colour = Vec3f(pc[0], pc[1], pc[2]) * jit;
+  f.frame_colour = rng.chance(0.6) ? Vec3f(0.92f, 0.92f, 0.90f)
+                                   : Vec3f(0.25f, 0.22f, 0.20f) * static_cast<float>(rng.uniform(0.8, 1.6));
+  f.trim_colour = f.colour * static_cast<float>(rng.uniform(0.55, 0.8));
+  f.brick_w = static_cast<float>(rng.uniform(0.22, 0.30));
+  f.brick_h = static_cast<float>(rng.uniform(0.065, 0.09));
+  f.floor_h = static_cast<float>(rng.uniform(2.7, 3.3));
+  f.ground_h = static_cast<float>(rng.uniform(3.2, 4.4));
+  f.win_w = static_cast<float>(rng.uniform(0.8, 1.7));
+  f.win_h = static_cast<float>(rng.uniform(1.1, 1.9));
+  f.win_h = std::min(f.win_h, f.floor_h - 0.9f);
+  f.win_sill = static_cast<float>(rng.uniform(0.6, f.floor_h - f.win_h - 0.25));
+  f.col_spacing = std::max(f.win_w + 0.5f, static_cast<float>(rng.uniform(1.7, 3.0)));
+  f.col_offset = static_cast<float>(rng.uniform(0.0, f.col_spacing));
+  f.shop = rng.chance(0.4);
+  f.panel_w = static_cast<float>(rng.uniform(2.0, 4.5));
+  f.door_w = static_cast<float>(rng.uniform(1.0, 2.2));
+  const int floors = std::max(
+      1, static_cast<int>(
+             std::round((rng.uniform(wc.building_min_height, wc.building_max_height) - f.ground_h) / f.floor_h)));
+  height = f.ground_h + floors * f.floor_h + rng.uniform(0.3, 1.2);
+  f.height = static_cast<float>(height);
+  return f;
+}
+
+// Buildings along side k of a block (start corner S, direction d, length L), each with its facades, roof
+// and perhaps a front hedge or wall; sides 1 and 3 keep clear of the corner buildings of sides 0 and 2.
+// `building` counts the buildings so far.
+void World::addBuildings(Rng& rng, int k, const Vec2d& S, const Vec2d& d, double L, int& building) {
+  const auto& wc = config.world;
+  const double pw = wc.pavement_width;
+  const float kerb = static_cast<float>(kKerb);
+  const Vec2d n(d.y(), -d.x()), in = -n;
+  const double corner_clear = (k % 2 == 1) ? pw + wc.building_setback_max + 17.0 : 0.0;
+  double along = corner_clear + (k % 2 == 0 ? 0.0 : rng.uniform(0, 3));
+  const double end = L - corner_clear;
+  while (along < end - 6.0) {
+    if (along > corner_clear + 1.0 && rng.chance(wc.building_gap_probability)) along += rng.uniform(2.0, 6.0);
+    double width = rng.uniform(8.0, 22.0);
+    if (end - (along + width) < 6.0) width = end - along;
+    if (width < 5.0) break;
+    const double setback = rng.uniform(0.0, wc.building_setback_max);
+    const double depth = rng.uniform(10.0, 16.0);
+    // Style.
+    double height;
+    const Facade f = randomFacade(rng, building, height);
+    // Footprint corners (front-left, front-right, back-right, back-left seen from the street).
+    const double fo = pw + setback, ba = fo + depth;
+    const Vec2d c0 = S + d * along + in * fo, c1 = S + d * (along + width) + in * fo;
+    const Vec2d c2 = S + d * (along + width) + in * ba, c3 = S + d * along + in * ba;
+    const Vec2d corners[4] = {c0, c1, c2, c3};
+    Chunk ch;
+    for (int w = 0; w < 4; ++w) {
+      const Vec2d a = corners[w], b = corners[(w + 1) % 4];
+      // Face outward normal is to the right of a->b? Corners go counter-clockwise seen from outside the
+      // front, so a->b runs left to right when seen from outside for every wall.
+      Facade fw = f;
+      fw.length = static_cast<float>((b - a).norm());
+      fw.seed = static_cast<std::uint32_t>(rng.next());
+      fw.door_face = w == 0;
+      fw.door_u = static_cast<float>(rng.uniform(1.0, std::max(1.1, fw.length - fw.door_w - 1.0)));
+      if (w != 0) fw.shop = false;
+      facades.push_back(fw);
+      const int fid = static_cast<int>(facades.size()) - 1;
+      const Vec2d ud = (b - a).normalized();
+      addQuad(ch.tris, v3(a.x(), a.y(), kerb), v3(b.x(), b.y(), kerb), v3(b.x(), b.y(), height),
+              v3(a.x(), a.y(), height), M_FACADE, fid, v3(ud.x(), ud.y(), 0), static_cast<float>(-ud.dot(a)), {0, 0, 1},
+              -kerb);
+    }
+    const float hh = static_cast<float>(height);
+    addQuad(ch.tris, v3(c0.x(), c0.y(), hh), v3(c1.x(), c1.y(), hh), v3(c2.x(), c2.y(), hh), v3(c3.x(), c3.y(), hh),
+            M_ROOF, building, {1, 0, 0}, 0, {0, 1, 0}, 0);
+    // A hedge or low wall in the front garden when the building stands back from the pavement.
+    if (setback > 1.0 && rng.chance(0.6)) {
+      const double hd = std::min(0.9, setback - 0.2), hh = rng.uniform(0.6, 1.3);
+      const Vec2d h0 = S + d * (along + 0.3) + in * (pw + 0.1),
+                  h1 = S + d * (along + width - 0.3) + in * (pw + 0.1 + hd);
+      const bool wall = rng.chance(0.3);
+      Chunk hc;
+      addBox(hc.tris, v3(std::min(h0.x(), h1.x()), std::min(h0.y(), h1.y()), kKerb),
+             v3(std::max(h0.x(), h1.x()), std::max(h0.y(), h1.y()), kKerb + hh), wall ? M_FENCE : M_LEAVES,
+             wall ? 0 : static_cast<int>(rng.next() & 0xffff));
+      hc.finish();
+      chunks.push_back(std::move(hc));
+    }
+    ch.finish();
+    chunks.push_back(std::move(ch));
+    ++building;
+    along += width;
+  }
+}
+
+// Street furniture along one side of a grid block (start corner S, direction d, length L): lamps, signs
+// and trees near the kerb, kept apart from each other.
+void World::addStreetFurniture(Rng& rng, const Vec2d& S, const Vec2d& d, double L) {
+  const auto& wc = config.world;
+  const float kerb = static_cast<float>(kKerb);
+  const Vec2d n(d.y(), -d.x()), in = -n;
+  std::vector<double> used;
+  auto clear = [&](double u, double gap) {
+    for (double x : used)
+      if (std::abs(x - u) < gap) return false;
+    return true;
+  };
+  // Lamps.
+  for (double u = rng.uniform(8, 20); u < L - 8; u += rng.uniform(24, 36)) {
+    used.push_back(u);
+    const Vec2d p = S + d * u + in * 0.45;
+    Chunk ch;
+    const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
+    addBox(ch.tris, {px - 0.08f, py - 0.08f, kerb}, {px + 0.08f, py + 0.08f, 6.5f}, M_POLE, 0);
+    const Vec2d q = p + n * 1.3;
+    const float qx = static_cast<float>(q.x()), qy = static_cast<float>(q.y());
+    addBox(ch.tris, {std::min(px, qx) - 0.05f, std::min(py, qy) - 0.05f, 6.3f},
+           {std::max(px, qx) + 0.05f, std::max(py, qy) + 0.05f, 6.42f}, M_POLE, 0);
+    addBox(ch.tris, {qx - 0.25f, qy - 0.25f, 6.05f}, {qx + 0.25f, qy + 0.25f, 6.3f}, M_SIGN_BACK, 0);
+    ch.finish();
+    chunks.push_back(std::move(ch));
+  }
+  // Signs near the far corner, facing traffic that approaches the next intersection.
+  for (int q = 0; q < 2; ++q) {
+    if (!rng.chance(0.7)) continue;
+    const double u = q == 0 ? L - rng.uniform(5, 9) : rng.uniform(0.3, 0.7) * L;
+    if (!clear(u, 2.0)) continue;
+    used.push_back(u);
+    const Vec2d p = S + d * u + in * 0.5;
+    SignStyle sg;
+    sg.kind = rng.index(5);
+    sg.seed = static_cast<std::uint32_t>(rng.next());
+    signs.push_back(sg);
+    const int sid = static_cast<int>(signs.size()) - 1;
+    Chunk ch;
+    const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
+    const float top = static_cast<float>(rng.uniform(2.4, 2.9));
+    addBox(ch.tris, {px - 0.04f, py - 0.04f, kerb}, {px + 0.04f, py + 0.04f, top + 0.3f}, M_POLE, 0);
+    // The plate faces +d (towards cars driving in -d on this side) or the street.
+    const Vec2d face = q == 0 ? d : n;
+    const Vec2d side(-face.y(), face.x());
+    const float hs = sg.kind == 4 ? 0.45f : 0.32f;
+    const Vec2d f0 = p + face * 0.06;
+    const Vec3f sa = v3(side.x(), side.y(), 0);
+    const Vec2d a = f0 - side * hs, b = f0 + side * hs;
+    addQuad(ch.tris, v3(b.x(), b.y(), top), v3(a.x(), a.y(), top), v3(a.x(), a.y(), top + 2 * hs),
+            v3(b.x(), b.y(), top + 2 * hs), M_SIGN, sid, -sa, static_cast<float>(side.dot(f0)), {0, 0, 1}, -(top + hs));
+    const Vec2d f1 = p + face * 0.05;
+    const Vec2d a1 = f1 - side * hs, b1 = f1 + side * hs;
+    addQuad(ch.tris, v3(a1.x(), a1.y(), top), v3(b1.x(), b1.y(), top), v3(b1.x(), b1.y(), top + 2 * hs),
+            v3(a1.x(), a1.y(), top + 2 * hs), M_SIGN_BACK, sid, sa, 0, {0, 0, 1}, 0);
+    ch.finish();
+    chunks.push_back(std::move(ch));
+  }
+  // Trees.
+  if (wc.tree_spacing > 0) {
+    for (double u = rng.uniform(4, wc.tree_spacing); u < L - 6; u += wc.tree_spacing * rng.uniform(0.7, 1.3)) {
+      if (!clear(u, 2.5) || !rng.chance(0.85)) continue;
+      used.push_back(u);
+      const Vec2d p = S + d * u + in * 1.0;
+      Chunk ch;
+      const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
+      const float tr = static_cast<float>(rng.uniform(0.10, 0.18));
+      const float th = static_cast<float>(rng.uniform(2.3, 3.4));
+      addBox(ch.tris, {px - tr, py - tr, kerb}, {px + tr, py + tr, th + 0.3f}, M_BARK, 0);
+      const float cr = static_cast<float>(rng.uniform(1.4, 2.6));
+      const Vec3f c(px, py, th + cr * 0.85f);
+      const std::uint32_t tseed = static_cast<std::uint32_t>(rng.next());
+      const float sx = static_cast<float>(rng.uniform(0.85, 1.15)), sz = static_cast<float>(rng.uniform(0.8, 1.2));
+      addCrown(ch.tris, c, cr, sx, sz, tseed);
+      ch.finish();
+      chunks.push_back(std::move(ch));
+    }
+  }
+}
+
+void World::buildUrban(Rng& rng) {
+  buildStreets(rng);
+  const std::vector<Block> blocks = urbanBlocks();
   int building = 0;
   for (const Block& bk : blocks) {
     raised.push_back({bk.x0, bk.y0, bk.x1, bk.y1});
-    // Pavement top, tiled.
-    const int nx = std::max(1, static_cast<int>(std::ceil((bk.x1 - bk.x0) / 20.0)));
-    const int ny = std::max(1, static_cast<int>(std::ceil((bk.y1 - bk.y0) / 20.0)));
-    for (int a = 0; a < nx; ++a)
-      for (int b = 0; b < ny; ++b) {
-        Chunk ch;
-        const float xa = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * a / nx),
-                    xb = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * (a + 1) / nx);
-        const float ya = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * b / ny),
-                    yb = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * (b + 1) / ny);
-        addQuad(ch.tris, {xa, ya, kerb}, {xb, ya, kerb}, {xb, yb, kerb}, {xa, yb, kerb}, M_PAVEMENT, 0, {1, 0, 0}, 0,
-                {0, 1, 0}, 0);
-        ch.finish();
-        chunks.push_back(std::move(ch));
-      }
+    addPavement(bk);
     // Sides: start corner, direction, outward normal (counter-clockwise traversal).
     const Vec2d S[4] = {{bk.x0, bk.y0}, {bk.x1, bk.y0}, {bk.x1, bk.y1}, {bk.x0, bk.y1}};
     const Vec2d D[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
     const double L[4] = {bk.x1 - bk.x0, bk.y1 - bk.y0, bk.x1 - bk.x0, bk.y1 - bk.y0};
     for (int k = 0; k < 4; ++k) {
-      const Vec2d d = D[k], n(d.y(), -d.x()), in = -n;
-      // Kerb face.
-      {
-        Chunk ch;
-        const int m = std::max(1, static_cast<int>(std::ceil(L[k] / 20.0)));
-        for (int q = 0; q < m; ++q) {
-          const Vec2d a = S[k] + d * (L[k] * q / m), b = S[k] + d * (L[k] * (q + 1) / m);
-          addQuad(ch.tris, v3(a.x(), a.y(), 0), v3(b.x(), b.y(), 0), v3(b.x(), b.y(), kerb), v3(a.x(), a.y(), kerb),
-                  M_KERB, 0, v3(d.x(), d.y(), 0), static_cast<float>(-d.dot(S[k])), {0, 0, 1}, 0);
-        }
-        ch.finish();
-        chunks.push_back(std::move(ch));
-      }
+      addKerbFace(S[k], D[k], L[k]);
       if (!bk.sides[k]) continue;
-      // Buildings along the side; sides 1 and 3 keep clear of the corner buildings of sides 0 and 2.
-      const double corner_clear = (k % 2 == 1) ? pw + wc.building_setback_max + 17.0 : 0.0;
-      double along = corner_clear + (k % 2 == 0 ? 0.0 : rng.uniform(0, 3));
-      const double end = L[k] - corner_clear;
-      while (along < end - 6.0) {
-        if (along > corner_clear + 1.0 && rng.chance(wc.building_gap_probability)) along += rng.uniform(2.0, 6.0);
-        double width = rng.uniform(8.0, 22.0);
-        if (end - (along + width) < 6.0) width = end - along;
-        if (width < 5.0) break;
-        const double setback = rng.uniform(0.0, wc.building_setback_max);
-        const double depth = rng.uniform(10.0, 16.0);
-        // Style.
-        Facade f;
-        f.building = building;
-        f.base = rng.chance(0.45) ? 0 : 1 + rng.index(2);
-        static const float palette[][3] = {{0.55f, 0.30f, 0.22f}, {0.70f, 0.58f, 0.42f}, {0.80f, 0.76f, 0.66f},
-                                           {0.62f, 0.64f, 0.62f}, {0.74f, 0.52f, 0.38f}, {0.50f, 0.52f, 0.58f},
-                                           {0.85f, 0.80f, 0.60f}, {0.66f, 0.44f, 0.40f}, {0.78f, 0.72f, 0.78f}};
-        const auto& pc = palette[rng.index(9)];
-        const float jit = static_cast<float>(rng.uniform(0.85, 1.12));
-        f.colour = Vec3f(pc[0], pc[1], pc[2]) * jit;
-        f.frame_colour = rng.chance(0.6) ? Vec3f(0.92f, 0.92f, 0.90f)
-                                         : Vec3f(0.25f, 0.22f, 0.20f) * static_cast<float>(rng.uniform(0.8, 1.6));
-        f.trim_colour = f.colour * static_cast<float>(rng.uniform(0.55, 0.8));
-        f.brick_w = static_cast<float>(rng.uniform(0.22, 0.30));
-        f.brick_h = static_cast<float>(rng.uniform(0.065, 0.09));
-        f.floor_h = static_cast<float>(rng.uniform(2.7, 3.3));
-        f.ground_h = static_cast<float>(rng.uniform(3.2, 4.4));
-        f.win_w = static_cast<float>(rng.uniform(0.8, 1.7));
-        f.win_h = static_cast<float>(rng.uniform(1.1, 1.9));
-        f.win_h = std::min(f.win_h, f.floor_h - 0.9f);
-        f.win_sill = static_cast<float>(rng.uniform(0.6, f.floor_h - f.win_h - 0.25));
-        f.col_spacing = std::max(f.win_w + 0.5f, static_cast<float>(rng.uniform(1.7, 3.0)));
-        f.col_offset = static_cast<float>(rng.uniform(0.0, f.col_spacing));
-        f.shop = rng.chance(0.4);
-        f.panel_w = static_cast<float>(rng.uniform(2.0, 4.5));
-        f.door_w = static_cast<float>(rng.uniform(1.0, 2.2));
-        const int floors = std::max(
-            1, static_cast<int>(
-                   std::round((rng.uniform(wc.building_min_height, wc.building_max_height) - f.ground_h) / f.floor_h)));
-        const double height = f.ground_h + floors * f.floor_h + rng.uniform(0.3, 1.2);
-        f.height = static_cast<float>(height);
-        // Footprint corners (front-left, front-right, back-right, back-left seen from the street).
-        const double fo = pw + setback, ba = fo + depth;
-        const Vec2d c0 = S[k] + d * along + in * fo, c1 = S[k] + d * (along + width) + in * fo;
-        const Vec2d c2 = S[k] + d * (along + width) + in * ba, c3 = S[k] + d * along + in * ba;
-        const Vec2d corners[4] = {c0, c1, c2, c3};
-        Chunk ch;
-        for (int w = 0; w < 4; ++w) {
-          const Vec2d a = corners[w], b = corners[(w + 1) % 4];
-          // Face outward normal is to the right of a->b? Corners go counter-clockwise seen from outside the
-          // front, so a->b runs left to right when seen from outside for every wall.
-          Facade fw = f;
-          fw.length = static_cast<float>((b - a).norm());
-          fw.seed = static_cast<std::uint32_t>(rng.next());
-          fw.door_face = w == 0;
-          fw.door_u = static_cast<float>(rng.uniform(1.0, std::max(1.1, fw.length - fw.door_w - 1.0)));
-          if (w != 0) fw.shop = false;
-          facades.push_back(fw);
-          const int fid = static_cast<int>(facades.size()) - 1;
-          const Vec2d ud = (b - a).normalized();
-          addQuad(ch.tris, v3(a.x(), a.y(), kerb), v3(b.x(), b.y(), kerb), v3(b.x(), b.y(), height),
-                  v3(a.x(), a.y(), height), M_FACADE, fid, v3(ud.x(), ud.y(), 0), static_cast<float>(-ud.dot(a)),
-                  {0, 0, 1}, -kerb);
-        }
-        const float hh = static_cast<float>(height);
-        addQuad(ch.tris, v3(c0.x(), c0.y(), hh), v3(c1.x(), c1.y(), hh), v3(c2.x(), c2.y(), hh), v3(c3.x(), c3.y(), hh),
-                M_ROOF, building, {1, 0, 0}, 0, {0, 1, 0}, 0);
-        // A hedge or low wall in the front garden when the building stands back from the pavement.
-        if (setback > 1.0 && rng.chance(0.6)) {
-          const double hd = std::min(0.9, setback - 0.2), hh = rng.uniform(0.6, 1.3);
-          const Vec2d h0 = S[k] + d * (along + 0.3) + in * (pw + 0.1),
-                      h1 = S[k] + d * (along + width - 0.3) + in * (pw + 0.1 + hd);
-          const bool wall = rng.chance(0.3);
-          Chunk hc;
-          addBox(hc.tris, v3(std::min(h0.x(), h1.x()), std::min(h0.y(), h1.y()), kKerb),
-                 v3(std::max(h0.x(), h1.x()), std::max(h0.y(), h1.y()), kKerb + hh), wall ? M_FENCE : M_LEAVES,
-                 wall ? 0 : static_cast<int>(rng.next() & 0xffff));
-          hc.finish();
-          chunks.push_back(std::move(hc));
-        }
-        ch.finish();
-        chunks.push_back(std::move(ch));
-        ++building;
-        along += width;
-      }
+      addBuildings(rng, k, S[k], D[k], L[k], building);
     }
     // Street furniture on grid blocks: trees, lamps and signs near the kerb.
     if (!(bk.sides[0] && bk.sides[1] && bk.sides[2] && bk.sides[3])) continue;
-    for (int k = 0; k < 4; ++k) {
-      const Vec2d d = D[k], n(d.y(), -d.x()), in = -n;
-      std::vector<double> used;
-      auto clear = [&](double u, double gap) {
-        for (double x : used)
-          if (std::abs(x - u) < gap) return false;
-        return true;
-      };
-      // Lamps.
-      for (double u = rng.uniform(8, 20); u < L[k] - 8; u += rng.uniform(24, 36)) {
-        used.push_back(u);
-        const Vec2d p = S[k] + d * u + in * 0.45;
-        Chunk ch;
-        const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
-        addBox(ch.tris, {px - 0.08f, py - 0.08f, kerb}, {px + 0.08f, py + 0.08f, 6.5f}, M_POLE, 0);
-        const Vec2d q = p + n * 1.3;
-        const float qx = static_cast<float>(q.x()), qy = static_cast<float>(q.y());
-        addBox(ch.tris, {std::min(px, qx) - 0.05f, std::min(py, qy) - 0.05f, 6.3f},
-               {std::max(px, qx) + 0.05f, std::max(py, qy) + 0.05f, 6.42f}, M_POLE, 0);
-        addBox(ch.tris, {qx - 0.25f, qy - 0.25f, 6.05f}, {qx + 0.25f, qy + 0.25f, 6.3f}, M_SIGN_BACK, 0);
-        ch.finish();
-        chunks.push_back(std::move(ch));
-      }
-      // Signs near the far corner, facing traffic that approaches the next intersection.
-      for (int q = 0; q < 2; ++q) {
-        if (!rng.chance(0.7)) continue;
-        const double u = q == 0 ? L[k] - rng.uniform(5, 9) : rng.uniform(0.3, 0.7) * L[k];
-        if (!clear(u, 2.0)) continue;
-        used.push_back(u);
-        const Vec2d p = S[k] + d * u + in * 0.5;
-        SignStyle sg;
-        sg.kind = rng.index(5);
-        sg.seed = static_cast<std::uint32_t>(rng.next());
-        signs.push_back(sg);
-        const int sid = static_cast<int>(signs.size()) - 1;
-        Chunk ch;
-        const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
-        const float top = static_cast<float>(rng.uniform(2.4, 2.9));
-        addBox(ch.tris, {px - 0.04f, py - 0.04f, kerb}, {px + 0.04f, py + 0.04f, top + 0.3f}, M_POLE, 0);
-        // The plate faces +d (towards cars driving in -d on this side) or the street.
-        const Vec2d face = q == 0 ? d : n;
-        const Vec2d side(-face.y(), face.x());
-        const float hs = sg.kind == 4 ? 0.45f : 0.32f;
-        const Vec2d f0 = p + face * 0.06;
-        const Vec3f sa = v3(side.x(), side.y(), 0);
-        const Vec2d a = f0 - side * hs, b = f0 + side * hs;
-        addQuad(ch.tris, v3(b.x(), b.y(), top), v3(a.x(), a.y(), top), v3(a.x(), a.y(), top + 2 * hs),
-                v3(b.x(), b.y(), top + 2 * hs), M_SIGN, sid, -sa, static_cast<float>(side.dot(f0)), {0, 0, 1},
-                -(top + hs));
-        const Vec2d f1 = p + face * 0.05;
-        const Vec2d a1 = f1 - side * hs, b1 = f1 + side * hs;
-        addQuad(ch.tris, v3(a1.x(), a1.y(), top), v3(b1.x(), b1.y(), top), v3(b1.x(), b1.y(), top + 2 * hs),
-                v3(a1.x(), a1.y(), top + 2 * hs), M_SIGN_BACK, sid, sa, 0, {0, 0, 1}, 0);
-        ch.finish();
-        chunks.push_back(std::move(ch));
-      }
-      // Trees.
-      if (wc.tree_spacing > 0) {
-        for (double u = rng.uniform(4, wc.tree_spacing); u < L[k] - 6; u += wc.tree_spacing * rng.uniform(0.7, 1.3)) {
-          if (!clear(u, 2.5) || !rng.chance(0.85)) continue;
-          used.push_back(u);
-          const Vec2d p = S[k] + d * u + in * 1.0;
-          Chunk ch;
-          const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
-          const float tr = static_cast<float>(rng.uniform(0.10, 0.18));
-          const float th = static_cast<float>(rng.uniform(2.3, 3.4));
-          addBox(ch.tris, {px - tr, py - tr, kerb}, {px + tr, py + tr, th + 0.3f}, M_BARK, 0);
-          const float cr = static_cast<float>(rng.uniform(1.4, 2.6));
-          const Vec3f c(px, py, th + cr * 0.85f);
-          const std::uint32_t tseed = static_cast<std::uint32_t>(rng.next());
-          const float sx = static_cast<float>(rng.uniform(0.85, 1.15)), sz = static_cast<float>(rng.uniform(0.8, 1.2));
-          addCrown(ch.tris, c, cr, sx, sz, tseed);
-          ch.finish();
-          chunks.push_back(std::move(ch));
-        }
-      }
-    }
+    for (int k = 0; k < 4; ++k) addStreetFurniture(rng, S[k], D[k], L[k]);
   }
 }
 

@@ -248,6 +248,16 @@ class World {
 
  private:
   void buildUrban(Rng& rng);
+  // buildUrban's stages (world.cpp).
+  struct Block;
+  void buildStreets(Rng& rng);
+  void addStreetTiles(int street, Vec2d start, Vec2d dir, double len);
+  std::vector<Block> urbanBlocks() const;
+  void addPavement(const Block& bk);
+  void addKerbFace(const Vec2d& S, const Vec2d& d, double L);
+  Facade randomFacade(Rng& rng, int building, double& height) const;
+  void addBuildings(Rng& rng, int k, const Vec2d& S, const Vec2d& d, double L, int& building);
+  void addStreetFurniture(Rng& rng, const Vec2d& S, const Vec2d& d, double L);
   void buildHighway(Rng& rng);
   void placeObjects(Rng& rng);
   // placeObjects' stages (world.cpp); Placement holds the footprints of what is placed so far.
