@@ -686,31 +686,25 @@ void World::buildUrban(Rng& rng) {
 // Highway: one big ring road (two carriageways split by a median), verges, guard rails, noise walls,
 // trees and signs; far buildings.
 
-void World::buildHighway(Rng& rng) {
-  const auto& wc = config.world;
+namespace {
+
+// The point `off` metres left of the ring at arc length s, and the ring's direction there.
+void ringPointAt(const Path& ring, double s, double off, Vec2d& p, Vec2d& dir) {
+  double h, k;
+  ring.at(s, p, h, k);
+  dir = Vec2d(std::cos(h), std::sin(h));
+  const Vec2d left(-dir.y(), dir.x());
+  p += left * off;
+}
+
+}  // namespace
+
+// The highway's ribbons along the ring (length L) in 4 m quads, five to a chunk: both carriageways,
+// verges, guard rails, noise walls and the median.
+void World::addHighwayRibbons(const Path& ring, double L) {
   const double hw = roadHalfWidth();
-  const double R = wc.corner_radius;
-  // The ring follows the same rounded rectangle as the routes (street lines 0 and blocks).
-  const int i0 = 0, j0 = 0, i1 = wc.blocks_x, j1 = wc.blocks_y;
-  auto centre = roundedRect(X_[i0], Y_[j0], X_[i1], Y_[j1], R, false, 5.0);
-  Path ring(centre, true);
-  const double L = ring.length();
-  Street st;
-  st.length = static_cast<float>(L);
-  st.lanes = wc.lanes_per_direction;
-  st.lane_w = static_cast<float>(wc.lane_width);
-  st.parking_w = 0;
-  st.median = true;
-  st.seed = static_cast<std::uint32_t>(rng.next());
-  streets.push_back(st);
   const int n = static_cast<int>(std::ceil(L / 4.0));
-  auto pointAt = [&](double s, double off, Vec2d& p, Vec2d& dir) {
-    double h, k;
-    ring.at(s, p, h, k);
-    dir = Vec2d(std::cos(h), std::sin(h));
-    const Vec2d left(-dir.y(), dir.x());
-    p += left * off;
-  };
+  auto pointAt = [&](double s, double off, Vec2d& p, Vec2d& dir) { ringPointAt(ring, s, off, p, dir); };
   const double verge = hw + 3.0, wall = hw + 9.0;
   for (int c = 0; c < n; c += 5) {
     Chunk road, side;
@@ -759,7 +753,14 @@ void World::buildHighway(Rng& rng) {
     chunks.push_back(std::move(road));
     chunks.push_back(std::move(side));
   }
-  // Poles and signs along both verges, trees behind the walls, a few far buildings.
+}
+
+// Poles and signs along both verges, trees behind the walls.
+void World::addHighwayRoadside(Rng& rng, const Path& ring, double L) {
+  const auto& wc = config.world;
+  const double hw = roadHalfWidth();
+  auto pointAt = [&](double s, double off, Vec2d& p, Vec2d& dir) { ringPointAt(ring, s, off, p, dir); };
+  const double wall = hw + 9.0;
   for (double s = rng.uniform(10, 40); s < L - 10; s += rng.uniform(40, 70)) {
     for (int sideSign = -1; sideSign <= 1; sideSign += 2) {
       Vec2d p, dir;
@@ -802,6 +803,13 @@ void World::buildHighway(Rng& rng) {
         chunks.push_back(std::move(ch));
       }
     }
+}
+
+// Ground inside and outside the ring, then a few far buildings round it.
+void World::addHighwayGroundAndFarBuildings(Rng& rng, const Path& ring, double L) {
+  const double hw = roadHalfWidth();
+  auto pointAt = [&](double s, double off, Vec2d& p, Vec2d& dir) { ringPointAt(ring, s, off, p, dir); };
+  const double wall = hw + 9.0;
   // Ground inside and outside the ring.
   {
     Chunk ch;
@@ -851,6 +859,27 @@ void World::buildHighway(Rng& rng) {
     ch.finish();
     chunks.push_back(std::move(ch));
   }
+}
+
+void World::buildHighway(Rng& rng) {
+  const auto& wc = config.world;
+  const double R = wc.corner_radius;
+  // The ring follows the same rounded rectangle as the routes (street lines 0 and blocks).
+  const int i0 = 0, j0 = 0, i1 = wc.blocks_x, j1 = wc.blocks_y;
+  auto centre = roundedRect(X_[i0], Y_[j0], X_[i1], Y_[j1], R, false, 5.0);
+  Path ring(centre, true);
+  const double L = ring.length();
+  Street st;
+  st.length = static_cast<float>(L);
+  st.lanes = wc.lanes_per_direction;
+  st.lane_w = static_cast<float>(wc.lane_width);
+  st.parking_w = 0;
+  st.median = true;
+  st.seed = static_cast<std::uint32_t>(rng.next());
+  streets.push_back(st);
+  addHighwayRibbons(ring, L);
+  addHighwayRoadside(rng, ring, L);
+  addHighwayGroundAndFarBuildings(rng, ring, L);
 }
 
 // ---------------------------------------------------------------------------------------------------

@@ -259,6 +259,10 @@ class World {
   void addBuildings(Rng& rng, int k, const Vec2d& S, const Vec2d& d, double L, int& building);
   void addStreetFurniture(Rng& rng, const Vec2d& S, const Vec2d& d, double L);
   void buildHighway(Rng& rng);
+  // buildHighway's stages (world.cpp); ring: the road's centreline, L its length.
+  void addHighwayRibbons(const Path& ring, double L);
+  void addHighwayRoadside(Rng& rng, const Path& ring, double L);
+  void addHighwayGroundAndFarBuildings(Rng& rng, const Path& ring, double L);
   void placeObjects(Rng& rng);
   // placeObjects' stages (world.cpp); Placement holds the footprints of what is placed so far.
   struct Placement;
