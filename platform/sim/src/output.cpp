@@ -69,11 +69,8 @@ std::uint64_t fnv1a(const std::string& s) {
   return h;
 }
 
-}  // namespace
-
-SequenceSummary generateSequence(const SynthConfig& config, const std::string& out_dir, std::ostream* progress) {
-  const Synthesizer synth(config);
-  const std::string seqDir = out_dir + "/sequences/" + config.sequence;
+// The sequence's folders.
+void makeSequenceDirectories(const SynthConfig& config, const std::string& out_dir, const std::string& seqDir) {
   makeDirectories(out_dir + "/poses");
   makeDirectories(seqDir);
   if (config.camera.grey) makeDirectories(seqDir + "/image_0");
@@ -83,10 +80,36 @@ SequenceSummary generateSequence(const SynthConfig& config, const std::string& o
   makeDirectories(seqDir + "/instance");
   makeDirectories(seqDir + "/label_02");
   makeDirectories(seqDir + "/objects");
-  const int n = config.frames;
+}
 
-  // Frames in parallel; each frame is a pure function of (config, index), so the bytes do not depend on
-  // which worker renders it. Labels are collected per frame and written in order afterwards.
+// Renders frame i into fr and writes its images, depth and scan; returns its label rows.
+std::string writeFrame(const Synthesizer& synth, const SynthConfig& config, const std::string& seqDir, int i,
+                       FrameRender& fr) {
+  synth.render(i, fr);
+  if (config.camera.grey) writePng(seqDir + "/image_0/" + frameName(i, ".png"), fr.grey);
+  if (config.camera.colour) writePng(seqDir + "/image_2/" + frameName(i, ".png"), fr.colour);
+  writePng(seqDir + "/instance/" + frameName(i, ".png"), fr.instance);
+  if (config.output.depth) {
+    cv::Mat d16(fr.depth.size(), CV_16UC1);
+    for (int y = 0; y < d16.rows; ++y)
+      for (int x = 0; x < d16.cols; ++x)
+        d16.at<std::uint16_t>(y, x) =
+            static_cast<std::uint16_t>(std::min(65535.0, std::round(fr.depth.at<float>(y, x) * 256.0)));
+    writePng(seqDir + "/depth/" + frameName(i, ".png"), d16);
+  }
+  if (config.lidar.enabled)
+    writeFileAtomic(seqDir + "/velodyne/" + frameName(i, ".bin"),
+                    std::string(reinterpret_cast<const char*>(fr.lidar.data()), fr.lidar.size() * sizeof(float)));
+  std::string rows;
+  for (const auto& L : fr.labels) rows += labelRow(i, L);
+  return rows;
+}
+
+// Frames in parallel; each frame is a pure function of (config, index), so the bytes do not depend on
+// which worker renders it. Labels are collected per frame (returned in frame order).
+std::vector<std::string> writeFrames(const Synthesizer& synth, const SynthConfig& config, const std::string& seqDir,
+                                     std::ostream* progress) {
+  const int n = config.frames;
   std::vector<std::string> labelText(static_cast<std::size_t>(n));
   std::atomic<int> next{0}, done{0};
   std::mutex errorMutex;
@@ -101,24 +124,7 @@ SequenceSummary generateSequence(const SynthConfig& config, const std::string& o
         if (!firstError.empty()) return;
       }
       try {
-        synth.render(i, fr);
-        if (config.camera.grey) writePng(seqDir + "/image_0/" + frameName(i, ".png"), fr.grey);
-        if (config.camera.colour) writePng(seqDir + "/image_2/" + frameName(i, ".png"), fr.colour);
-        writePng(seqDir + "/instance/" + frameName(i, ".png"), fr.instance);
-        if (config.output.depth) {
-          cv::Mat d16(fr.depth.size(), CV_16UC1);
-          for (int y = 0; y < d16.rows; ++y)
-            for (int x = 0; x < d16.cols; ++x)
-              d16.at<std::uint16_t>(y, x) =
-                  static_cast<std::uint16_t>(std::min(65535.0, std::round(fr.depth.at<float>(y, x) * 256.0)));
-          writePng(seqDir + "/depth/" + frameName(i, ".png"), d16);
-        }
-        if (config.lidar.enabled)
-          writeFileAtomic(seqDir + "/velodyne/" + frameName(i, ".bin"),
-                          std::string(reinterpret_cast<const char*>(fr.lidar.data()), fr.lidar.size() * sizeof(float)));
-        std::string rows;
-        for (const auto& L : fr.labels) rows += labelRow(i, L);
-        labelText[static_cast<std::size_t>(i)] = rows;
+        labelText[static_cast<std::size_t>(i)] = writeFrame(synth, config, seqDir, i, fr);
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(errorMutex);
         if (firstError.empty()) firstError = e.what();
@@ -138,8 +144,13 @@ SequenceSummary generateSequence(const SynthConfig& config, const std::string& o
   for (auto& th : threads) th.join();
   if (progress) *progress << "\n";
   if (!firstError.empty()) throw Error(firstError);
+  return labelText;
+}
 
-  // Sequence-level files.
+// Sequence-level files: labels, times, ego poses, calibration.
+void writeSequenceFiles(const Synthesizer& synth, const SynthConfig& config, const std::string& out_dir,
+                        const std::string& seqDir, const std::vector<std::string>& labelText) {
+  const int n = config.frames;
   std::string labels;
   for (const auto& s : labelText) labels += s;
   writeFileAtomic(seqDir + "/label_02/" + config.sequence + ".txt", labels);
@@ -161,7 +172,11 @@ SequenceSummary generateSequence(const SynthConfig& config, const std::string& o
     c << "\nTr_velo_to_cam: " << row34(Tr) << "\nTr: " << row34(Tr) << "\n";
     writeFileAtomic(seqDir + "/calib.txt", c.str());
   }
-  // Objects: motion flags, poses, meshes.
+}
+
+// Objects: motion flags, poses, meshes.
+void writeObjectFiles(const Synthesizer& synth, const SynthConfig& config, const std::string& seqDir) {
+  const int n = config.frames;
   std::ostringstream motion, opose, oinfo;
   motion << "# frame track_id moving speed_m_s\n";
   opose << "# frame track_id T_world_obj (3x4 row-major; KITTI world = cam0 at frame 0; object frame x fwd, y down, z "
@@ -198,40 +213,54 @@ SequenceSummary generateSequence(const SynthConfig& config, const std::string& o
     std::snprintf(name, sizeof name, "car_%04d.ply", o.track_id);
     writeFileAtomic(seqDir + "/objects/" + name, ply.str());
   }
-  // Manifest.
+}
+
+// Manifest: what was placed against what was asked for, the ego's loop, and the config.
+void writeManifest(const SynthConfig& config, const SequenceSummary& sum, const std::string& seqDir) {
+  const int n = config.frames;
+  YAML::Emitter m;
+  m << YAML::BeginMap;
+  m << YAML::Key << "generator" << YAML::Value << "beslam synth";
+  m << YAML::Key << "seed" << YAML::Value << config.seed;
+  m << YAML::Key << "frames" << YAML::Value << n;
+  m << YAML::Key << "counts" << YAML::Value << YAML::BeginMap;
+  m << YAML::Key << "parked" << YAML::Value << sum.parked;
+  m << YAML::Key << "driving" << YAML::Value << sum.driving;
+  m << YAML::Key << "stop_and_go" << YAML::Value << sum.stop_and_go;
+  m << YAML::Key << "pedestrians" << YAML::Value << sum.pedestrians;
+  m << YAML::EndMap;
+  m << YAML::Key << "requested" << YAML::Value << YAML::BeginMap;
+  m << YAML::Key << "parked" << YAML::Value << config.objects.parked;
+  m << YAML::Key << "driving" << YAML::Value << config.objects.driving;
+  m << YAML::Key << "stop_and_go" << YAML::Value << config.objects.stop_and_go;
+  m << YAML::Key << "pedestrians" << YAML::Value << config.objects.pedestrians;
+  m << YAML::EndMap;
+  m << YAML::Key << "ego" << YAML::Value << YAML::BeginMap;
+  m << YAML::Key << "loop_length_m" << YAML::Value << sum.loop_length_m;
+  m << YAML::Key << "distance_m" << YAML::Value << sum.distance_m;
+  m << YAML::Key << "laps" << YAML::Value << sum.laps;
+  m << YAML::EndMap;
+  m << YAML::EndMap;
+  // Every parameter that shapes the data, verbatim (the worker count does not, so it is left out).
+  std::string text = std::string(m.c_str()) + "\nconfig:\n";
+  std::istringstream cfgText(synthConfigToYaml(config));
+  std::string line;
+  while (std::getline(cfgText, line))
+    if (line.rfind("  threads:", 0) != 0 && !line.empty()) text += "  " + line + "\n";
+  writeFileAtomic(seqDir + "/manifest.yaml", text);
+}
+
+}  // namespace
+
+SequenceSummary generateSequence(const SynthConfig& config, const std::string& out_dir, std::ostream* progress) {
+  const Synthesizer synth(config);
+  const std::string seqDir = out_dir + "/sequences/" + config.sequence;
+  makeSequenceDirectories(config, out_dir, seqDir);
+  const std::vector<std::string> labelText = writeFrames(synth, config, seqDir, progress);
+  writeSequenceFiles(synth, config, out_dir, seqDir, labelText);
+  writeObjectFiles(synth, config, seqDir);
   const SequenceSummary sum = synth.summary();
-  {
-    YAML::Emitter m;
-    m << YAML::BeginMap;
-    m << YAML::Key << "generator" << YAML::Value << "beslam synth";
-    m << YAML::Key << "seed" << YAML::Value << config.seed;
-    m << YAML::Key << "frames" << YAML::Value << n;
-    m << YAML::Key << "counts" << YAML::Value << YAML::BeginMap;
-    m << YAML::Key << "parked" << YAML::Value << sum.parked;
-    m << YAML::Key << "driving" << YAML::Value << sum.driving;
-    m << YAML::Key << "stop_and_go" << YAML::Value << sum.stop_and_go;
-    m << YAML::Key << "pedestrians" << YAML::Value << sum.pedestrians;
-    m << YAML::EndMap;
-    m << YAML::Key << "requested" << YAML::Value << YAML::BeginMap;
-    m << YAML::Key << "parked" << YAML::Value << config.objects.parked;
-    m << YAML::Key << "driving" << YAML::Value << config.objects.driving;
-    m << YAML::Key << "stop_and_go" << YAML::Value << config.objects.stop_and_go;
-    m << YAML::Key << "pedestrians" << YAML::Value << config.objects.pedestrians;
-    m << YAML::EndMap;
-    m << YAML::Key << "ego" << YAML::Value << YAML::BeginMap;
-    m << YAML::Key << "loop_length_m" << YAML::Value << sum.loop_length_m;
-    m << YAML::Key << "distance_m" << YAML::Value << sum.distance_m;
-    m << YAML::Key << "laps" << YAML::Value << sum.laps;
-    m << YAML::EndMap;
-    m << YAML::EndMap;
-    // Every parameter that shapes the data, verbatim (the worker count does not, so it is left out).
-    std::string text = std::string(m.c_str()) + "\nconfig:\n";
-    std::istringstream cfgText(synthConfigToYaml(config));
-    std::string line;
-    while (std::getline(cfgText, line))
-      if (line.rfind("  threads:", 0) != 0 && !line.empty()) text += "  " + line + "\n";
-    writeFileAtomic(seqDir + "/manifest.yaml", text);
-  }
+  writeManifest(config, sum, seqDir);
   return sum;
 }
 

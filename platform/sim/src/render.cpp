@@ -236,30 +236,20 @@ FrameRender Synthesizer::render(int frame) const {
   return out;
 }
 
-void Synthesizer::render(int frame, FrameRender& out) const {
-  const World& w = *world_;
-  const SynthConfig& cfg = w.config;
-  const int W = cfg.camera.width, H = cfg.camera.height;
-  const double t = w.frameTime(frame);
-  out.index = frame;
-  out.labels.clear();
-  out.lidar.clear();
-  out.stamp = t;
-  const Eigen::Isometry3d T_sim_cam = w.T_sim_cam(t);
-  out.T_world_cam = w.T_sim_cam0.inverse() * T_sim_cam;
-  const Eigen::Isometry3d T_cam_sim = T_sim_cam.inverse();
-  const Eigen::Matrix3f Rcs = T_cam_sim.linear().cast<float>();
-  const Vec3f tcs = T_cam_sim.translation().cast<float>();
-  const double sunAz = static_cast<double>(mixSeed(cfg.seed, 5) % 6283) / 1000.0;
-  const Vec3f sun_sim =
-      Vec3f(static_cast<float>(std::cos(sunAz) * 0.55), static_cast<float>(std::sin(sunAz) * 0.55), 0.83f).normalized();
+namespace {
 
-  // Objects' poses at this time.
-  struct ObjView {
-    const Object* o;
-    Eigen::Isometry3d T_sim_iso;
-    std::vector<Tri> tris;
-  };
+// An object's pose and triangles (ISO object frame) at the frame's time.
+struct ObjView {
+  const Object* o;
+  Eigen::Isometry3d T_sim_iso;
+  std::vector<Tri> tris;
+};
+
+// Index range [first, second) of each object's triangles in the camera's view triangles (empty: culled).
+using TriRanges = std::vector<std::pair<std::size_t, std::size_t>>;
+
+// Objects' poses at time t.
+std::vector<ObjView> poseObjects(const World& w, double t) {
   std::vector<ObjView> objs;
   objs.reserve(w.objects.size());
   for (const auto& o : w.objects) {
@@ -270,9 +260,15 @@ void Synthesizer::render(int frame, FrameRender& out) const {
     w.objectTris(o, t, ov.tris);
     objs.push_back(std::move(ov));
   }
+  return objs;
+}
 
-  // ---- Camera.
-  Scratch& sc = scratch();
+// Camera: frustum-culls chunks and objects into camera-frame triangles (sc.vt) and rasterises their ids
+// and 1/z into sc.cam; returns each object's triangle range.
+TriRanges rasteriseCamera(const World& w, const std::vector<ObjView>& objs, const Eigen::Isometry3d& T_cam_sim,
+                          const Eigen::Matrix3f& Rcs, const Vec3f& tcs, const Vec3f& sun_sim, Scratch& sc) {
+  const SynthConfig& cfg = w.config;
+  const int W = cfg.camera.width, H = cfg.camera.height;
   RasterTarget& cam = sc.cam;
   cam.fx = static_cast<float>(cfg.camera.fx), cam.fy = static_cast<float>(cfg.camera.fy);
   cam.cx = static_cast<float>(cfg.camera.cx), cam.cy = static_cast<float>(cfg.camera.cy);
@@ -288,7 +284,7 @@ void Synthesizer::render(int frame, FrameRender& out) const {
     if (!sphereVisible(s, Rcs, tcs, planes, np, farDist)) continue;
     appendTris(ch.tris, Rcs, tcs, 0, sun_cam, vt);
   }
-  std::vector<std::pair<std::size_t, std::size_t>> objRange(objs.size(), {0, 0});
+  TriRanges objRange(objs.size(), {0, 0});
   for (std::size_t i = 0; i < objs.size(); ++i) {
     const Eigen::Isometry3d T = T_cam_sim * objs[i].T_sim_iso;
     const Eigen::Matrix3f R = T.linear().cast<float>();
@@ -301,8 +297,15 @@ void Synthesizer::render(int frame, FrameRender& out) const {
   }
   for (std::size_t i = 0; i < vt.size(); ++i)
     drawTriangle(vt[i].a, vt[i].b, vt[i].c, static_cast<std::int32_t>(i), cam);
+  return objRange;
+}
 
-  // Shade.
+// Shade: each camera pixel once, into linear radiance (sc.lin), the instance mask and the depth.
+void shadeCamera(const World& w, const Eigen::Matrix3f& Rcs, Scratch& sc, FrameRender& out) {
+  const SynthConfig& cfg = w.config;
+  const int W = cfg.camera.width, H = cfg.camera.height;
+  const RasterTarget& cam = sc.cam;
+  const std::vector<ViewTri>& vt = sc.vt;
   const Eigen::Matrix3f Rsc = Rcs.transpose();
   sc.lin.create(H, W, CV_32FC3);
   cv::Mat& lin = sc.lin;
@@ -345,26 +348,12 @@ void Synthesizer::render(int frame, FrameRender& out) const {
       lrow[x] = cv::Vec3f(c.z(), c.y(), c.x());  // BGR
     }
   }
+}
 
-  // Image effects: exposure, blur, noise; grey from the same radiance.
-  const double ph = static_cast<double>(mixSeed(cfg.seed, 6) % 1000) / 159.0;
-  const float gain = static_cast<float>(
-      1.0 + cfg.image.exposure_variation * (0.6 * std::sin(0.21 * frame + ph) + 0.4 * std::sin(0.77 * frame + 2 * ph)) +
-      0.3 * cfg.image.exposure_variation *
-          (hashf(static_cast<std::uint32_t>(cfg.seed), static_cast<std::uint32_t>(frame), 77) - 0.5f));
-  // Separable blur (horizontal into tmp, vertical fused with gain, noise and quantisation).
-  int radius = 0;
-  float kern[8] = {1, 0, 0, 0, 0, 0, 0, 0};
-  if (cfg.image.blur_sigma > 0) {
-    const double sg = cfg.image.blur_sigma;
-    radius = std::min(7, std::max(1, static_cast<int>(std::lround(2.0 * sg))));
-    float sum = 0;
-    for (int i = 0; i <= radius; ++i) kern[i] = static_cast<float>(std::exp(-0.5 * i * i / (sg * sg)));
-    for (int i = 0; i <= radius; ++i) sum += (i ? 2.f : 1.f) * kern[i];
-    for (int i = 0; i <= radius; ++i) kern[i] /= sum;
-  }
+// The horizontal pass of the separable blur (sc.lin into sc.tmp) with the half kernel kern[0..radius].
+void blurRows(const float kern[8], int radius, int W, int H, Scratch& sc) {
+  const cv::Mat& lin = sc.lin;
   sc.tmp.create(H, W, CV_32FC3);
-  sc.vrow.resize(static_cast<std::size_t>(3) * W);
   for (int y = 0; y < H; ++y) {
     const float* src = lin.ptr<float>(y);
     float* dst = sc.tmp.ptr<float>(y);
@@ -385,6 +374,30 @@ void Synthesizer::render(int frame, FrameRender& out) const {
         dst[3 * x + ch] = acc;
       }
   }
+}
+
+// Image effects: exposure, blur, noise; grey from the same radiance (sc.lin into out.colour and out.grey).
+// Returns the frame's noise seed (the LiDAR's range noise draws from it too).
+std::uint32_t applyImageEffects(const SynthConfig& cfg, int frame, Scratch& sc, FrameRender& out) {
+  const int W = cfg.camera.width, H = cfg.camera.height;
+  const double ph = static_cast<double>(mixSeed(cfg.seed, 6) % 1000) / 159.0;
+  const float gain = static_cast<float>(
+      1.0 + cfg.image.exposure_variation * (0.6 * std::sin(0.21 * frame + ph) + 0.4 * std::sin(0.77 * frame + 2 * ph)) +
+      0.3 * cfg.image.exposure_variation *
+          (hashf(static_cast<std::uint32_t>(cfg.seed), static_cast<std::uint32_t>(frame), 77) - 0.5f));
+  // Separable blur (horizontal into tmp, vertical fused with gain, noise and quantisation).
+  int radius = 0;
+  float kern[8] = {1, 0, 0, 0, 0, 0, 0, 0};
+  if (cfg.image.blur_sigma > 0) {
+    const double sg = cfg.image.blur_sigma;
+    radius = std::min(7, std::max(1, static_cast<int>(std::lround(2.0 * sg))));
+    float sum = 0;
+    for (int i = 0; i <= radius; ++i) kern[i] = static_cast<float>(std::exp(-0.5 * i * i / (sg * sg)));
+    for (int i = 0; i <= radius; ++i) sum += (i ? 2.f : 1.f) * kern[i];
+    for (int i = 0; i <= radius; ++i) kern[i] /= sum;
+  }
+  blurRows(kern, radius, W, H, sc);
+  sc.vrow.resize(static_cast<std::size_t>(3) * W);
   const float sigma = static_cast<float>(cfg.image.noise_sigma);
   const std::uint32_t fseed = hash3(static_cast<std::uint32_t>(cfg.seed), static_cast<std::uint32_t>(cfg.seed >> 32),
                                     static_cast<std::uint32_t>(frame));
@@ -426,7 +439,41 @@ void Synthesizer::render(int frame, FrameRender& out) const {
       o += 4;
     }
   }
-  // ---- Labels.
+  return fseed;
+}
+
+// Truncation: share of the projected box (label L's size, pose T_cam_obj) outside the image.
+double boxTruncation(const SynthConfig& cfg, const ObjectLabel& L, const Eigen::Isometry3d& T_cam_obj) {
+  const int W = cfg.camera.width, H = cfg.camera.height;
+  double u0 = 1e18, v0 = 1e18, u1 = -1e18, v1 = -1e18;
+  bool behind = false;
+  for (int cnr = 0; cnr < 8; ++cnr) {
+    const Eigen::Vector3d pk((cnr & 1 ? 0.5 : -0.5) * L.l, (cnr & 2 ? -L.h : 0.0), (cnr & 4 ? 0.5 : -0.5) * L.w);
+    const Eigen::Vector3d pc = T_cam_obj * pk;
+    if (pc.z() < 0.1) {
+      behind = true;
+      continue;
+    }
+    const double u = cfg.camera.fx * pc.x() / pc.z() + cfg.camera.cx,
+                 v = cfg.camera.fy * pc.y() / pc.z() + cfg.camera.cy;
+    u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+  }
+  if (behind) return 1.0;
+  const double area = std::max(1e-9, (u1 - u0) * (v1 - v0));
+  const double cu0 = std::max(u0, 0.0), cu1 = std::min(u1, W - 1.0), cv0 = std::max(v0, 0.0),
+               cv1 = std::min(v1, H - 1.0);
+  const double inside = std::max(0.0, cu1 - cu0) * std::max(0.0, cv1 - cv0);
+  return std::clamp(1.0 - inside / area, 0.0, 1.0);
+}
+
+// Labels: a KITTI label for each object with at least 10 visible pixels (its full silhouette re-stamped
+// from its camera triangles gives the box and the occlusion level).
+void labelObjects(const World& w, double t, const std::vector<ObjView>& objs, const TriRanges& objRange,
+                  const Eigen::Isometry3d& T_cam_sim, Scratch& sc, FrameRender& out) {
+  const SynthConfig& cfg = w.config;
+  const int W = cfg.camera.width, H = cfg.camera.height;
+  const RasterTarget& cam = sc.cam;
+  const std::vector<ViewTri>& vt = sc.vt;
   std::vector<int>& visible = sc.visible;
   visible.assign(65536, 0);
   for (int y = 0; y < H; ++y) {
@@ -470,156 +517,188 @@ void Synthesizer::render(int frame, FrameRender& out) const {
     L.alpha = L.ry - std::atan2(L.location.x(), L.location.z());
     while (L.alpha > M_PI) L.alpha -= 2 * M_PI;
     while (L.alpha < -M_PI) L.alpha += 2 * M_PI;
-    // Truncation: share of the projected box outside the image.
-    double u0 = 1e18, v0 = 1e18, u1 = -1e18, v1 = -1e18;
-    bool behind = false;
-    for (int cnr = 0; cnr < 8; ++cnr) {
-      const Eigen::Vector3d pk((cnr & 1 ? 0.5 : -0.5) * L.l, (cnr & 2 ? -L.h : 0.0), (cnr & 4 ? 0.5 : -0.5) * L.w);
-      const Eigen::Vector3d pc = T_cam_obj * pk;
-      if (pc.z() < 0.1) {
-        behind = true;
-        continue;
-      }
-      const double u = cfg.camera.fx * pc.x() / pc.z() + cfg.camera.cx,
-                   v = cfg.camera.fy * pc.y() / pc.z() + cfg.camera.cy;
-      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
-    }
-    if (behind) {
-      L.truncated = 1.0;
-    } else {
-      const double area = std::max(1e-9, (u1 - u0) * (v1 - v0));
-      const double cu0 = std::max(u0, 0.0), cu1 = std::min(u1, W - 1.0), cv0 = std::max(v0, 0.0),
-                   cv1 = std::min(v1, H - 1.0);
-      const double inside = std::max(0.0, cu1 - cu0) * std::max(0.0, cv1 - cv0);
-      L.truncated = std::clamp(1.0 - inside / area, 0.0, 1.0);
-    }
+    L.truncated = boxTruncation(cfg, L, T_cam_obj);
     out.labels.push_back(L);
   }
+}
 
-  // ---- LiDAR.
-  if (cfg.lidar.enabled) {
-    const Eigen::Isometry3d T_sim_velo = T_sim_cam * w.T_cam_velo;
-    Eigen::Isometry3d T_L_velo = Eigen::Isometry3d::Identity();
-    T_L_velo.linear() = w.T_cam_velo.linear();  // camera-like axes at the LiDAR origin
-    const Eigen::Isometry3d T_L_sim = T_L_velo * T_sim_velo.inverse();
-    const Eigen::Matrix3f RL = T_L_sim.linear().cast<float>();
-    const Vec3f tL = T_L_sim.translation().cast<float>();
-    const float range = static_cast<float>(cfg.lidar.max_range);
-    std::vector<ViewTri>& lt = sc.lt;
-    lt.clear();
-    const Vec3f sun_L = RL * sun_sim;
-    for (const auto& ch : w.chunks) {
-      const Sphere s = chunkSphere(ch);
-      if ((RL * s.c + tL).norm() - s.r > range) continue;
-      appendTris(ch.tris, RL, tL, 0, sun_L, lt);
-    }
-    for (const auto& ov : objs) {
-      const Eigen::Isometry3d T = T_L_sim * ov.T_sim_iso;
-      const Eigen::Matrix3f R = T.linear().cast<float>();
-      const Vec3f tt = T.translation().cast<float>();
-      if (tt.norm() - 3.5f > range) continue;
-      appendTris(ov.tris, R, tt, static_cast<std::uint16_t>(ov.o->info.track_id), sun_L, lt);
-    }
-    const double deg = M_PI / 180.0;
-    const double up = cfg.lidar.fov_up_deg * deg, down = cfg.lidar.fov_down_deg * deg;
-    const double margin = 0.6 * deg;
-    const double c45 = std::cos(M_PI / 4);
-    const double ymin = -std::tan(up + margin) / (up + margin > 0 ? c45 : 1.0);
-    const double ymax = -std::tan(down - margin) / (down - margin < 0 ? c45 : 1.0);
-    const int cols = static_cast<int>(std::lround(360.0 / cfg.lidar.horizontal_resolution_deg));
-    const int faceW = std::max(64, static_cast<int>(std::ceil(cols / 4.0 * 1.15)));
-    const float f = faceW / 2.f;
-    RasterTarget* face = sc.face;
-    for (int k = 0; k < 4; ++k) {
-      RasterTarget& ft = face[k];
-      ft.fx = f;
-      ft.fy = 0.5f * f;  // beams are twice as far apart vertically as columns horizontally
-      ft.cx = (faceW - 1) / 2.f;
-      ft.cy = static_cast<float>(-ymin * ft.fy) + 1.f;
-      ft.near = 0.05f;
-      ft.reset(faceW, static_cast<int>(std::ceil((ymax - ymin) * ft.fy)) + 3);
-      // Face k looks along azimuth k * 90 deg (0 forward, 90 left): z_F = p . dir, x_F = p . right.
-      const double az = k * M_PI / 2;
-      const Vec3f dir(static_cast<float>(-std::sin(az)), 0, static_cast<float>(std::cos(az)));
-      const Vec3f right(static_cast<float>(std::cos(az)), 0, static_cast<float>(std::sin(az)));
-      auto toFace = [&](const Vec3f& p) { return Vec3f(p.dot(right), p.y(), p.dot(dir)); };
-      for (std::size_t i = 0; i < lt.size(); ++i) {
-        const Vec3f a = toFace(lt[i].a), b = toFace(lt[i].b), c = toFace(lt[i].c);
-        if (a.z() < 0 && b.z() < 0 && c.z() < 0) continue;
-        drawTriangle(a, b, c, static_cast<std::int32_t>(i), ft);
-      }
-    }
-    const int beams = cfg.lidar.beams;
-    // Per-beam and per-column trigonometry, computed once per frame.
-    std::vector<float> te(beams), ce(beams), se(beams);
-    for (int bm = 0; bm < beams; ++bm) {
-      const double e = beams == 1 ? up : up + (down - up) * bm / (beams - 1);
-      te[bm] = static_cast<float>(std::tan(e)), ce[bm] = static_cast<float>(std::cos(e)),
-      se[bm] = static_cast<float>(std::sin(e));
-    }
-    struct Col {
-      float ca, sa, sx, inv_cos_a;
-      int face;
-    };
-    std::vector<Col> colInfo(cols);
-    for (int col = 0; col < cols; ++col) {
-      const double alpha = 2 * M_PI * col / cols;  // 0 forward, counter-clockwise (left)
-      const int kk = static_cast<int>(std::floor((alpha + M_PI / 4) / (M_PI / 2)));
-      const double a = alpha - kk * M_PI / 2;
-      colInfo[col] = {static_cast<float>(std::cos(alpha)), static_cast<float>(std::sin(alpha)),
-                      static_cast<float>(-f * std::tan(a) + face[kk % 4].cx), static_cast<float>(1.0 / std::cos(a)),
-                      kk % 4};
-    }
-    out.lidar.reserve(static_cast<std::size_t>(beams) * cols * 4);
-    const float noise = static_cast<float>(cfg.lidar.range_noise);
-    const Vec3f origin(0, 0, 0);
-    const std::vector<float>& table = noiseTable();
-    const std::size_t tmask = table.size() - 1;
-    std::size_t to = hash3(fseed, 0xa5a5u, 9u);
-    for (int bm = 0; bm < beams; ++bm) {
-      for (int col = 0; col < cols; ++col) {
-        const Col& ci = colInfo[col];
-        const RasterTarget& ft = face[ci.face];
-        const float sx = ci.sx;
-        const float sy = ft.fy * (-te[bm] * ci.inv_cos_a) + ft.cy;
-        const Vec3f dirL(-ce[bm] * ci.sa, -se[bm], ce[bm] * ci.ca);
-        // Candidates: the 2 x 2 pixels round the ray, then a 4 x 4 ring if none of them is hit.
-        float best = 1e30f;
-        int bestId = -1;
-        std::int32_t seen[16];
-        int nseen = 0;
-        const int bx = static_cast<int>(std::floor(sx)), by = static_cast<int>(std::floor(sy));
-        for (int pass = 0; pass < 2 && bestId < 0; ++pass) {
-          const int lo = pass == 0 ? 0 : -1, hi = pass == 0 ? 1 : 2;
-          for (int dy = lo; dy <= hi; ++dy)
-            for (int dx = lo; dx <= hi; ++dx) {
-              if (pass == 1 && dx >= 0 && dx <= 1 && dy >= 0 && dy <= 1) continue;
-              const int xx = bx + dx, yy = by + dy;
-              if (xx < 0 || yy < 0 || xx >= ft.W || yy >= ft.H) continue;
-              const std::int32_t id = ft.id[static_cast<std::size_t>(yy) * ft.W + xx];
-              if (id < 0) continue;
-              bool dup = false;
-              for (int q = 0; q < nseen; ++q) dup = dup || seen[q] == id;
-              if (dup || nseen >= 16) continue;
-              seen[nseen++] = id;
-              float dist;
-              if (rayTriangle(origin, dirL, lt[static_cast<std::size_t>(id)], dist) && dist < best)
-                best = dist, bestId = id;
-            }
-        }
-        to += 1;
-        if (bestId < 0 || best > range || best < 1.0f) continue;
-        const ViewTri& tr = lt[static_cast<std::size_t>(bestId)];
-        const float r = best + noise * table[to & tmask];
-        const float cosi = std::abs(tr.n.dot(dirL));
-        const float inten = std::clamp(lidarReflectance(tr.material) * (0.3f + 0.7f * cosi), 0.f, 1.f);
-        out.lidar.push_back(r * ce[bm] * ci.ca);
-        out.lidar.push_back(r * ce[bm] * ci.sa);
-        out.lidar.push_back(r * se[bm]);
-        out.lidar.push_back(inten);
-      }
+// The LiDAR's four raster faces round the sensor: their geometry and the beams' elevation range.
+struct LidarFaces {
+  double up, down;  // elevation of the first and the last beam (radians)
+  int cols;         // columns per revolution
+  float f;          // the faces' horizontal focal length (px)
+};
+
+// Rasterises the LiDAR-frame triangles lt into the four faces (candidate triangles per pixel).
+LidarFaces rasteriseLidarFaces(const SynthConfig& cfg, const std::vector<ViewTri>& lt, RasterTarget face[4]) {
+  const double deg = M_PI / 180.0;
+  const double up = cfg.lidar.fov_up_deg * deg, down = cfg.lidar.fov_down_deg * deg;
+  const double margin = 0.6 * deg;
+  const double c45 = std::cos(M_PI / 4);
+  const double ymin = -std::tan(up + margin) / (up + margin > 0 ? c45 : 1.0);
+  const double ymax = -std::tan(down - margin) / (down - margin < 0 ? c45 : 1.0);
+  const int cols = static_cast<int>(std::lround(360.0 / cfg.lidar.horizontal_resolution_deg));
+  const int faceW = std::max(64, static_cast<int>(std::ceil(cols / 4.0 * 1.15)));
+  const float f = faceW / 2.f;
+  for (int k = 0; k < 4; ++k) {
+    RasterTarget& ft = face[k];
+    ft.fx = f;
+    ft.fy = 0.5f * f;  // beams are twice as far apart vertically as columns horizontally
+    ft.cx = (faceW - 1) / 2.f;
+    ft.cy = static_cast<float>(-ymin * ft.fy) + 1.f;
+    ft.near = 0.05f;
+    ft.reset(faceW, static_cast<int>(std::ceil((ymax - ymin) * ft.fy)) + 3);
+    // Face k looks along azimuth k * 90 deg (0 forward, 90 left): z_F = p . dir, x_F = p . right.
+    const double az = k * M_PI / 2;
+    const Vec3f dir(static_cast<float>(-std::sin(az)), 0, static_cast<float>(std::cos(az)));
+    const Vec3f right(static_cast<float>(std::cos(az)), 0, static_cast<float>(std::sin(az)));
+    auto toFace = [&](const Vec3f& p) { return Vec3f(p.dot(right), p.y(), p.dot(dir)); };
+    for (std::size_t i = 0; i < lt.size(); ++i) {
+      const Vec3f a = toFace(lt[i].a), b = toFace(lt[i].b), c = toFace(lt[i].c);
+      if (a.z() < 0 && b.z() < 0 && c.z() < 0) continue;
+      drawTriangle(a, b, c, static_cast<std::int32_t>(i), ft);
     }
   }
+  return {up, down, cols, f};
+}
+
+// Casts every beam of every column against the candidate triangles of the faces and appends the returns
+// (x, y, z, intensity in the LiDAR frame) to out.lidar.
+void castBeams(const SynthConfig& cfg, const std::vector<ViewTri>& lt, const RasterTarget face[4], const LidarFaces& lf,
+               std::uint32_t fseed, FrameRender& out) {
+  const double up = lf.up, down = lf.down;
+  const int cols = lf.cols;
+  const float f = lf.f;
+  const float range = static_cast<float>(cfg.lidar.max_range);
+  const int beams = cfg.lidar.beams;
+  // Per-beam and per-column trigonometry, computed once per frame.
+  std::vector<float> te(beams), ce(beams), se(beams);
+  for (int bm = 0; bm < beams; ++bm) {
+    const double e = beams == 1 ? up : up + (down - up) * bm / (beams - 1);
+    te[bm] = static_cast<float>(std::tan(e)), ce[bm] = static_cast<float>(std::cos(e)),
+    se[bm] = static_cast<float>(std::sin(e));
+  }
+  struct Col {
+    float ca, sa, sx, inv_cos_a;
+    int face;
+  };
+  std::vector<Col> colInfo(cols);
+  for (int col = 0; col < cols; ++col) {
+    const double alpha = 2 * M_PI * col / cols;  // 0 forward, counter-clockwise (left)
+    const int kk = static_cast<int>(std::floor((alpha + M_PI / 4) / (M_PI / 2)));
+    const double a = alpha - kk * M_PI / 2;
+    colInfo[col] = {static_cast<float>(std::cos(alpha)), static_cast<float>(std::sin(alpha)),
+                    static_cast<float>(-f * std::tan(a) + face[kk % 4].cx), static_cast<float>(1.0 / std::cos(a)),
+                    kk % 4};
+  }
+  out.lidar.reserve(static_cast<std::size_t>(beams) * cols * 4);
+  const float noise = static_cast<float>(cfg.lidar.range_noise);
+  const Vec3f origin(0, 0, 0);
+  const std::vector<float>& table = noiseTable();
+  const std::size_t tmask = table.size() - 1;
+  std::size_t to = hash3(fseed, 0xa5a5u, 9u);
+  for (int bm = 0; bm < beams; ++bm) {
+    for (int col = 0; col < cols; ++col) {
+      const Col& ci = colInfo[col];
+      const RasterTarget& ft = face[ci.face];
+      const float sx = ci.sx;
+      const float sy = ft.fy * (-te[bm] * ci.inv_cos_a) + ft.cy;
+      const Vec3f dirL(-ce[bm] * ci.sa, -se[bm], ce[bm] * ci.ca);
+      // Candidates: the 2 x 2 pixels round the ray, then a 4 x 4 ring if none of them is hit.
+      float best = 1e30f;
+      int bestId = -1;
+      std::int32_t seen[16];
+      int nseen = 0;
+      const int bx = static_cast<int>(std::floor(sx)), by = static_cast<int>(std::floor(sy));
+      for (int pass = 0; pass < 2 && bestId < 0; ++pass) {
+        const int lo = pass == 0 ? 0 : -1, hi = pass == 0 ? 1 : 2;
+        for (int dy = lo; dy <= hi; ++dy)
+          for (int dx = lo; dx <= hi; ++dx) {
+            if (pass == 1 && dx >= 0 && dx <= 1 && dy >= 0 && dy <= 1) continue;
+            const int xx = bx + dx, yy = by + dy;
+            if (xx < 0 || yy < 0 || xx >= ft.W || yy >= ft.H) continue;
+            const std::int32_t id = ft.id[static_cast<std::size_t>(yy) * ft.W + xx];
+            if (id < 0) continue;
+            bool dup = false;
+            for (int q = 0; q < nseen; ++q) dup = dup || seen[q] == id;
+            if (dup || nseen >= 16) continue;
+            seen[nseen++] = id;
+            float dist;
+            if (rayTriangle(origin, dirL, lt[static_cast<std::size_t>(id)], dist) && dist < best)
+              best = dist, bestId = id;
+          }
+      }
+      to += 1;
+      if (bestId < 0 || best > range || best < 1.0f) continue;
+      const ViewTri& tr = lt[static_cast<std::size_t>(bestId)];
+      const float r = best + noise * table[to & tmask];
+      const float cosi = std::abs(tr.n.dot(dirL));
+      const float inten = std::clamp(lidarReflectance(tr.material) * (0.3f + 0.7f * cosi), 0.f, 1.f);
+      out.lidar.push_back(r * ce[bm] * ci.ca);
+      out.lidar.push_back(r * ce[bm] * ci.sa);
+      out.lidar.push_back(r * se[bm]);
+      out.lidar.push_back(inten);
+    }
+  }
+}
+
+// LiDAR: the scene within range in a camera-like frame at the sensor (sc.lt), rasterised into four faces,
+// then one exact ray-triangle intersection per beam.
+void scanLidar(const World& w, const std::vector<ObjView>& objs, const Eigen::Isometry3d& T_sim_cam,
+               const Vec3f& sun_sim, std::uint32_t fseed, Scratch& sc, FrameRender& out) {
+  const SynthConfig& cfg = w.config;
+  const Eigen::Isometry3d T_sim_velo = T_sim_cam * w.T_cam_velo;
+  Eigen::Isometry3d T_L_velo = Eigen::Isometry3d::Identity();
+  T_L_velo.linear() = w.T_cam_velo.linear();  // camera-like axes at the LiDAR origin
+  const Eigen::Isometry3d T_L_sim = T_L_velo * T_sim_velo.inverse();
+  const Eigen::Matrix3f RL = T_L_sim.linear().cast<float>();
+  const Vec3f tL = T_L_sim.translation().cast<float>();
+  const float range = static_cast<float>(cfg.lidar.max_range);
+  std::vector<ViewTri>& lt = sc.lt;
+  lt.clear();
+  const Vec3f sun_L = RL * sun_sim;
+  for (const auto& ch : w.chunks) {
+    const Sphere s = chunkSphere(ch);
+    if ((RL * s.c + tL).norm() - s.r > range) continue;
+    appendTris(ch.tris, RL, tL, 0, sun_L, lt);
+  }
+  for (const auto& ov : objs) {
+    const Eigen::Isometry3d T = T_L_sim * ov.T_sim_iso;
+    const Eigen::Matrix3f R = T.linear().cast<float>();
+    const Vec3f tt = T.translation().cast<float>();
+    if (tt.norm() - 3.5f > range) continue;
+    appendTris(ov.tris, R, tt, static_cast<std::uint16_t>(ov.o->info.track_id), sun_L, lt);
+  }
+  const LidarFaces lf = rasteriseLidarFaces(cfg, lt, sc.face);
+  castBeams(cfg, lt, sc.face, lf, fseed, out);
+}
+
+}  // namespace
+
+void Synthesizer::render(int frame, FrameRender& out) const {
+  const World& w = *world_;
+  const SynthConfig& cfg = w.config;
+  const double t = w.frameTime(frame);
+  out.index = frame;
+  out.labels.clear();
+  out.lidar.clear();
+  out.stamp = t;
+  const Eigen::Isometry3d T_sim_cam = w.T_sim_cam(t);
+  out.T_world_cam = w.T_sim_cam0.inverse() * T_sim_cam;
+  const Eigen::Isometry3d T_cam_sim = T_sim_cam.inverse();
+  const Eigen::Matrix3f Rcs = T_cam_sim.linear().cast<float>();
+  const Vec3f tcs = T_cam_sim.translation().cast<float>();
+  const double sunAz = static_cast<double>(mixSeed(cfg.seed, 5) % 6283) / 1000.0;
+  const Vec3f sun_sim =
+      Vec3f(static_cast<float>(std::cos(sunAz) * 0.55), static_cast<float>(std::sin(sunAz) * 0.55), 0.83f).normalized();
+
+  const std::vector<ObjView> objs = poseObjects(w, t);
+  Scratch& sc = scratch();
+  const TriRanges objRange = rasteriseCamera(w, objs, T_cam_sim, Rcs, tcs, sun_sim, sc);
+  shadeCamera(w, Rcs, sc, out);
+  const std::uint32_t fseed = applyImageEffects(cfg, frame, sc, out);
+  labelObjects(w, t, objs, objRange, T_cam_sim, sc, out);
+  if (cfg.lidar.enabled) scanLidar(w, objs, T_sim_cam, sun_sim, fseed, sc, out);
 }
 
 }  // namespace beslam::sim

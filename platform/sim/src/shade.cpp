@@ -234,41 +234,44 @@ Vec3f kerb(float u, float v, float fp) {
   return grey(c);
 }
 
-Vec3f facade(const Facade& f, float u, float v, float fp) {
+// The wall material of a facade, evaluated only where no opening or trim covers it.
+Vec3f facadeWall(const Facade& f, float u, float v, float fp) {
   const std::uint32_t sd = f.seed;
-  // The wall material, evaluated only where no opening or trim covers it.
-  auto base = [&]() -> Vec3f {
-    if (v < 0.45f) return f.trim_colour * (0.85f + 0.3f * N(u / 2.f, v / 2.f) + 0.4f * detail(u, v, 0.01f, 3, fp, 3.f));
-    const float stain = N(u / 25.f + static_cast<float>(sd % 113) * 0.01f, v / 25.f);
-    Vec3f c = f.colour * (0.85f + 0.3f * (stain - 0.5f) + 0.3f * speckle(u, v, 0.07f, fp, sd + 3) +
-                          0.25f * speckle(u, v, 0.2f, fp, sd + 4) + 0.2f * speckle(u, v, 0.55f, fp, sd + 5));
-    if (f.base == 0) {  // brick
-      const float row = ffloor(v / f.brick_h);
-      const float off = (static_cast<int>(row) & 1) * f.brick_w * 0.5f;
-      const float col = ffloor((u + off) / f.brick_w);
-      const float fu = fract((u + off) / f.brick_w), fv = fract(v / f.brick_h);
-      const float tint = 0.62f + 0.75f * hashf(sd, static_cast<std::uint32_t>(static_cast<int>(row)),
-                                               static_cast<std::uint32_t>(static_cast<int>(col)));
-      const float bw = fade(f.brick_h * 0.8f, fp);
-      const Vec3f brick = c * (1.0f + (tint - 0.97f) * bw) * (1.f + 0.25f * detail(u, v, 0.008f, 2, fp, 2.f));
-      const float mortar = std::max(lineCov(std::min(fu, 1.f - fu) * f.brick_w, 0.01f, fp),
-                                    lineCov(std::min(fv, 1.f - fv) * f.brick_h, 0.01f, fp));
-      return mix(brick, Vec3f(0.72f, 0.70f, 0.66f), mortar);
-    }
-    if (f.base == 1)  // plaster
-      return c * (1.0f + 0.45f * detail(u, v, 0.015f, 4, fp, static_cast<float>(sd % 101)) +
-                  0.25f * speckle(u, v, 0.08f, fp, sd));
-    // concrete panels
-    const float pc = ffloor(u / f.panel_w), pr = ffloor(v / f.floor_h);
-    c = c *
-        (0.85f + 0.3f * hashf(sd, static_cast<std::uint32_t>(static_cast<int>(pc)),
-                              static_cast<std::uint32_t>(static_cast<int>(pr)))) *
-        (1.0f + 0.35f * detail(u, v, 0.015f, 4, fp, static_cast<float>(sd % 89)));
-    const float pu = fract(u / f.panel_w), pv = fract(v / f.floor_h);
-    return c * (1.0f - 0.5f * std::max(lineCov(std::min(pu, 1.f - pu) * f.panel_w, 0.03f, fp),
-                                       lineCov(std::min(pv, 1.f - pv) * f.floor_h, 0.03f, fp)));
-  };
-  const float style = hashf(static_cast<std::uint32_t>(f.building), 41, 42);
+  if (v < 0.45f) return f.trim_colour * (0.85f + 0.3f * N(u / 2.f, v / 2.f) + 0.4f * detail(u, v, 0.01f, 3, fp, 3.f));
+  const float stain = N(u / 25.f + static_cast<float>(sd % 113) * 0.01f, v / 25.f);
+  Vec3f c = f.colour * (0.85f + 0.3f * (stain - 0.5f) + 0.3f * speckle(u, v, 0.07f, fp, sd + 3) +
+                        0.25f * speckle(u, v, 0.2f, fp, sd + 4) + 0.2f * speckle(u, v, 0.55f, fp, sd + 5));
+  if (f.base == 0) {  // brick
+    const float row = ffloor(v / f.brick_h);
+    const float off = (static_cast<int>(row) & 1) * f.brick_w * 0.5f;
+    const float col = ffloor((u + off) / f.brick_w);
+    const float fu = fract((u + off) / f.brick_w), fv = fract(v / f.brick_h);
+    const float tint = 0.62f + 0.75f * hashf(sd, static_cast<std::uint32_t>(static_cast<int>(row)),
+                                             static_cast<std::uint32_t>(static_cast<int>(col)));
+    const float bw = fade(f.brick_h * 0.8f, fp);
+    const Vec3f brick = c * (1.0f + (tint - 0.97f) * bw) * (1.f + 0.25f * detail(u, v, 0.008f, 2, fp, 2.f));
+    const float mortar = std::max(lineCov(std::min(fu, 1.f - fu) * f.brick_w, 0.01f, fp),
+                                  lineCov(std::min(fv, 1.f - fv) * f.brick_h, 0.01f, fp));
+    return mix(brick, Vec3f(0.72f, 0.70f, 0.66f), mortar);
+  }
+  if (f.base == 1)  // plaster
+    return c * (1.0f + 0.45f * detail(u, v, 0.015f, 4, fp, static_cast<float>(sd % 101)) +
+                0.25f * speckle(u, v, 0.08f, fp, sd));
+  // concrete panels
+  const float pc = ffloor(u / f.panel_w), pr = ffloor(v / f.floor_h);
+  c = c *
+      (0.85f + 0.3f * hashf(sd, static_cast<std::uint32_t>(static_cast<int>(pc)),
+                            static_cast<std::uint32_t>(static_cast<int>(pr)))) *
+      (1.0f + 0.35f * detail(u, v, 0.015f, 4, fp, static_cast<float>(sd % 89)));
+  const float pu = fract(u / f.panel_w), pv = fract(v / f.floor_h);
+  return c * (1.0f - 0.5f * std::max(lineCov(std::min(pu, 1.f - pu) * f.panel_w, 0.03f, fp),
+                                     lineCov(std::min(pv, 1.f - pv) * f.floor_h, 0.03f, fp)));
+}
+
+// Posters, stickers and patches of repair near street level, then quoins (alternating corner stones)
+// and the top trim: true with `out` set where one of them covers (u, v).
+bool facadeTrim(const Facade& f, float u, float v, float fp, float style, Vec3f& out) {
+  const std::uint32_t sd = f.seed;
   // Posters, stickers and patches of repair near street level.
   if (v > 0.5f && v < 2.6f) {
     const float cu = ffloor(u / 1.7f), cv = ffloor(v / 1.05f);
@@ -280,7 +283,8 @@ Vec3f facade(const Facade& f, float u, float v, float fp) {
                   h0 = 0.12f + 0.25f * static_cast<float>((hp >> 12) & 15) / 15.f;
       if (pu > w0 && pu < 1.f - w0 * 0.5f && pv > h0 && pv < 1.f - h0 * 0.5f) {
         const Vec3f pc(hashf(hp, 1, 2), hashf(hp, 2, 3), hashf(hp, 3, 4));
-        return mix(pc, grey(0.9f), 0.3f) * (0.8f + 0.4f * (fract(pv * 9.f) < 0.5f ? 1.f : 0.f) * fade(0.06f, fp));
+        out = mix(pc, grey(0.9f), 0.3f) * (0.8f + 0.4f * (fract(pv * 9.f) < 0.5f ? 1.f : 0.f) * fade(0.06f, fp));
+        return true;
       }
     }
   }
@@ -294,70 +298,110 @@ Vec3f facade(const Facade& f, float u, float v, float fp) {
       Vec3f q =
           f.trim_colour * 1.35f * (0.9f + 0.2f * hashf(sd, static_cast<std::uint32_t>(static_cast<int>(row)), 43));
       q *= 1.f - 0.4f * std::max(lineCov(std::min(fv, 1.f - fv) * 0.32f, 0.012f, fp), lineCov(width - e, 0.012f, fp));
-      return q;
+      out = q;
+      return true;
     }
   }
-  if (v > f.height - 0.45f) return f.trim_colour * (0.9f + 0.2f * N(u / 3.f, 0.3f));
-  // Openings.
+  if (v > f.height - 0.45f) {
+    out = f.trim_colour * (0.9f + 0.2f * N(u / 3.f, 0.3f));
+    return true;
+  }
+  return false;
+}
+
+// Glass of an opening (window, door pane or shop bay) at (lu, lv) inside its ww x wh pane: reflections,
+// curtains, blinds or light, and the glazing bars; key picks the opening's own look.
+Vec3f facadeGlass(const Facade& f, float u, float v, float fp, float style, float lu, float lv, float ww, float wh,
+                  std::uint32_t key) {
+  const std::uint32_t sd = f.seed;
+  const float h = hashf(sd, key, 21);
+  const float refl = 0.10f + 0.16f * (lv / wh) + 0.10f * N(u / 6.f + h, v / 6.f);
+  Vec3f g(refl * 0.9f, refl, refl * 1.12f);
+  if (h < 0.33f) {  // curtains from the sides
+    const float open = 0.15f + 0.3f * hashf(sd, key, 22);
+    if (lu < ww * open || lu > ww * (1 - open))
+      g = Vec3f(0.75f, 0.72f, 0.65f) * (0.8f + 0.3f * hashf(sd, key, 23)) *
+          (0.9f + 0.1f * std::sin(lu * 40.f) * fade(0.04f, fp));
+  } else if (h < 0.5f) {  // blinds
+    const float down = wh * (0.2f + 0.7f * hashf(sd, key, 24));
+    if (lv > wh - down) g = grey(0.6f + 0.15f * (fract(lv / 0.05f) < 0.5f ? 1.f : 0.f) * fade(0.025f, fp));
+  } else if (h > 0.93f) {  // lit
+    g = Vec3f(0.85f, 0.78f, 0.55f);
+  }
+  const float cols = ww > 1.2f ? 2.f : 1.f;
+  const float rows = (style > 0.45f) ? 3.f : (h > 0.6f ? 2.f : 1.f);
+  const float pu = fract(lu / ww * cols), pv = fract(lv / wh * rows);
+  const float bar = std::max(lineCov(std::min(pu, 1.f - pu) * ww / cols, 0.05f, fp),
+                             lineCov(std::min(pv, 1.f - pv) * wh / rows, 0.04f, fp));
+  return mix(g, f.frame_colour, bar);
+}
+
+// The ground floor's door and shop front (sign band with lettering, bays of glass): true with `out` set
+// where one of them covers (u, v).
+bool facadeShopFront(const Facade& f, float u, float v, float fp, float style, Vec3f& out) {
+  const std::uint32_t sd = f.seed;
   auto glass = [&](float lu, float lv, float ww, float wh, std::uint32_t key) {
-    const float h = hashf(sd, key, 21);
-    const float refl = 0.10f + 0.16f * (lv / wh) + 0.10f * N(u / 6.f + h, v / 6.f);
-    Vec3f g(refl * 0.9f, refl, refl * 1.12f);
-    if (h < 0.33f) {  // curtains from the sides
-      const float open = 0.15f + 0.3f * hashf(sd, key, 22);
-      if (lu < ww * open || lu > ww * (1 - open))
-        g = Vec3f(0.75f, 0.72f, 0.65f) * (0.8f + 0.3f * hashf(sd, key, 23)) *
-            (0.9f + 0.1f * std::sin(lu * 40.f) * fade(0.04f, fp));
-    } else if (h < 0.5f) {  // blinds
-      const float down = wh * (0.2f + 0.7f * hashf(sd, key, 24));
-      if (lv > wh - down) g = grey(0.6f + 0.15f * (fract(lv / 0.05f) < 0.5f ? 1.f : 0.f) * fade(0.025f, fp));
-    } else if (h > 0.93f) {  // lit
-      g = Vec3f(0.85f, 0.78f, 0.55f);
-    }
-    const float cols = ww > 1.2f ? 2.f : 1.f;
-    const float rows = (style > 0.45f) ? 3.f : (h > 0.6f ? 2.f : 1.f);
-    const float pu = fract(lu / ww * cols), pv = fract(lv / wh * rows);
-    const float bar = std::max(lineCov(std::min(pu, 1.f - pu) * ww / cols, 0.05f, fp),
-                               lineCov(std::min(pv, 1.f - pv) * wh / rows, 0.04f, fp));
-    return mix(g, f.frame_colour, bar);
+    return facadeGlass(f, u, v, fp, style, lu, lv, ww, wh, key);
   };
   const float frame = 0.07f;
-  if (v < f.ground_h) {
-    if (f.door_face && u > f.door_u && u < f.door_u + f.door_w && v > 0.3f && v < 2.35f) {
-      const float lu = u - f.door_u, lv = v - 0.3f;
-      if (lu < frame || lu > f.door_w - frame || lv > 2.05f - frame) return f.frame_colour * 0.8f;
-      Vec3f d = Vec3f(0.30f, 0.20f, 0.12f) * (0.8f + 0.5f * hashf(sd, 7, 7));
-      if (lv > 1.1f && lv < 1.8f && lu > 0.2f && lu < f.door_w - 0.2f) d = glass(lu, lv, f.door_w, 2.0f, 999);
-      if (std::abs(lu - (f.door_w - 0.22f)) < 0.03f && std::abs(lv - 1.0f) < 0.12f) d = grey(0.8f);
-      return d;
+  if (f.door_face && u > f.door_u && u < f.door_u + f.door_w && v > 0.3f && v < 2.35f) {
+    const float lu = u - f.door_u, lv = v - 0.3f;
+    if (lu < frame || lu > f.door_w - frame || lv > 2.05f - frame) {
+      out = f.frame_colour * 0.8f;
+      return true;
     }
-    if (f.shop && u > 0.8f && u < f.length - 0.8f) {
-      const float top = f.ground_h - 0.7f;
-      if (v > top && v < top + 0.5f) {  // sign band with lettering
-        const float shopHue = hashf(sd, 31, 1);
-        Vec3f band = shopHue < 0.33f ? Vec3f(0.1f, 0.15f, 0.5f)
-                                     : (shopHue < 0.66f ? Vec3f(0.55f, 0.08f, 0.06f) : Vec3f(0.1f, 0.35f, 0.15f));
-        const float letter = ffloor((u - 0.8f) / 0.32f);
-        const float lu = fract((u - 0.8f) / 0.32f), lv = (v - top) / 0.5f;
-        if (lv > 0.2f && lv < 0.8f && lu > 0.15f && lu < 0.8f &&
-            hashf(sd, static_cast<std::uint32_t>(static_cast<int>(letter)), 32) < 0.8f) {
-          const float cellx = ffloor(lu * 3), celly = ffloor(lv * 5);
-          if (hashf(sd, static_cast<std::uint32_t>(static_cast<int>(letter * 16 + cellx)),
-                    static_cast<std::uint32_t>(static_cast<int>(celly))) < 0.6f)
-            band = grey(0.92f);
-        }
-        return band;
-      }
-      if (v > 0.45f && v < top - 0.05f) {
-        const float bay = 2.4f;
-        const float lu = fract(u / bay) * bay;
-        if (lu < 0.09f) return f.frame_colour * 0.7f;
-        return glass(lu, v - 0.45f, bay, top - 0.5f,
-                     static_cast<std::uint32_t>(static_cast<int>(ffloor(u / bay))) + 500u);
-      }
-      return base();
-    }
+    Vec3f d = Vec3f(0.30f, 0.20f, 0.12f) * (0.8f + 0.5f * hashf(sd, 7, 7));
+    if (lv > 1.1f && lv < 1.8f && lu > 0.2f && lu < f.door_w - 0.2f) d = glass(lu, lv, f.door_w, 2.0f, 999);
+    if (std::abs(lu - (f.door_w - 0.22f)) < 0.03f && std::abs(lv - 1.0f) < 0.12f) d = grey(0.8f);
+    out = d;
+    return true;
   }
+  if (f.shop && u > 0.8f && u < f.length - 0.8f) {
+    const float top = f.ground_h - 0.7f;
+    if (v > top && v < top + 0.5f) {  // sign band with lettering
+      const float shopHue = hashf(sd, 31, 1);
+      Vec3f band = shopHue < 0.33f ? Vec3f(0.1f, 0.15f, 0.5f)
+                                   : (shopHue < 0.66f ? Vec3f(0.55f, 0.08f, 0.06f) : Vec3f(0.1f, 0.35f, 0.15f));
+      const float letter = ffloor((u - 0.8f) / 0.32f);
+      const float lu = fract((u - 0.8f) / 0.32f), lv = (v - top) / 0.5f;
+      if (lv > 0.2f && lv < 0.8f && lu > 0.15f && lu < 0.8f &&
+          hashf(sd, static_cast<std::uint32_t>(static_cast<int>(letter)), 32) < 0.8f) {
+        const float cellx = ffloor(lu * 3), celly = ffloor(lv * 5);
+        if (hashf(sd, static_cast<std::uint32_t>(static_cast<int>(letter * 16 + cellx)),
+                  static_cast<std::uint32_t>(static_cast<int>(celly))) < 0.6f)
+          band = grey(0.92f);
+      }
+      out = band;
+      return true;
+    }
+    if (v > 0.45f && v < top - 0.05f) {
+      const float bay = 2.4f;
+      const float lu = fract(u / bay) * bay;
+      if (lu < 0.09f) {
+        out = f.frame_colour * 0.7f;
+        return true;
+      }
+      out = glass(lu, v - 0.45f, bay, top - 0.5f, static_cast<std::uint32_t>(static_cast<int>(ffloor(u / bay))) + 500u);
+      return true;
+    }
+    out = facadeWall(f, u, v, fp);
+    return true;
+  }
+  return false;
+}
+
+Vec3f facade(const Facade& f, float u, float v, float fp) {
+  // The wall material, evaluated only where no opening or trim covers it.
+  auto base = [&]() -> Vec3f { return facadeWall(f, u, v, fp); };
+  const float style = hashf(static_cast<std::uint32_t>(f.building), 41, 42);
+  Vec3f out;
+  if (facadeTrim(f, u, v, fp, style, out)) return out;
+  // Openings.
+  auto glass = [&](float lu, float lv, float ww, float wh, std::uint32_t key) {
+    return facadeGlass(f, u, v, fp, style, lu, lv, ww, wh, key);
+  };
+  const float frame = 0.07f;
+  if (v < f.ground_h && facadeShopFront(f, u, v, fp, style, out)) return out;
   float lv, sill = f.win_sill;
   std::uint32_t fl;
   if (v < f.ground_h) {

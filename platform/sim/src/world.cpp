@@ -356,28 +356,35 @@ World::World(const SynthConfig& cfg) : config(cfg) {
 // ---------------------------------------------------------------------------------------------------
 // Urban street grid.
 
-void World::buildUrban(Rng& rng) {
+// A block of the urban grid (pavement from x0, y0 to x1, y1) and which of its sides carry buildings.
+struct World::Block {
+  double x0, y0, x1, y1;
+  bool sides[4];
+};
+
+// The road surface of one street segment from `start` along the unit axis `dir`, in 20 m tiles.
+void World::addStreetTiles(int street, Vec2d start, Vec2d dir, double len) {
+  const double hw = roadHalfWidth();
+  const Vec2d left(-dir.y(), dir.x());
+  const int n = std::max(1, static_cast<int>(std::ceil(len / 20.0)));
+  for (int k = 0; k < n; ++k) {
+    const double a = len * k / n, b = len * (k + 1) / n;
+    Chunk ch;
+    const Vec2d p0 = start + dir * a - left * hw, p1 = start + dir * b - left * hw;
+    const Vec2d p2 = start + dir * b + left * hw, p3 = start + dir * a + left * hw;
+    const Vec3f ua = v3(dir.x(), dir.y(), 0), va = v3(left.x(), left.y(), 0);
+    addQuad(ch.tris, v3(p0.x(), p0.y(), 0), v3(p1.x(), p1.y(), 0), v3(p2.x(), p2.y(), 0), v3(p3.x(), p3.y(), 0), M_ROAD,
+            street, ua, static_cast<float>(-dir.dot(start)), va, static_cast<float>(-left.dot(start)));
+    ch.finish();
+    chunks.push_back(std::move(ch));
+  }
+}
+
+// Streets (one segment between two intersections, horizontal then vertical) and intersections.
+void World::buildStreets(Rng& rng) {
   const auto& wc = config.world;
   const double hw = roadHalfWidth();
-  const double pw = wc.pavement_width;
   const int ex = wc.blocks_x / 2, ey = wc.blocks_y / 2;
-  const float kerb = static_cast<float>(kKerb);
-
-  auto addStreetTiles = [&](int street, Vec2d start, Vec2d dir, double len) {
-    const Vec2d left(-dir.y(), dir.x());
-    const int n = std::max(1, static_cast<int>(std::ceil(len / 20.0)));
-    for (int k = 0; k < n; ++k) {
-      const double a = len * k / n, b = len * (k + 1) / n;
-      Chunk ch;
-      const Vec2d p0 = start + dir * a - left * hw, p1 = start + dir * b - left * hw;
-      const Vec2d p2 = start + dir * b + left * hw, p3 = start + dir * a + left * hw;
-      const Vec3f ua = v3(dir.x(), dir.y(), 0), va = v3(left.x(), left.y(), 0);
-      addQuad(ch.tris, v3(p0.x(), p0.y(), 0), v3(p1.x(), p1.y(), 0), v3(p2.x(), p2.y(), 0), v3(p3.x(), p3.y(), 0),
-              M_ROAD, street, ua, static_cast<float>(-dir.dot(start)), va, static_cast<float>(-left.dot(start)));
-      ch.finish();
-      chunks.push_back(std::move(ch));
-    }
-  };
 
   // One street and its segment from `start` along the unit axis `dir` (length in metres, between two
   // intersections); `ego` where the ego's loop runs along it.
@@ -416,12 +423,12 @@ void World::buildUrban(Rng& rng) {
       ch.finish();
       chunks.push_back(std::move(ch));
     }
+}
 
-  // Blocks: the grid's blocks plus four border strips facing the outer streets.
-  struct Block {
-    double x0, y0, x1, y1;
-    bool sides[4];
-  };
+// Blocks: the grid's blocks plus four border strips facing the outer streets.
+std::vector<World::Block> World::urbanBlocks() const {
+  const auto& wc = config.world;
+  const double hw = roadHalfWidth();
   std::vector<Block> blocks;
   for (int i = 0; i < wc.blocks_x; ++i)
     for (int j = 0; j < wc.blocks_y; ++j)
@@ -432,210 +439,246 @@ void World::buildUrban(Rng& rng) {
   blocks.push_back({gx0 - B, gy1, gx1 + B, gy1 + B, {true, false, false, false}});  // north strip
   blocks.push_back({gx0 - B, gy0, gx0, gy1, {false, true, false, false}});          // west strip
   blocks.push_back({gx1, gy0, gx1 + B, gy1, {false, false, false, true}});          // east strip
+  return blocks;
+}
 
+// Pavement top of a block, tiled.
+void World::addPavement(const Block& bk) {
+  const float kerb = static_cast<float>(kKerb);
+  const int nx = std::max(1, static_cast<int>(std::ceil((bk.x1 - bk.x0) / 20.0)));
+  const int ny = std::max(1, static_cast<int>(std::ceil((bk.y1 - bk.y0) / 20.0)));
+  for (int a = 0; a < nx; ++a)
+    for (int b = 0; b < ny; ++b) {
+      Chunk ch;
+      const float xa = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * a / nx),
+                  xb = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * (a + 1) / nx);
+      const float ya = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * b / ny),
+                  yb = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * (b + 1) / ny);
+      addQuad(ch.tris, {xa, ya, kerb}, {xb, ya, kerb}, {xb, yb, kerb}, {xa, yb, kerb}, M_PAVEMENT, 0, {1, 0, 0}, 0,
+              {0, 1, 0}, 0);
+      ch.finish();
+      chunks.push_back(std::move(ch));
+    }
+}
+
+// Kerb face of a block side from corner S along d (length L).
+void World::addKerbFace(const Vec2d& S, const Vec2d& d, double L) {
+  const float kerb = static_cast<float>(kKerb);
+  Chunk ch;
+  const int m = std::max(1, static_cast<int>(std::ceil(L / 20.0)));
+  for (int q = 0; q < m; ++q) {
+    const Vec2d a = S + d * (L * q / m), b = S + d * (L * (q + 1) / m);
+    addQuad(ch.tris, v3(a.x(), a.y(), 0), v3(b.x(), b.y(), 0), v3(b.x(), b.y(), kerb), v3(a.x(), a.y(), kerb), M_KERB,
+            0, v3(d.x(), d.y(), 0), static_cast<float>(-d.dot(S)), {0, 0, 1}, 0);
+  }
+  ch.finish();
+  chunks.push_back(std::move(ch));
+}
+
+// Style of a random building's facades (colours, bricks, floors, windows, shop front); `height` gets its
+// height in metres.
+Facade World::randomFacade(Rng& rng, int building, double& height) const {
+  const auto& wc = config.world;
+  Facade f;
+  f.building = building;
+  f.base = rng.chance(0.45) ? 0 : 1 + rng.index(2);
+  static const float palette[][3] = {{0.55f, 0.30f, 0.22f}, {0.70f, 0.58f, 0.42f}, {0.80f, 0.76f, 0.66f},
+                                     {0.62f, 0.64f, 0.62f}, {0.74f, 0.52f, 0.38f}, {0.50f, 0.52f, 0.58f},
+                                     {0.85f, 0.80f, 0.60f}, {0.66f, 0.44f, 0.40f}, {0.78f, 0.72f, 0.78f}};
+  const auto& pc = palette[rng.index(9)];
+  const float jit = static_cast<float>(rng.uniform(0.85, 1.12));
+  f.colour = Vec3f(pc[0], pc[1], pc[2]) * jit;
+  f.frame_colour = rng.chance(0.6) ? Vec3f(0.92f, 0.92f, 0.90f)
+                                   : Vec3f(0.25f, 0.22f, 0.20f) * static_cast<float>(rng.uniform(0.8, 1.6));
+  f.trim_colour = f.colour * static_cast<float>(rng.uniform(0.55, 0.8));
+  f.brick_w = static_cast<float>(rng.uniform(0.22, 0.30));
+  f.brick_h = static_cast<float>(rng.uniform(0.065, 0.09));
+  f.floor_h = static_cast<float>(rng.uniform(2.7, 3.3));
+  f.ground_h = static_cast<float>(rng.uniform(3.2, 4.4));
+  f.win_w = static_cast<float>(rng.uniform(0.8, 1.7));
+  f.win_h = static_cast<float>(rng.uniform(1.1, 1.9));
+  f.win_h = std::min(f.win_h, f.floor_h - 0.9f);
+  f.win_sill = static_cast<float>(rng.uniform(0.6, f.floor_h - f.win_h - 0.25));
+  f.col_spacing = std::max(f.win_w + 0.5f, static_cast<float>(rng.uniform(1.7, 3.0)));
+  f.col_offset = static_cast<float>(rng.uniform(0.0, f.col_spacing));
+  f.shop = rng.chance(0.4);
+  f.panel_w = static_cast<float>(rng.uniform(2.0, 4.5));
+  f.door_w = static_cast<float>(rng.uniform(1.0, 2.2));
+  const int floors = std::max(
+      1, static_cast<int>(
+             std::round((rng.uniform(wc.building_min_height, wc.building_max_height) - f.ground_h) / f.floor_h)));
+  height = f.ground_h + floors * f.floor_h + rng.uniform(0.3, 1.2);
+  f.height = static_cast<float>(height);
+  return f;
+}
+
+// Buildings along side k of a block (start corner S, direction d, length L), each with its facades, roof
+// and perhaps a front hedge or wall; sides 1 and 3 keep clear of the corner buildings of sides 0 and 2.
+// `building` counts the buildings so far.
+void World::addBuildings(Rng& rng, int k, const Vec2d& S, const Vec2d& d, double L, int& building) {
+  const auto& wc = config.world;
+  const double pw = wc.pavement_width;
+  const float kerb = static_cast<float>(kKerb);
+  const Vec2d n(d.y(), -d.x()), in = -n;
+  const double corner_clear = (k % 2 == 1) ? pw + wc.building_setback_max + 17.0 : 0.0;
+  double along = corner_clear + (k % 2 == 0 ? 0.0 : rng.uniform(0, 3));
+  const double end = L - corner_clear;
+  while (along < end - 6.0) {
+    if (along > corner_clear + 1.0 && rng.chance(wc.building_gap_probability)) along += rng.uniform(2.0, 6.0);
+    double width = rng.uniform(8.0, 22.0);
+    if (end - (along + width) < 6.0) width = end - along;
+    if (width < 5.0) break;
+    const double setback = rng.uniform(0.0, wc.building_setback_max);
+    const double depth = rng.uniform(10.0, 16.0);
+    // Style.
+    double height;
+    const Facade f = randomFacade(rng, building, height);
+    // Footprint corners (front-left, front-right, back-right, back-left seen from the street).
+    const double fo = pw + setback, ba = fo + depth;
+    const Vec2d c0 = S + d * along + in * fo, c1 = S + d * (along + width) + in * fo;
+    const Vec2d c2 = S + d * (along + width) + in * ba, c3 = S + d * along + in * ba;
+    const Vec2d corners[4] = {c0, c1, c2, c3};
+    Chunk ch;
+    for (int w = 0; w < 4; ++w) {
+      const Vec2d a = corners[w], b = corners[(w + 1) % 4];
+      // Face outward normal is to the right of a->b? Corners go counter-clockwise seen from outside the
+      // front, so a->b runs left to right when seen from outside for every wall.
+      Facade fw = f;
+      fw.length = static_cast<float>((b - a).norm());
+      fw.seed = static_cast<std::uint32_t>(rng.next());
+      fw.door_face = w == 0;
+      fw.door_u = static_cast<float>(rng.uniform(1.0, std::max(1.1, fw.length - fw.door_w - 1.0)));
+      if (w != 0) fw.shop = false;
+      facades.push_back(fw);
+      const int fid = static_cast<int>(facades.size()) - 1;
+      const Vec2d ud = (b - a).normalized();
+      addQuad(ch.tris, v3(a.x(), a.y(), kerb), v3(b.x(), b.y(), kerb), v3(b.x(), b.y(), height),
+              v3(a.x(), a.y(), height), M_FACADE, fid, v3(ud.x(), ud.y(), 0), static_cast<float>(-ud.dot(a)), {0, 0, 1},
+              -kerb);
+    }
+    const float hh = static_cast<float>(height);
+    addQuad(ch.tris, v3(c0.x(), c0.y(), hh), v3(c1.x(), c1.y(), hh), v3(c2.x(), c2.y(), hh), v3(c3.x(), c3.y(), hh),
+            M_ROOF, building, {1, 0, 0}, 0, {0, 1, 0}, 0);
+    // A hedge or low wall in the front garden when the building stands back from the pavement.
+    if (setback > 1.0 && rng.chance(0.6)) {
+      const double hd = std::min(0.9, setback - 0.2), hh = rng.uniform(0.6, 1.3);
+      const Vec2d h0 = S + d * (along + 0.3) + in * (pw + 0.1),
+                  h1 = S + d * (along + width - 0.3) + in * (pw + 0.1 + hd);
+      const bool wall = rng.chance(0.3);
+      Chunk hc;
+      addBox(hc.tris, v3(std::min(h0.x(), h1.x()), std::min(h0.y(), h1.y()), kKerb),
+             v3(std::max(h0.x(), h1.x()), std::max(h0.y(), h1.y()), kKerb + hh), wall ? M_FENCE : M_LEAVES,
+             wall ? 0 : static_cast<int>(rng.next() & 0xffff));
+      hc.finish();
+      chunks.push_back(std::move(hc));
+    }
+    ch.finish();
+    chunks.push_back(std::move(ch));
+    ++building;
+    along += width;
+  }
+}
+
+// Street furniture along one side of a grid block (start corner S, direction d, length L): lamps, signs
+// and trees near the kerb, kept apart from each other.
+void World::addStreetFurniture(Rng& rng, const Vec2d& S, const Vec2d& d, double L) {
+  const auto& wc = config.world;
+  const float kerb = static_cast<float>(kKerb);
+  const Vec2d n(d.y(), -d.x()), in = -n;
+  std::vector<double> used;
+  auto clear = [&](double u, double gap) {
+    for (double x : used)
+      if (std::abs(x - u) < gap) return false;
+    return true;
+  };
+  // Lamps.
+  for (double u = rng.uniform(8, 20); u < L - 8; u += rng.uniform(24, 36)) {
+    used.push_back(u);
+    const Vec2d p = S + d * u + in * 0.45;
+    Chunk ch;
+    const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
+    addBox(ch.tris, {px - 0.08f, py - 0.08f, kerb}, {px + 0.08f, py + 0.08f, 6.5f}, M_POLE, 0);
+    const Vec2d q = p + n * 1.3;
+    const float qx = static_cast<float>(q.x()), qy = static_cast<float>(q.y());
+    addBox(ch.tris, {std::min(px, qx) - 0.05f, std::min(py, qy) - 0.05f, 6.3f},
+           {std::max(px, qx) + 0.05f, std::max(py, qy) + 0.05f, 6.42f}, M_POLE, 0);
+    addBox(ch.tris, {qx - 0.25f, qy - 0.25f, 6.05f}, {qx + 0.25f, qy + 0.25f, 6.3f}, M_SIGN_BACK, 0);
+    ch.finish();
+    chunks.push_back(std::move(ch));
+  }
+  // Signs near the far corner, facing traffic that approaches the next intersection.
+  for (int q = 0; q < 2; ++q) {
+    if (!rng.chance(0.7)) continue;
+    const double u = q == 0 ? L - rng.uniform(5, 9) : rng.uniform(0.3, 0.7) * L;
+    if (!clear(u, 2.0)) continue;
+    used.push_back(u);
+    const Vec2d p = S + d * u + in * 0.5;
+    SignStyle sg;
+    sg.kind = rng.index(5);
+    sg.seed = static_cast<std::uint32_t>(rng.next());
+    signs.push_back(sg);
+    const int sid = static_cast<int>(signs.size()) - 1;
+    Chunk ch;
+    const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
+    const float top = static_cast<float>(rng.uniform(2.4, 2.9));
+    addBox(ch.tris, {px - 0.04f, py - 0.04f, kerb}, {px + 0.04f, py + 0.04f, top + 0.3f}, M_POLE, 0);
+    // The plate faces +d (towards cars driving in -d on this side) or the street.
+    const Vec2d face = q == 0 ? d : n;
+    const Vec2d side(-face.y(), face.x());
+    const float hs = sg.kind == 4 ? 0.45f : 0.32f;
+    const Vec2d f0 = p + face * 0.06;
+    const Vec3f sa = v3(side.x(), side.y(), 0);
+    const Vec2d a = f0 - side * hs, b = f0 + side * hs;
+    addQuad(ch.tris, v3(b.x(), b.y(), top), v3(a.x(), a.y(), top), v3(a.x(), a.y(), top + 2 * hs),
+            v3(b.x(), b.y(), top + 2 * hs), M_SIGN, sid, -sa, static_cast<float>(side.dot(f0)), {0, 0, 1}, -(top + hs));
+    const Vec2d f1 = p + face * 0.05;
+    const Vec2d a1 = f1 - side * hs, b1 = f1 + side * hs;
+    addQuad(ch.tris, v3(a1.x(), a1.y(), top), v3(b1.x(), b1.y(), top), v3(b1.x(), b1.y(), top + 2 * hs),
+            v3(a1.x(), a1.y(), top + 2 * hs), M_SIGN_BACK, sid, sa, 0, {0, 0, 1}, 0);
+    ch.finish();
+    chunks.push_back(std::move(ch));
+  }
+  // Trees.
+  if (wc.tree_spacing > 0) {
+    for (double u = rng.uniform(4, wc.tree_spacing); u < L - 6; u += wc.tree_spacing * rng.uniform(0.7, 1.3)) {
+      if (!clear(u, 2.5) || !rng.chance(0.85)) continue;
+      used.push_back(u);
+      const Vec2d p = S + d * u + in * 1.0;
+      Chunk ch;
+      const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
+      const float tr = static_cast<float>(rng.uniform(0.10, 0.18));
+      const float th = static_cast<float>(rng.uniform(2.3, 3.4));
+      addBox(ch.tris, {px - tr, py - tr, kerb}, {px + tr, py + tr, th + 0.3f}, M_BARK, 0);
+      const float cr = static_cast<float>(rng.uniform(1.4, 2.6));
+      const Vec3f c(px, py, th + cr * 0.85f);
+      const std::uint32_t tseed = static_cast<std::uint32_t>(rng.next());
+      const float sx = static_cast<float>(rng.uniform(0.85, 1.15)), sz = static_cast<float>(rng.uniform(0.8, 1.2));
+      addCrown(ch.tris, c, cr, sx, sz, tseed);
+      ch.finish();
+      chunks.push_back(std::move(ch));
+    }
+  }
+}
+
+void World::buildUrban(Rng& rng) {
+  buildStreets(rng);
+  const std::vector<Block> blocks = urbanBlocks();
   int building = 0;
   for (const Block& bk : blocks) {
     raised.push_back({bk.x0, bk.y0, bk.x1, bk.y1});
-    // Pavement top, tiled.
-    const int nx = std::max(1, static_cast<int>(std::ceil((bk.x1 - bk.x0) / 20.0)));
-    const int ny = std::max(1, static_cast<int>(std::ceil((bk.y1 - bk.y0) / 20.0)));
-    for (int a = 0; a < nx; ++a)
-      for (int b = 0; b < ny; ++b) {
-        Chunk ch;
-        const float xa = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * a / nx),
-                    xb = static_cast<float>(bk.x0 + (bk.x1 - bk.x0) * (a + 1) / nx);
-        const float ya = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * b / ny),
-                    yb = static_cast<float>(bk.y0 + (bk.y1 - bk.y0) * (b + 1) / ny);
-        addQuad(ch.tris, {xa, ya, kerb}, {xb, ya, kerb}, {xb, yb, kerb}, {xa, yb, kerb}, M_PAVEMENT, 0, {1, 0, 0}, 0,
-                {0, 1, 0}, 0);
-        ch.finish();
-        chunks.push_back(std::move(ch));
-      }
+    addPavement(bk);
     // Sides: start corner, direction, outward normal (counter-clockwise traversal).
     const Vec2d S[4] = {{bk.x0, bk.y0}, {bk.x1, bk.y0}, {bk.x1, bk.y1}, {bk.x0, bk.y1}};
     const Vec2d D[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
     const double L[4] = {bk.x1 - bk.x0, bk.y1 - bk.y0, bk.x1 - bk.x0, bk.y1 - bk.y0};
     for (int k = 0; k < 4; ++k) {
-      const Vec2d d = D[k], n(d.y(), -d.x()), in = -n;
-      // Kerb face.
-      {
-        Chunk ch;
-        const int m = std::max(1, static_cast<int>(std::ceil(L[k] / 20.0)));
-        for (int q = 0; q < m; ++q) {
-          const Vec2d a = S[k] + d * (L[k] * q / m), b = S[k] + d * (L[k] * (q + 1) / m);
-          addQuad(ch.tris, v3(a.x(), a.y(), 0), v3(b.x(), b.y(), 0), v3(b.x(), b.y(), kerb), v3(a.x(), a.y(), kerb),
-                  M_KERB, 0, v3(d.x(), d.y(), 0), static_cast<float>(-d.dot(S[k])), {0, 0, 1}, 0);
-        }
-        ch.finish();
-        chunks.push_back(std::move(ch));
-      }
+      addKerbFace(S[k], D[k], L[k]);
       if (!bk.sides[k]) continue;
-      // Buildings along the side; sides 1 and 3 keep clear of the corner buildings of sides 0 and 2.
-      const double corner_clear = (k % 2 == 1) ? pw + wc.building_setback_max + 17.0 : 0.0;
-      double along = corner_clear + (k % 2 == 0 ? 0.0 : rng.uniform(0, 3));
-      const double end = L[k] - corner_clear;
-      while (along < end - 6.0) {
-        if (along > corner_clear + 1.0 && rng.chance(wc.building_gap_probability)) along += rng.uniform(2.0, 6.0);
-        double width = rng.uniform(8.0, 22.0);
-        if (end - (along + width) < 6.0) width = end - along;
-        if (width < 5.0) break;
-        const double setback = rng.uniform(0.0, wc.building_setback_max);
-        const double depth = rng.uniform(10.0, 16.0);
-        // Style.
-        Facade f;
-        f.building = building;
-        f.base = rng.chance(0.45) ? 0 : 1 + rng.index(2);
-        static const float palette[][3] = {{0.55f, 0.30f, 0.22f}, {0.70f, 0.58f, 0.42f}, {0.80f, 0.76f, 0.66f},
-                                           {0.62f, 0.64f, 0.62f}, {0.74f, 0.52f, 0.38f}, {0.50f, 0.52f, 0.58f},
-                                           {0.85f, 0.80f, 0.60f}, {0.66f, 0.44f, 0.40f}, {0.78f, 0.72f, 0.78f}};
-        const auto& pc = palette[rng.index(9)];
-        const float jit = static_cast<float>(rng.uniform(0.85, 1.12));
-        f.colour = Vec3f(pc[0], pc[1], pc[2]) * jit;
-        f.frame_colour = rng.chance(0.6) ? Vec3f(0.92f, 0.92f, 0.90f)
-                                         : Vec3f(0.25f, 0.22f, 0.20f) * static_cast<float>(rng.uniform(0.8, 1.6));
-        f.trim_colour = f.colour * static_cast<float>(rng.uniform(0.55, 0.8));
-        f.brick_w = static_cast<float>(rng.uniform(0.22, 0.30));
-        f.brick_h = static_cast<float>(rng.uniform(0.065, 0.09));
-        f.floor_h = static_cast<float>(rng.uniform(2.7, 3.3));
-        f.ground_h = static_cast<float>(rng.uniform(3.2, 4.4));
-        f.win_w = static_cast<float>(rng.uniform(0.8, 1.7));
-        f.win_h = static_cast<float>(rng.uniform(1.1, 1.9));
-        f.win_h = std::min(f.win_h, f.floor_h - 0.9f);
-        f.win_sill = static_cast<float>(rng.uniform(0.6, f.floor_h - f.win_h - 0.25));
-        f.col_spacing = std::max(f.win_w + 0.5f, static_cast<float>(rng.uniform(1.7, 3.0)));
-        f.col_offset = static_cast<float>(rng.uniform(0.0, f.col_spacing));
-        f.shop = rng.chance(0.4);
-        f.panel_w = static_cast<float>(rng.uniform(2.0, 4.5));
-        f.door_w = static_cast<float>(rng.uniform(1.0, 2.2));
-        const int floors = std::max(
-            1, static_cast<int>(
-                   std::round((rng.uniform(wc.building_min_height, wc.building_max_height) - f.ground_h) / f.floor_h)));
-        const double height = f.ground_h + floors * f.floor_h + rng.uniform(0.3, 1.2);
-        f.height = static_cast<float>(height);
-        // Footprint corners (front-left, front-right, back-right, back-left seen from the street).
-        const double fo = pw + setback, ba = fo + depth;
-        const Vec2d c0 = S[k] + d * along + in * fo, c1 = S[k] + d * (along + width) + in * fo;
-        const Vec2d c2 = S[k] + d * (along + width) + in * ba, c3 = S[k] + d * along + in * ba;
-        const Vec2d corners[4] = {c0, c1, c2, c3};
-        Chunk ch;
-        for (int w = 0; w < 4; ++w) {
-          const Vec2d a = corners[w], b = corners[(w + 1) % 4];
-          // Face outward normal is to the right of a->b? Corners go counter-clockwise seen from outside the
-          // front, so a->b runs left to right when seen from outside for every wall.
-          Facade fw = f;
-          fw.length = static_cast<float>((b - a).norm());
-          fw.seed = static_cast<std::uint32_t>(rng.next());
-          fw.door_face = w == 0;
-          fw.door_u = static_cast<float>(rng.uniform(1.0, std::max(1.1, fw.length - fw.door_w - 1.0)));
-          if (w != 0) fw.shop = false;
-          facades.push_back(fw);
-          const int fid = static_cast<int>(facades.size()) - 1;
-          const Vec2d ud = (b - a).normalized();
-          addQuad(ch.tris, v3(a.x(), a.y(), kerb), v3(b.x(), b.y(), kerb), v3(b.x(), b.y(), height),
-                  v3(a.x(), a.y(), height), M_FACADE, fid, v3(ud.x(), ud.y(), 0), static_cast<float>(-ud.dot(a)),
-                  {0, 0, 1}, -kerb);
-        }
-        const float hh = static_cast<float>(height);
-        addQuad(ch.tris, v3(c0.x(), c0.y(), hh), v3(c1.x(), c1.y(), hh), v3(c2.x(), c2.y(), hh), v3(c3.x(), c3.y(), hh),
-                M_ROOF, building, {1, 0, 0}, 0, {0, 1, 0}, 0);
-        // A hedge or low wall in the front garden when the building stands back from the pavement.
-        if (setback > 1.0 && rng.chance(0.6)) {
-          const double hd = std::min(0.9, setback - 0.2), hh = rng.uniform(0.6, 1.3);
-          const Vec2d h0 = S[k] + d * (along + 0.3) + in * (pw + 0.1),
-                      h1 = S[k] + d * (along + width - 0.3) + in * (pw + 0.1 + hd);
-          const bool wall = rng.chance(0.3);
-          Chunk hc;
-          addBox(hc.tris, v3(std::min(h0.x(), h1.x()), std::min(h0.y(), h1.y()), kKerb),
-                 v3(std::max(h0.x(), h1.x()), std::max(h0.y(), h1.y()), kKerb + hh), wall ? M_FENCE : M_LEAVES,
-                 wall ? 0 : static_cast<int>(rng.next() & 0xffff));
-          hc.finish();
-          chunks.push_back(std::move(hc));
-        }
-        ch.finish();
-        chunks.push_back(std::move(ch));
-        ++building;
-        along += width;
-      }
+      addBuildings(rng, k, S[k], D[k], L[k], building);
     }
     // Street furniture on grid blocks: trees, lamps and signs near the kerb.
     if (!(bk.sides[0] && bk.sides[1] && bk.sides[2] && bk.sides[3])) continue;
-    for (int k = 0; k < 4; ++k) {
-      const Vec2d d = D[k], n(d.y(), -d.x()), in = -n;
-      std::vector<double> used;
-      auto clear = [&](double u, double gap) {
-        for (double x : used)
-          if (std::abs(x - u) < gap) return false;
-        return true;
-      };
-      // Lamps.
-      for (double u = rng.uniform(8, 20); u < L[k] - 8; u += rng.uniform(24, 36)) {
-        used.push_back(u);
-        const Vec2d p = S[k] + d * u + in * 0.45;
-        Chunk ch;
-        const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
-        addBox(ch.tris, {px - 0.08f, py - 0.08f, kerb}, {px + 0.08f, py + 0.08f, 6.5f}, M_POLE, 0);
-        const Vec2d q = p + n * 1.3;
-        const float qx = static_cast<float>(q.x()), qy = static_cast<float>(q.y());
-        addBox(ch.tris, {std::min(px, qx) - 0.05f, std::min(py, qy) - 0.05f, 6.3f},
-               {std::max(px, qx) + 0.05f, std::max(py, qy) + 0.05f, 6.42f}, M_POLE, 0);
-        addBox(ch.tris, {qx - 0.25f, qy - 0.25f, 6.05f}, {qx + 0.25f, qy + 0.25f, 6.3f}, M_SIGN_BACK, 0);
-        ch.finish();
-        chunks.push_back(std::move(ch));
-      }
-      // Signs near the far corner, facing traffic that approaches the next intersection.
-      for (int q = 0; q < 2; ++q) {
-        if (!rng.chance(0.7)) continue;
-        const double u = q == 0 ? L[k] - rng.uniform(5, 9) : rng.uniform(0.3, 0.7) * L[k];
-        if (!clear(u, 2.0)) continue;
-        used.push_back(u);
-        const Vec2d p = S[k] + d * u + in * 0.5;
-        SignStyle sg;
-        sg.kind = rng.index(5);
-        sg.seed = static_cast<std::uint32_t>(rng.next());
-        signs.push_back(sg);
-        const int sid = static_cast<int>(signs.size()) - 1;
-        Chunk ch;
-        const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
-        const float top = static_cast<float>(rng.uniform(2.4, 2.9));
-        addBox(ch.tris, {px - 0.04f, py - 0.04f, kerb}, {px + 0.04f, py + 0.04f, top + 0.3f}, M_POLE, 0);
-        // The plate faces +d (towards cars driving in -d on this side) or the street.
-        const Vec2d face = q == 0 ? d : n;
-        const Vec2d side(-face.y(), face.x());
-        const float hs = sg.kind == 4 ? 0.45f : 0.32f;
-        const Vec2d f0 = p + face * 0.06;
-        const Vec3f sa = v3(side.x(), side.y(), 0);
-        const Vec2d a = f0 - side * hs, b = f0 + side * hs;
-        addQuad(ch.tris, v3(b.x(), b.y(), top), v3(a.x(), a.y(), top), v3(a.x(), a.y(), top + 2 * hs),
-                v3(b.x(), b.y(), top + 2 * hs), M_SIGN, sid, -sa, static_cast<float>(side.dot(f0)), {0, 0, 1},
-                -(top + hs));
-        const Vec2d f1 = p + face * 0.05;
-        const Vec2d a1 = f1 - side * hs, b1 = f1 + side * hs;
-        addQuad(ch.tris, v3(a1.x(), a1.y(), top), v3(b1.x(), b1.y(), top), v3(b1.x(), b1.y(), top + 2 * hs),
-                v3(a1.x(), a1.y(), top + 2 * hs), M_SIGN_BACK, sid, sa, 0, {0, 0, 1}, 0);
-        ch.finish();
-        chunks.push_back(std::move(ch));
-      }
-      // Trees.
-      if (wc.tree_spacing > 0) {
-        for (double u = rng.uniform(4, wc.tree_spacing); u < L[k] - 6; u += wc.tree_spacing * rng.uniform(0.7, 1.3)) {
-          if (!clear(u, 2.5) || !rng.chance(0.85)) continue;
-          used.push_back(u);
-          const Vec2d p = S[k] + d * u + in * 1.0;
-          Chunk ch;
-          const float px = static_cast<float>(p.x()), py = static_cast<float>(p.y());
-          const float tr = static_cast<float>(rng.uniform(0.10, 0.18));
-          const float th = static_cast<float>(rng.uniform(2.3, 3.4));
-          addBox(ch.tris, {px - tr, py - tr, kerb}, {px + tr, py + tr, th + 0.3f}, M_BARK, 0);
-          const float cr = static_cast<float>(rng.uniform(1.4, 2.6));
-          const Vec3f c(px, py, th + cr * 0.85f);
-          const std::uint32_t tseed = static_cast<std::uint32_t>(rng.next());
-          const float sx = static_cast<float>(rng.uniform(0.85, 1.15)), sz = static_cast<float>(rng.uniform(0.8, 1.2));
-          addCrown(ch.tris, c, cr, sx, sz, tseed);
-          ch.finish();
-          chunks.push_back(std::move(ch));
-        }
-      }
-    }
+    for (int k = 0; k < 4; ++k) addStreetFurniture(rng, S[k], D[k], L[k]);
   }
 }
 
@@ -643,31 +686,25 @@ void World::buildUrban(Rng& rng) {
 // Highway: one big ring road (two carriageways split by a median), verges, guard rails, noise walls,
 // trees and signs; far buildings.
 
-void World::buildHighway(Rng& rng) {
-  const auto& wc = config.world;
+namespace {
+
+// The point `off` metres left of the ring at arc length s, and the ring's direction there.
+void ringPointAt(const Path& ring, double s, double off, Vec2d& p, Vec2d& dir) {
+  double h, k;
+  ring.at(s, p, h, k);
+  dir = Vec2d(std::cos(h), std::sin(h));
+  const Vec2d left(-dir.y(), dir.x());
+  p += left * off;
+}
+
+}  // namespace
+
+// The highway's ribbons along the ring (length L) in 4 m quads, five to a chunk: both carriageways,
+// verges, guard rails, noise walls and the median.
+void World::addHighwayRibbons(const Path& ring, double L) {
   const double hw = roadHalfWidth();
-  const double R = wc.corner_radius;
-  // The ring follows the same rounded rectangle as the routes (street lines 0 and blocks).
-  const int i0 = 0, j0 = 0, i1 = wc.blocks_x, j1 = wc.blocks_y;
-  auto centre = roundedRect(X_[i0], Y_[j0], X_[i1], Y_[j1], R, false, 5.0);
-  Path ring(centre, true);
-  const double L = ring.length();
-  Street st;
-  st.length = static_cast<float>(L);
-  st.lanes = wc.lanes_per_direction;
-  st.lane_w = static_cast<float>(wc.lane_width);
-  st.parking_w = 0;
-  st.median = true;
-  st.seed = static_cast<std::uint32_t>(rng.next());
-  streets.push_back(st);
   const int n = static_cast<int>(std::ceil(L / 4.0));
-  auto pointAt = [&](double s, double off, Vec2d& p, Vec2d& dir) {
-    double h, k;
-    ring.at(s, p, h, k);
-    dir = Vec2d(std::cos(h), std::sin(h));
-    const Vec2d left(-dir.y(), dir.x());
-    p += left * off;
-  };
+  auto pointAt = [&](double s, double off, Vec2d& p, Vec2d& dir) { ringPointAt(ring, s, off, p, dir); };
   const double verge = hw + 3.0, wall = hw + 9.0;
   for (int c = 0; c < n; c += 5) {
     Chunk road, side;
@@ -716,7 +753,14 @@ void World::buildHighway(Rng& rng) {
     chunks.push_back(std::move(road));
     chunks.push_back(std::move(side));
   }
-  // Poles and signs along both verges, trees behind the walls, a few far buildings.
+}
+
+// Poles and signs along both verges, trees behind the walls.
+void World::addHighwayRoadside(Rng& rng, const Path& ring, double L) {
+  const auto& wc = config.world;
+  const double hw = roadHalfWidth();
+  auto pointAt = [&](double s, double off, Vec2d& p, Vec2d& dir) { ringPointAt(ring, s, off, p, dir); };
+  const double wall = hw + 9.0;
   for (double s = rng.uniform(10, 40); s < L - 10; s += rng.uniform(40, 70)) {
     for (int sideSign = -1; sideSign <= 1; sideSign += 2) {
       Vec2d p, dir;
@@ -759,6 +803,13 @@ void World::buildHighway(Rng& rng) {
         chunks.push_back(std::move(ch));
       }
     }
+}
+
+// Ground inside and outside the ring, then a few far buildings round it.
+void World::addHighwayGroundAndFarBuildings(Rng& rng, const Path& ring, double L) {
+  const double hw = roadHalfWidth();
+  auto pointAt = [&](double s, double off, Vec2d& p, Vec2d& dir) { ringPointAt(ring, s, off, p, dir); };
+  const double wall = hw + 9.0;
   // Ground inside and outside the ring.
   {
     Chunk ch;
@@ -808,6 +859,27 @@ void World::buildHighway(Rng& rng) {
     ch.finish();
     chunks.push_back(std::move(ch));
   }
+}
+
+void World::buildHighway(Rng& rng) {
+  const auto& wc = config.world;
+  const double R = wc.corner_radius;
+  // The ring follows the same rounded rectangle as the routes (street lines 0 and blocks).
+  const int i0 = 0, j0 = 0, i1 = wc.blocks_x, j1 = wc.blocks_y;
+  auto centre = roundedRect(X_[i0], Y_[j0], X_[i1], Y_[j1], R, false, 5.0);
+  Path ring(centre, true);
+  const double L = ring.length();
+  Street st;
+  st.length = static_cast<float>(L);
+  st.lanes = wc.lanes_per_direction;
+  st.lane_w = static_cast<float>(wc.lane_width);
+  st.parking_w = 0;
+  st.median = true;
+  st.seed = static_cast<std::uint32_t>(rng.next());
+  streets.push_back(st);
+  addHighwayRibbons(ring, L);
+  addHighwayRoadside(rng, ring, L);
+  addHighwayGroundAndFarBuildings(rng, ring, L);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -978,38 +1050,36 @@ void World::objectTris(const Object& o, double t, std::vector<Tri>& out) const {
   addBox(out, {-0.1f, -0.09f, headb}, {0.11f, 0.09f, H}, M_PED_SKIN, o.style);
 }
 
-void World::placeObjects(Rng& rng) {
-  const auto& oc = config.objects;
-  const auto& wc = config.world;
-  const double hw = roadHalfWidth();
-  const int steps = config.frames * 4;
-  const double dt = 1.0 / (config.rate_hz * 4);
-  const double T = config.frames / config.rate_hz;
-  const double egoSpeed = config.ego.speed_kmh / 3.6;
-
+// The state placeObjects' stages share: the footprints over time of the ego and of every object accepted
+// so far (an object is placed only where its footprints overlap none of them).
+struct World::Placement {
   struct Track {
     std::vector<Footprint> fp;
   };
+  Placement(World& world, Rng& r) : w(world), rng(r) {}
+
+  World& w;
+  Rng& rng;
+  int steps = 0;
+  double dt = 0;
   std::vector<Track> tracks;  // accepted objects' footprints over time (static: one entry)
   Track egoTrack;
-  for (int i = 0; i <= steps; ++i) {
-    const Pose2 e = egoPose(i * dt);
-    const double c = std::cos(e.yaw), s = std::sin(e.yaw);
-    // The ego's body plus a safety zone ahead: nothing comes closer than about 8 m in front.
-    egoTrack.fp.push_back({e.x + c * 2.25, e.y + s * 2.25, c, s, 5.75, 1.15});
-  }
-  auto footprints = [&](const Object& o) {
+  int next_id = 1;
+
+  // The object's footprints at every step (static: one entry).
+  Track footprints(const Object& o) const {
     Track tr;
     const bool ped = o.info.behaviour == Behaviour::Pedestrian;
     const double hl = ped ? 0.35 : o.info.length / 2 + 0.3, hwid = ped ? 0.35 : o.info.width / 2 + 0.2;
     const int n = o.kind == Object::Kind::Static ? 0 : steps;
     for (int i = 0; i <= n; ++i) {
-      const Pose2 p = objectPose(o, i * dt);
+      const Pose2 p = w.objectPose(o, i * dt);
       tr.fp.push_back({p.x, p.y, std::cos(p.yaw), std::sin(p.yaw), hl, hwid});
     }
     return tr;
-  };
-  auto collides = [&](const Track& a, bool checkEgo) {
+  }
+  // Whether track a overlaps an accepted object's (or, with checkEgo, the ego's) at any step.
+  bool collides(const Track& a, bool checkEgo) const {
     auto at = [](const Track& t, int i) -> const Footprint& { return t.fp.size() == 1 ? t.fp[0] : t.fp[i]; };
     for (int i = 0; i <= steps; ++i) {
       if (checkEgo && overlap(at(a, i), egoTrack.fp[i])) return true;
@@ -1025,53 +1095,16 @@ void World::placeObjects(Rng& rng) {
       for (const auto& b : tracks)
         if (b.fp.size() == 1 && overlap(a.fp[0], b.fp[0])) return true;
     return false;
-  };
-
-  int next_id = 1;
-  auto newCar = [&](Behaviour b) {
-    Object o;
-    o.info.behaviour = b;
-    const double r = rng.uniform();
-    double l, w, h;
-    if (r < 0.30)
-      o.shape = CarShape::Sedan, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.74, 1.85), h = rng.uniform(1.40, 1.50),
-      o.info.shape = "sedan";
-    else if (r < 0.52)
-      o.shape = CarShape::Hatchback, l = rng.uniform(3.8, 4.25), w = rng.uniform(1.68, 1.78),
-      h = rng.uniform(1.45, 1.55), o.info.shape = "hatchback";
-    else if (r < 0.70)
-      o.shape = CarShape::Wagon, l = rng.uniform(4.55, 4.9), w = rng.uniform(1.76, 1.85), h = rng.uniform(1.45, 1.55),
-      o.info.shape = "wagon";
-    else if (r < 0.87)
-      o.shape = CarShape::Suv, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.84, 1.95), h = rng.uniform(1.65, 1.80),
-      o.info.shape = "suv";
-    else
-      o.shape = CarShape::Van, l = rng.uniform(4.8, 5.4), w = rng.uniform(1.9, 2.0), h = rng.uniform(1.9, 2.2),
-      o.info.shape = "van";
-    o.info.type = o.shape == CarShape::Van ? "Van" : "Car";
-    CarStyle cs;
-    static const float colours[][3] = {{0.85f, 0.85f, 0.86f}, {0.08f, 0.08f, 0.09f}, {0.55f, 0.56f, 0.58f},
-                                       {0.62f, 0.08f, 0.07f}, {0.10f, 0.18f, 0.45f}, {0.75f, 0.75f, 0.72f},
-                                       {0.15f, 0.32f, 0.18f}, {0.80f, 0.55f, 0.10f}, {0.35f, 0.22f, 0.15f},
-                                       {0.30f, 0.45f, 0.62f}, {0.92f, 0.90f, 0.82f}, {0.45f, 0.05f, 0.20f}};
-    const auto& c = colours[rng.index(12)];
-    cs.colour = Vec3f(c[0], c[1], c[2]) * static_cast<float>(rng.uniform(0.9, 1.08));
-    cs.seed = static_cast<std::uint32_t>(rng.next());
-    cs.metallic = static_cast<float>(rng.uniform(0.0, 1.0));
-    cs.plate_seed = static_cast<int>(rng.next() & 0x7fffffff);
-    o.style = static_cast<int>(car_styles.size());
-    o.mesh = buildCarMesh(o.shape, l, w, h, o.style, cs);
-    car_styles.push_back(cs);
-    o.info.length = l, o.info.width = w + 0.008, o.info.height = h;
-    return o;
-  };
-  auto accept = [&](Object& o, const Track& tr) {
+  }
+  // Gives o the next track id and moves it into the world.
+  void accept(Object& o, const Track& tr) {
     o.info.track_id = next_id++;
-    objects.push_back(std::move(o));
+    w.objects.push_back(std::move(o));
     tracks.push_back(tr);
-  };
+  }
   // Accepts o and counts it in `placed` where its track is free; else undoes what making it added.
-  auto place = [&](Object& o, int& placed, const auto& undo) {
+  template <class Undo>
+  bool place(Object& o, int& placed, const Undo& undo) {
     const Track tr = footprints(o);
     if (collides(tr, true)) {
       undo();
@@ -1080,29 +1113,78 @@ void World::placeObjects(Rng& rng) {
     accept(o, tr);
     ++placed;
     return true;
-  };
+  }
+};
+
+// A car of a random shape, size and colour with behaviour b (its style appended to car_styles).
+Object World::newCar(Placement& pl, Behaviour b) {
+  Rng& rng = pl.rng;
+  Object o;
+  o.info.behaviour = b;
+  const double r = rng.uniform();
+  double l, w, h;
+  if (r < 0.30)
+    o.shape = CarShape::Sedan, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.74, 1.85), h = rng.uniform(1.40, 1.50),
+    o.info.shape = "sedan";
+  else if (r < 0.52)
+    o.shape = CarShape::Hatchback, l = rng.uniform(3.8, 4.25), w = rng.uniform(1.68, 1.78), h = rng.uniform(1.45, 1.55),
+    o.info.shape = "hatchback";
+  else if (r < 0.70)
+    o.shape = CarShape::Wagon, l = rng.uniform(4.55, 4.9), w = rng.uniform(1.76, 1.85), h = rng.uniform(1.45, 1.55),
+    o.info.shape = "wagon";
+  else if (r < 0.87)
+    o.shape = CarShape::Suv, l = rng.uniform(4.4, 4.9), w = rng.uniform(1.84, 1.95), h = rng.uniform(1.65, 1.80),
+    o.info.shape = "suv";
+  else
+    o.shape = CarShape::Van, l = rng.uniform(4.8, 5.4), w = rng.uniform(1.9, 2.0), h = rng.uniform(1.9, 2.2),
+    o.info.shape = "van";
+  o.info.type = o.shape == CarShape::Van ? "Van" : "Car";
+  CarStyle cs;
+  static const float colours[][3] = {{0.85f, 0.85f, 0.86f}, {0.08f, 0.08f, 0.09f}, {0.55f, 0.56f, 0.58f},
+                                     {0.62f, 0.08f, 0.07f}, {0.10f, 0.18f, 0.45f}, {0.75f, 0.75f, 0.72f},
+                                     {0.15f, 0.32f, 0.18f}, {0.80f, 0.55f, 0.10f}, {0.35f, 0.22f, 0.15f},
+                                     {0.30f, 0.45f, 0.62f}, {0.92f, 0.90f, 0.82f}, {0.45f, 0.05f, 0.20f}};
+  const auto& c = colours[rng.index(12)];
+  cs.colour = Vec3f(c[0], c[1], c[2]) * static_cast<float>(rng.uniform(0.9, 1.08));
+  cs.seed = static_cast<std::uint32_t>(rng.next());
+  cs.metallic = static_cast<float>(rng.uniform(0.0, 1.0));
+  cs.plate_seed = static_cast<int>(rng.next() & 0x7fffffff);
+  o.style = static_cast<int>(car_styles.size());
+  o.mesh = buildCarMesh(o.shape, l, w, h, o.style, cs);
+  car_styles.push_back(cs);
+  o.info.length = l, o.info.width = w + 0.008, o.info.height = h;
+  return o;
+}
+
+// Picks a random loop route; kind 0: the ego's loop, same direction; 1: ego's loop, opposite; 2: other.
+int World::randomRoute(Placement& pl, int kind, int lane, bool& clockwise) {
+  Rng& rng = pl.rng;
+  const auto& wc = config.world;
   const int ex = wc.blocks_x / 2, ey = wc.blocks_y / 2;
-  const double parkLat = hw - 1.1;  // parking lane centre from the street centreline
   const bool highway = wc.type == "highway";
+  int i0 = ex, j0 = ey, i1 = ex + 1, j1 = ey + 1;
+  clockwise = config.ego.clockwise;
+  if (kind == 1) clockwise = !clockwise;
+  if (kind == 2 && !highway) {
+    do {
+      i0 = rng.index(wc.blocks_x), i1 = i0 + 1 + rng.index(wc.blocks_x - i0);
+      j0 = rng.index(wc.blocks_y), j1 = j0 + 1 + rng.index(wc.blocks_y - j0);
+    } while (wc.blocks_x * wc.blocks_y > 1 && i0 == ex && j0 == ey && i1 == ex + 1 && j1 == ey + 1);
+    clockwise = rng.chance(0.5);
+  }
+  if (highway) i0 = 0, j0 = 0, i1 = wc.blocks_x, j1 = wc.blocks_y;
+  const double lat = (lane + 0.5) * wc.lane_width;
+  return addRoute(i0, j0, i1, j1, clockwise, lat);
+}
 
-  // Picks a random loop route; kind 0: the ego's loop, same direction; 1: ego's loop, opposite; 2: other.
-  auto randomRoute = [&](int kind, int lane, bool& clockwise) {
-    int i0 = ex, j0 = ey, i1 = ex + 1, j1 = ey + 1;
-    clockwise = config.ego.clockwise;
-    if (kind == 1) clockwise = !clockwise;
-    if (kind == 2 && !highway) {
-      do {
-        i0 = rng.index(wc.blocks_x), i1 = i0 + 1 + rng.index(wc.blocks_x - i0);
-        j0 = rng.index(wc.blocks_y), j1 = j0 + 1 + rng.index(wc.blocks_y - j0);
-      } while (wc.blocks_x * wc.blocks_y > 1 && i0 == ex && j0 == ey && i1 == ex + 1 && j1 == ey + 1);
-      clockwise = rng.chance(0.5);
-    }
-    if (highway) i0 = 0, j0 = 0, i1 = wc.blocks_x, j1 = wc.blocks_y;
-    const double lat = (lane + 0.5) * wc.lane_width;
-    return addRoute(i0, j0, i1, j1, clockwise, lat);
-  };
-
-  // Stop-and-go cars first: they reserve their parking spots.
+// Stop-and-go cars (placed first: they reserve their parking spots); returns how many were placed.
+int World::placeStopAndGo(Placement& pl) {
+  Rng& rng = pl.rng;
+  const auto& oc = config.objects;
+  const auto& wc = config.world;
+  const double hw = roadHalfWidth();
+  const double T = config.frames / config.rate_hz;
+  const double parkLat = hw - 1.1;  // parking lane centre from the street centreline
   int placed_sg = 0;
   for (int n = 0; n < oc.stop_and_go; ++n) {
     for (int attempt = 0; attempt < 60; ++attempt) {
@@ -1111,10 +1193,10 @@ void World::placeObjects(Rng& rng) {
         paths.resize(np, paths.front());
         car_styles.resize(ns);
       };
-      Object o = newCar(Behaviour::StopAndGo);
+      Object o = newCar(pl, Behaviour::StopAndGo);
       bool cw;
       const int kind = attempt < 30 ? rng.index(2) : 2;
-      const int route = randomRoute(kind, wc.lanes_per_direction - 1, cw);
+      const int route = randomRoute(pl, kind, wc.lanes_per_direction - 1, cw);
       const Path& rp = paths[route];
       const double v = rng.uniform(oc.driving_speed_kmh_min, oc.driving_speed_kmh_max) / 3.6;
       const bool pullOut = rng.chance(0.5);
@@ -1159,11 +1241,19 @@ void World::placeObjects(Rng& rng) {
         rollback();
         continue;
       }
-      if (place(o, placed_sg, rollback)) break;
+      if (pl.place(o, placed_sg, rollback)) break;
     }
   }
+  return placed_sg;
+}
 
-  // Parked cars in the parking lanes, mostly along the ego's loop.
+// Parked cars in the parking lanes, mostly along the ego's loop; returns how many were placed.
+int World::placeParked(Placement& pl) {
+  Rng& rng = pl.rng;
+  const auto& oc = config.objects;
+  const auto& wc = config.world;
+  const double hw = roadHalfWidth();
+  const double parkLat = hw - 1.1;  // parking lane centre from the street centreline
   int placed_parked = 0;
   if (wc.parking_lanes && !segments_.empty()) {
     std::vector<int> egoSegs;
@@ -1171,7 +1261,7 @@ void World::placeObjects(Rng& rng) {
       if (segments_[i].ego) egoSegs.push_back(static_cast<int>(i));
     for (int n = 0; n < oc.parked; ++n) {
       for (int attempt = 0; attempt < 80; ++attempt) {
-        Object o = newCar(Behaviour::Parked);
+        Object o = newCar(pl, Behaviour::Parked);
         const int si = (!egoSegs.empty() && rng.chance(0.75)) ? egoSegs[rng.index(static_cast<int>(egoSegs.size()))]
                                                               : rng.index(static_cast<int>(segments_.size()));
         const Segment& seg = segments_[si];
@@ -1188,17 +1278,24 @@ void World::placeObjects(Rng& rng) {
         o.x = xy.x(), o.y = xy.y();
         o.yaw = std::atan2(seg.dir.y(), seg.dir.x()) + (side ? M_PI : 0.0) + rng.uniform(-0.03, 0.03);
         // Keep the kerb side tight; jitter the lateral position a little.
-        if (place(o, placed_parked, [&] { car_styles.pop_back(); })) break;
+        if (pl.place(o, placed_parked, [&] { car_styles.pop_back(); })) break;
       }
     }
   }
+  return placed_parked;
+}
 
-  // Driving cars: loops in and against the ego direction (overtaking where there is a second lane), and
-  // round other blocks, which cross the ego's streets.
+// Driving cars: loops in and against the ego direction (overtaking where there is a second lane), and
+// round other blocks, which cross the ego's streets; returns how many were placed.
+int World::placeDriving(Placement& pl) {
+  Rng& rng = pl.rng;
+  const auto& oc = config.objects;
+  const auto& wc = config.world;
+  const double egoSpeed = config.ego.speed_kmh / 3.6;
   int placed_driving = 0;
   for (int n = 0; n < oc.driving; ++n) {
     for (int attempt = 0; attempt < 80; ++attempt) {
-      Object o = newCar(Behaviour::Driving);
+      Object o = newCar(pl, Behaviour::Driving);
       const int kind = n % 3 == 0 ? 0 : (n % 3 == 1 ? 1 : 2);
       int lane = rng.index(wc.lanes_per_direction);
       double v = rng.uniform(oc.driving_speed_kmh_min, oc.driving_speed_kmh_max) / 3.6;
@@ -1207,7 +1304,7 @@ void World::placeObjects(Rng& rng) {
       else if (kind == 0)
         v = egoSpeed;  // same lane as the ego: keeps its distance
       bool cw;
-      const int route = randomRoute(kind, lane, cw);
+      const int route = randomRoute(pl, kind, lane, cw);
       o.path = route;
       o.kind = Object::Kind::Loop;
       o.profile = Profile(paths[route], v, 2.5, 1.5, -1, -1);
@@ -1216,11 +1313,21 @@ void World::placeObjects(Rng& rng) {
         paths.pop_back();
         car_styles.pop_back();
       };
-      if (place(o, placed_driving, undo)) break;
+      if (pl.place(o, placed_driving, undo)) break;
     }
   }
+  return placed_driving;
+}
 
-  // Pedestrians: walking round blocks on the pavement, or crossing streets at the crosswalks.
+// Pedestrians: walking round blocks on the pavement, or crossing streets at the crosswalks; returns how
+// many were placed.
+int World::placePedestrians(Placement& pl) {
+  Rng& rng = pl.rng;
+  const auto& oc = config.objects;
+  const auto& wc = config.world;
+  const double hw = roadHalfWidth();
+  const int ex = wc.blocks_x / 2, ey = wc.blocks_y / 2;
+  const bool highway = wc.type == "highway";
   int placed_peds = 0;
   for (int n = 0; n < oc.pedestrians && !highway; ++n) {
     for (int attempt = 0; attempt < 80; ++attempt) {
@@ -1268,7 +1375,7 @@ void World::placeObjects(Rng& rng) {
         o.wait_a = rng.uniform(2, 10), o.wait_b = rng.uniform(2, 10);
         o.phase = rng.uniform(0, 60);
       }
-      if (!place(o, placed_peds, [&] {
+      if (!pl.place(o, placed_peds, [&] {
             if (added_path) paths.pop_back();
           }))
         continue;
@@ -1276,6 +1383,23 @@ void World::placeObjects(Rng& rng) {
       break;
     }
   }
+  return placed_peds;
+}
+
+void World::placeObjects(Rng& rng) {
+  Placement pl(*this, rng);
+  pl.steps = config.frames * 4;
+  pl.dt = 1.0 / (config.rate_hz * 4);
+  for (int i = 0; i <= pl.steps; ++i) {
+    const Pose2 e = egoPose(i * pl.dt);
+    const double c = std::cos(e.yaw), s = std::sin(e.yaw);
+    // The ego's body plus a safety zone ahead: nothing comes closer than about 8 m in front.
+    pl.egoTrack.fp.push_back({e.x + c * 2.25, e.y + s * 2.25, c, s, 5.75, 1.15});
+  }
+  const int placed_sg = placeStopAndGo(pl);
+  const int placed_parked = placeParked(pl);
+  const int placed_driving = placeDriving(pl);
+  const int placed_peds = placePedestrians(pl);
   count_stop_and_go = placed_sg, count_parked = placed_parked, count_driving = placed_driving,
   count_pedestrians = placed_peds;
 }

@@ -248,8 +248,30 @@ class World {
 
  private:
   void buildUrban(Rng& rng);
+  // buildUrban's stages (world.cpp).
+  struct Block;
+  void buildStreets(Rng& rng);
+  void addStreetTiles(int street, Vec2d start, Vec2d dir, double len);
+  std::vector<Block> urbanBlocks() const;
+  void addPavement(const Block& bk);
+  void addKerbFace(const Vec2d& S, const Vec2d& d, double L);
+  Facade randomFacade(Rng& rng, int building, double& height) const;
+  void addBuildings(Rng& rng, int k, const Vec2d& S, const Vec2d& d, double L, int& building);
+  void addStreetFurniture(Rng& rng, const Vec2d& S, const Vec2d& d, double L);
   void buildHighway(Rng& rng);
+  // buildHighway's stages (world.cpp); ring: the road's centreline, L its length.
+  void addHighwayRibbons(const Path& ring, double L);
+  void addHighwayRoadside(Rng& rng, const Path& ring, double L);
+  void addHighwayGroundAndFarBuildings(Rng& rng, const Path& ring, double L);
   void placeObjects(Rng& rng);
+  // placeObjects' stages (world.cpp); Placement holds the footprints of what is placed so far.
+  struct Placement;
+  Object newCar(Placement& pl, Behaviour b);
+  int randomRoute(Placement& pl, int kind, int lane, bool& clockwise);
+  int placeStopAndGo(Placement& pl);
+  int placeParked(Placement& pl);
+  int placeDriving(Placement& pl);
+  int placePedestrians(Placement& pl);
   // Closed route round street lines i0..i1 x j0..j1, `lateral` metres right of the centreline.
   int addRoute(int i0, int j0, int i1, int j1, bool clockwise, double lateral);
   double roadHalfWidth() const;

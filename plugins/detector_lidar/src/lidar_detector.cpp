@@ -401,32 +401,30 @@ LidarDetector::LidarDetector(const Options& options, const Eigen::Isometry3d& T_
     camera_.reset();  // no usable intrinsics: no field-of-view selection
 }
 
-std::vector<beslam_box3d> LidarDetector::detect(const float* xyzi, std::size_t count, std::size_t stride_floats,
-                                                Stats* stats_out) const {
-  const Options& o = options_;
-  Stats stats;
-  stats.input_points = count;
-  std::vector<beslam_box3d> boxes;
-  if (xyzi == nullptr || count == 0) {
-    if (stats_out) *stats_out = stats;
-    return boxes;
-  }
-  if (stride_floats < 4) throw std::invalid_argument("detector_lidar: point stride below 4 floats");
+namespace {
 
-  // 1. Selection, in the camera frame. With a camera, points inside the image's view wedge (in the BEV) are
-  // "in view"; points up to fov_context outside it are kept too, to shape boxes cut by the image border.
-  const Eigen::Matrix3d R = T_cam_lidar_.linear();
-  const Eigen::Vector3d t = T_cam_lidar_.translation();
-  const bool use_fov = o.camera_fov_only && camera_.has_value();
+// The kept points in the camera frame and whether each is in the image's view.
+struct Selection {
+  std::vector<Eigen::Vector3d> p;
+  std::vector<char> in_view;
+};
+
+// 1. Selection, in the camera frame. With a camera, points inside the image's view wedge (in the BEV) are
+// "in view"; points up to fov_context outside it are kept too, to shape boxes cut by the image border.
+Selection selectPoints(const float* xyzi, std::size_t count, std::size_t stride_floats, const Eigen::Matrix3d& R,
+                       const Eigen::Vector3d& t, const std::optional<beslam_camera>& camera, const Options& o,
+                       Stats& stats) {
+  const bool use_fov = o.camera_fov_only && camera.has_value();
   double tan_left = 0, tan_right = 0;
   Eigen::Vector2d edge_left = Eigen::Vector2d::Zero(), edge_right = Eigen::Vector2d::Zero();
   if (use_fov) {
-    tan_left = (-o.fov_margin_px - camera_->cx) / camera_->fx;
-    tan_right = (camera_->width + o.fov_margin_px - camera_->cx) / camera_->fx;
+    tan_left = (-o.fov_margin_px - camera->cx) / camera->fx;
+    tan_right = (camera->width + o.fov_margin_px - camera->cx) / camera->fx;
     edge_left = Eigen::Vector2d(tan_left, 1).normalized(), edge_right = Eigen::Vector2d(tan_right, 1).normalized();
   }
-  std::vector<Eigen::Vector3d> p;
-  std::vector<char> in_view;
+  Selection s;
+  std::vector<Eigen::Vector3d>& p = s.p;
+  std::vector<char>& in_view = s.in_view;
   p.reserve(count);
   in_view.reserve(count);
   for (std::size_t i = 0; i < count; ++i) {
@@ -460,17 +458,13 @@ std::vector<beslam_box3d> LidarDetector::detect(const float* xyzi, std::size_t c
     for (size_t k = 0; k < kept.size(); ++k) p_kept[k] = p[kept[k]], in_view_kept[k] = in_view[kept[k]];
     p.swap(p_kept), in_view.swap(in_view_kept);
   }
+  return s;
+}
 
-  // 2. Ground.
-  Ground ground = o.ground_method == "ransac" ? ransacGround(p, o) : Ground{};
-  if (!ground.found) ground = gridGround(p, o);
-  stats.ground_found = ground.found;
-  if (!ground.found) {
-    if (stats_out) *stats_out = stats;
-    return boxes;
-  }
+// 2. The points above the ground and below max_height, as a cloud; object_index maps them back to p.
+pcl::PointCloud<pcl::PointXYZ>::Ptr objectPoints(const std::vector<Eigen::Vector3d>& p, const Ground& ground,
+                                                 const Options& o, Stats& stats, std::vector<size_t>& object_index) {
   pcl::PointCloud<pcl::PointXYZ>::Ptr objects(new pcl::PointCloud<pcl::PointXYZ>);
-  std::vector<size_t> object_index;
   for (size_t i = 0; i < p.size(); ++i) {
     if (ground.height[i] <= o.ground_threshold) {
       ++stats.ground_points;
@@ -482,12 +476,11 @@ std::vector<beslam_box3d> LidarDetector::detect(const float* xyzi, std::size_t c
     object_index.push_back(i);
   }
   stats.object_points = objects->size();
-  if (objects->size() < static_cast<size_t>(o.min_cluster_points)) {
-    if (stats_out) *stats_out = stats;
-    return boxes;
-  }
+  return objects;
+}
 
-  // 3. Clusters.
+// 3. Clusters: Euclidean clustering of the object points.
+std::vector<pcl::PointIndices> euclideanClusters(const pcl::PointCloud<pcl::PointXYZ>::Ptr& objects, const Options& o) {
   pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
   tree->setInputCloud(objects);
   std::vector<pcl::PointIndices> cluster_indices;
@@ -498,103 +491,163 @@ std::vector<beslam_box3d> LidarDetector::detect(const float* xyzi, std::size_t c
   ec.setSearchMethod(tree);
   ec.setInputCloud(objects);
   ec.extract(cluster_indices);
+  return cluster_indices;
+}
+
+// The free space round the sensor (t: the LiDAR origin in the camera frame) from all kept points.
+void buildFreeSpace(const std::vector<Eigen::Vector3d>& p, const Ground& ground, const Eigen::Vector2d& sensor,
+                    const Eigen::Vector3d& t, const Options& o, std::optional<FreeSpace>& free_space) {
+  // The sensor's height above the ground: the ground below the nearby points, seen from the sensor.
+  std::vector<double> below;
+  for (size_t i = 0; i < p.size(); ++i)
+    if ((Eigen::Vector2d(p[i].x(), p[i].z()) - sensor).squaredNorm() < 15.0 * 15.0)
+      below.push_back(ground.ground_y[i] - t.y());
+  double sensor_height = 1.73;
+  if (!below.empty()) {
+    std::nth_element(below.begin(), below.begin() + static_cast<long>(below.size() / 2), below.end());
+    sensor_height = below[below.size() / 2];
+  }
+  free_space.emplace(sensor, sensor_height, o);
+  for (size_t i = 0; i < p.size(); ++i) free_space->add(Eigen::Vector2d(p[i].x(), p[i].z()), ground.height[i]);
+}
+
+// Without free space: orients a footprint seen end-on along the line of sight, and grows the sides the
+// sensor cannot have measured away from it, up to the prior car size (fit_center: the fitted rectangle's).
+void growHiddenSides(const Eigen::Vector2d& sensor, const Options& o, const Eigen::Vector2d& fit_center,
+                     Eigen::Vector2d& center, Eigen::Vector2d axis[2], double extent[2]) {
+  if (extent[0] <= o.car_size[1] + 0.5) {
+    // No side is longer than a car is wide: the car is seen from behind or ahead, so its length runs
+    // along the line of sight (the axis closer to the viewing ray).
+    const Eigen::Vector2d ray = (fit_center - sensor).normalized();
+    if (std::abs(axis[1].dot(ray)) > std::abs(axis[0].dot(ray)))
+      std::swap(axis[0], axis[1]), std::swap(extent[0], extent[1]);
+  }
+  // Grow sides the sensor cannot have measured away from it, up to the prior. A side along axis k is
+  // measured when the sensor looks at the face parallel to it (it lies outside the box's slab across k)
+  // and the cluster spans a plausible car length (width) along it; otherwise part of it is hidden.
+  for (int k = 0; k < 2; ++k) {
+    const double prior = o.car_size[static_cast<size_t>(k)];
+    if (extent[k] >= prior) continue;
+    const int j = 1 - k;
+    const double across = std::abs((sensor - center).dot(axis[j]));
+    const double plausible = k == 0 ? o.car_min_length : o.car_min_width;
+    if (extent[k] >= plausible && across > extent[j] / 2 + 0.1) continue;
+    const double mid = (center - sensor).dot(axis[k]);
+    const double lo = mid - extent[k] / 2, hi = mid + extent[k] / 2;
+    double new_lo = lo, new_hi = hi;
+    if (lo >= 0)
+      new_hi = lo + prior;
+    else if (hi <= 0)
+      new_lo = hi - prior;
+    else
+      new_lo = mid - prior / 2, new_hi = mid + prior / 2;
+    center += ((new_lo + new_hi) / 2 - mid) * axis[k];
+    extent[k] = prior;
+  }
+}
+
+// 4-5. Fit, gate, grow: the car box of one cluster, or none where it is wholly outside the image or its
+// height or footprint does not fit a car.
+std::optional<beslam_box3d> clusterBox(const pcl::PointIndices& indices, const std::vector<size_t>& object_index,
+                                       const Selection& sel, const Ground& ground,
+                                       const std::optional<FreeSpace>& free_space, const Eigen::Vector2d& sensor,
+                                       const Options& o) {
+  const std::vector<Eigen::Vector3d>& p = sel.p;
+  const std::vector<char>& in_view = sel.in_view;
+  Cluster c;
+  double ground_sum = 0;
+  int seen_in_view = 0;
+  for (int k : indices.indices) {
+    const size_t i = object_index[static_cast<size_t>(k)];
+    c.bev.emplace_back(p[i].x(), p[i].z());
+    ground_sum += ground.ground_y[i];
+    c.top = std::max(c.top, ground.height[i]);
+    c.bottom = std::min(c.bottom, ground.height[i]);
+    seen_in_view += in_view[i];
+  }
+  if (seen_in_view == 0) return std::nullopt;  // wholly outside the image
+  c.ground_y = ground_sum / static_cast<double>(indices.indices.size());
+  if (c.top < o.car_min_top || c.top > o.car_max_top || c.bottom > o.car_max_bottom) return std::nullopt;
+  // The closeness criterion needs enough points along both sides; sparse (far) clusters get the
+  // minimum-area rectangle.
+  const bool lshape = o.box_fit == "lshape" && static_cast<int>(c.bev.size()) >= o.lshape_min_points;
+  Rect2 r = lshape ? fitLShape(c.bev, o.angle_step_deg) : fitMinAreaRect(c.bev);
+
+  // Axis 0: the length axis, axis 1: the width axis.
+  Eigen::Vector2d axis[2] = {r.axis, Eigen::Vector2d(-r.axis.y(), r.axis.x())};
+  double extent[2] = {r.extent_axis, r.extent_cross};
+  if (extent[1] > extent[0]) std::swap(axis[0], axis[1]), std::swap(extent[0], extent[1]);
+  if (extent[0] < o.car_min_extent || extent[0] > o.car_max_length || extent[1] > o.car_max_width) return std::nullopt;
+  Eigen::Vector2d center = r.center;
+  if (free_space && lshape)
+    completeWithFreeSpace(*free_space, sensor, o, center, axis, extent);
+  else
+    growHiddenSides(sensor, o, r.center, center, axis, extent);
+
+  beslam_box3d box{};
+  box.class_id = BESLAM_CLASS_CAR;
+  box.track_id = -1;
+  box.motion_state = BESLAM_MOTION_UNKNOWN;
+  const double height = std::max(c.top, 0.5);
+  box.center_cam[0] = center.x();
+  box.center_cam[1] = c.ground_y - height / 2;
+  box.center_cam[2] = center.y();
+  box.size[0] = extent[0];
+  box.size[1] = extent[1];
+  box.size[2] = height;
+  box.yaw = normalizeHalfPi(std::atan2(-axis[0].y(), axis[0].x()));  // heading (x, z) = (cos ry, -sin ry)
+  const double n_points = static_cast<double>(c.bev.size());
+  box.score = static_cast<float>(std::min(1.0, 0.3 + 0.7 * n_points / 80.0));
+  const double range = (center - sensor).norm();
+  if (range > o.uncertain_range || n_points < o.uncertain_points) box.flags |= BESLAM_BOX_UNCERTAIN;
+  return box;
+}
+
+}  // namespace
+
+std::vector<beslam_box3d> LidarDetector::detect(const float* xyzi, std::size_t count, std::size_t stride_floats,
+                                                Stats* stats_out) const {
+  const Options& o = options_;
+  Stats stats;
+  stats.input_points = count;
+  std::vector<beslam_box3d> boxes;
+  if (xyzi == nullptr || count == 0) {
+    if (stats_out) *stats_out = stats;
+    return boxes;
+  }
+  if (stride_floats < 4) throw std::invalid_argument("detector_lidar: point stride below 4 floats");
+
+  // 1. Selection.
+  const Eigen::Matrix3d R = T_cam_lidar_.linear();
+  const Eigen::Vector3d t = T_cam_lidar_.translation();
+  const Selection sel = selectPoints(xyzi, count, stride_floats, R, t, camera_, o, stats);
+  const std::vector<Eigen::Vector3d>& p = sel.p;
+
+  // 2. Ground.
+  Ground ground = o.ground_method == "ransac" ? ransacGround(p, o) : Ground{};
+  if (!ground.found) ground = gridGround(p, o);
+  stats.ground_found = ground.found;
+  if (!ground.found) {
+    if (stats_out) *stats_out = stats;
+    return boxes;
+  }
+  std::vector<size_t> object_index;
+  const pcl::PointCloud<pcl::PointXYZ>::Ptr objects = objectPoints(p, ground, o, stats, object_index);
+  if (objects->size() < static_cast<size_t>(o.min_cluster_points)) {
+    if (stats_out) *stats_out = stats;
+    return boxes;
+  }
+
+  // 3. Clusters.
+  const std::vector<pcl::PointIndices> cluster_indices = euclideanClusters(objects, o);
   stats.clusters = cluster_indices.size();
 
   // 4-5. Fit, gate, grow.
   const Eigen::Vector2d sensor(t.x(), t.z());  // LiDAR origin in the BEV
   std::optional<FreeSpace> free_space;
-  if (o.free_space) {
-    // The sensor's height above the ground: the ground below the nearby points, seen from the sensor.
-    std::vector<double> below;
-    for (size_t i = 0; i < p.size(); ++i)
-      if ((Eigen::Vector2d(p[i].x(), p[i].z()) - sensor).squaredNorm() < 15.0 * 15.0)
-        below.push_back(ground.ground_y[i] - t.y());
-    double sensor_height = 1.73;
-    if (!below.empty()) {
-      std::nth_element(below.begin(), below.begin() + static_cast<long>(below.size() / 2), below.end());
-      sensor_height = below[below.size() / 2];
-    }
-    free_space.emplace(sensor, sensor_height, o);
-    for (size_t i = 0; i < p.size(); ++i) free_space->add(Eigen::Vector2d(p[i].x(), p[i].z()), ground.height[i]);
-  }
-  for (const pcl::PointIndices& indices : cluster_indices) {
-    Cluster c;
-    double ground_sum = 0;
-    int seen_in_view = 0;
-    for (int k : indices.indices) {
-      const size_t i = object_index[static_cast<size_t>(k)];
-      c.bev.emplace_back(p[i].x(), p[i].z());
-      ground_sum += ground.ground_y[i];
-      c.top = std::max(c.top, ground.height[i]);
-      c.bottom = std::min(c.bottom, ground.height[i]);
-      seen_in_view += in_view[i];
-    }
-    if (seen_in_view == 0) continue;  // wholly outside the image
-    c.ground_y = ground_sum / static_cast<double>(indices.indices.size());
-    if (c.top < o.car_min_top || c.top > o.car_max_top || c.bottom > o.car_max_bottom) continue;
-    // The closeness criterion needs enough points along both sides; sparse (far) clusters get the
-    // minimum-area rectangle.
-    const bool lshape = o.box_fit == "lshape" && static_cast<int>(c.bev.size()) >= o.lshape_min_points;
-    Rect2 r = lshape ? fitLShape(c.bev, o.angle_step_deg) : fitMinAreaRect(c.bev);
-
-    // Axis 0: the length axis, axis 1: the width axis.
-    Eigen::Vector2d axis[2] = {r.axis, Eigen::Vector2d(-r.axis.y(), r.axis.x())};
-    double extent[2] = {r.extent_axis, r.extent_cross};
-    if (extent[1] > extent[0]) std::swap(axis[0], axis[1]), std::swap(extent[0], extent[1]);
-    if (extent[0] < o.car_min_extent || extent[0] > o.car_max_length || extent[1] > o.car_max_width) continue;
-    Eigen::Vector2d center = r.center;
-    if (free_space && lshape) {
-      completeWithFreeSpace(*free_space, sensor, o, center, axis, extent);
-    } else {
-      if (extent[0] <= o.car_size[1] + 0.5) {
-        // No side is longer than a car is wide: the car is seen from behind or ahead, so its length runs
-        // along the line of sight (the axis closer to the viewing ray).
-        const Eigen::Vector2d ray = (r.center - sensor).normalized();
-        if (std::abs(axis[1].dot(ray)) > std::abs(axis[0].dot(ray)))
-          std::swap(axis[0], axis[1]), std::swap(extent[0], extent[1]);
-      }
-      // Grow sides the sensor cannot have measured away from it, up to the prior. A side along axis k is
-      // measured when the sensor looks at the face parallel to it (it lies outside the box's slab across k)
-      // and the cluster spans a plausible car length (width) along it; otherwise part of it is hidden.
-      for (int k = 0; k < 2; ++k) {
-        const double prior = o.car_size[static_cast<size_t>(k)];
-        if (extent[k] >= prior) continue;
-        const int j = 1 - k;
-        const double across = std::abs((sensor - center).dot(axis[j]));
-        const double plausible = k == 0 ? o.car_min_length : o.car_min_width;
-        if (extent[k] >= plausible && across > extent[j] / 2 + 0.1) continue;
-        const double mid = (center - sensor).dot(axis[k]);
-        const double lo = mid - extent[k] / 2, hi = mid + extent[k] / 2;
-        double new_lo = lo, new_hi = hi;
-        if (lo >= 0)
-          new_hi = lo + prior;
-        else if (hi <= 0)
-          new_lo = hi - prior;
-        else
-          new_lo = mid - prior / 2, new_hi = mid + prior / 2;
-        center += ((new_lo + new_hi) / 2 - mid) * axis[k];
-        extent[k] = prior;
-      }
-    }
-
-    beslam_box3d box{};
-    box.class_id = BESLAM_CLASS_CAR;
-    box.track_id = -1;
-    box.motion_state = BESLAM_MOTION_UNKNOWN;
-    const double height = std::max(c.top, 0.5);
-    box.center_cam[0] = center.x();
-    box.center_cam[1] = c.ground_y - height / 2;
-    box.center_cam[2] = center.y();
-    box.size[0] = extent[0];
-    box.size[1] = extent[1];
-    box.size[2] = height;
-    box.yaw = normalizeHalfPi(std::atan2(-axis[0].y(), axis[0].x()));  // heading (x, z) = (cos ry, -sin ry)
-    const double n_points = static_cast<double>(c.bev.size());
-    box.score = static_cast<float>(std::min(1.0, 0.3 + 0.7 * n_points / 80.0));
-    const double range = (center - sensor).norm();
-    if (range > o.uncertain_range || n_points < o.uncertain_points) box.flags |= BESLAM_BOX_UNCERTAIN;
-    boxes.push_back(box);
-  }
+  if (o.free_space) buildFreeSpace(p, ground, sensor, t, o, free_space);
+  for (const pcl::PointIndices& indices : cluster_indices)
+    if (const auto box = clusterBox(indices, object_index, sel, ground, free_space, sensor, o)) boxes.push_back(*box);
   std::sort(boxes.begin(), boxes.end(), [](const beslam_box3d& a, const beslam_box3d& b) {
     return a.center_cam[0] * a.center_cam[0] + a.center_cam[2] * a.center_cam[2] <
            b.center_cam[0] * b.center_cam[0] + b.center_cam[2] * b.center_cam[2];

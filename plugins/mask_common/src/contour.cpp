@@ -121,20 +121,20 @@ struct EdgePoint {
   double nx, ny;  // unit image gradient
 };
 
-}  // namespace
+// Column extents of the region and of the fallback outline (-1 where a column is empty), and their
+// horizontal and vertical spans.
+struct ColumnExtents {
+  std::vector<int> rTop, rBot, fTop, fBot;
+  int xl = -1, xr = -1, y0 = 0, y1 = -1;  // the region's bounding rectangle (xl < 0: empty)
+  int fl = -1, fr = -1;                   // the fallback's columns (fl < 0: empty)
+};
 
-ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, const cv::Mat& prior,
-                            const ContourParams& params) {
-  CV_Assert(gray_crop.type() == CV_8UC1 && region.type() == CV_8UC1 && gray_crop.size() == region.size());
-  CV_Assert(prior.empty() || (prior.type() == CV_8UC1 && prior.size() == region.size()));
-  ContourResult result;
-  const cv::Mat fallback = prior.empty() ? region : prior;
-  result.mask = fallback.clone();
+// Column extents of the region and of the fallback outline.
+ColumnExtents columnExtents(const cv::Mat& region, const cv::Mat& fallback) {
   const int W = region.cols, H = region.rows;
-  if (W < params.min_size_px || H < params.min_size_px) return result;
-
-  // Column extents of the region and of the fallback outline.
-  std::vector<int> rTop(W, -1), rBot(W, -1), fTop(W, -1), fBot(W, -1);
+  ColumnExtents e;
+  std::vector<int>&rTop = e.rTop, &rBot = e.rBot, &fTop = e.fTop, &fBot = e.fBot;
+  rTop.assign(W, -1), rBot.assign(W, -1), fTop.assign(W, -1), fBot.assign(W, -1);
   for (int y = 0; y < H; ++y) {
     const uint8_t* r = region.ptr<uint8_t>(y);
     const uint8_t* f = fallback.ptr<uint8_t>(y);
@@ -149,64 +149,78 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
       }
     }
   }
-  int xl = -1, xr = -1, y0 = H, y1 = -1;
+  e.y0 = H;
   for (int x = 0; x < W; ++x)
     if (rTop[x] >= 0) {
-      if (xl < 0) xl = x;
-      xr = x;
-      y0 = std::min(y0, rTop[x]);
-      y1 = std::max(y1, rBot[x]);
+      if (e.xl < 0) e.xl = x;
+      e.xr = x;
+      e.y0 = std::min(e.y0, rTop[x]);
+      e.y1 = std::max(e.y1, rBot[x]);
     }
-  if (xl < 0 || xr - xl + 1 < params.min_size_px || y1 - y0 + 1 < params.min_size_px) return result;
-  int fl = -1, fr = -1;
   for (int x = 0; x < W; ++x)
     if (fTop[x] >= 0) {
-      if (fl < 0) fl = x;
-      fr = x;
+      if (e.fl < 0) e.fl = x;
+      e.fr = x;
     }
-  if (fl < 0) return result;
+  return e;
+}
 
-  cv::Mat blurred, edges;
-  cv::GaussianBlur(gray_crop, blurred, cv::Size(3, 3), 0);
-  cv::Canny(blurred, edges, params.canny_low, params.canny_high, 3, true);
-  auto gradient = [&blurred, W, H](int x, int y, double& nx, double& ny) {
-    auto I = [&](int xx, int yy) {
-      return static_cast<double>(blurred.at<uint8_t>(std::clamp(yy, 0, H - 1), std::clamp(xx, 0, W - 1)));
-    };
-    const double gx =
-        (I(x + 1, y - 1) + 2 * I(x + 1, y) + I(x + 1, y + 1)) - (I(x - 1, y - 1) + 2 * I(x - 1, y) + I(x - 1, y + 1));
-    const double gy =
-        (I(x - 1, y + 1) + 2 * I(x, y + 1) + I(x + 1, y + 1)) - (I(x - 1, y - 1) + 2 * I(x, y - 1) + I(x + 1, y - 1));
-    const double n = std::hypot(gx, gy);
-    if (n < 1e-9) return false;
-    nx = gx / n, ny = gy / n;
-    return true;
+// Unit Sobel gradient of the blurred crop at (x, y), clamped at the borders; false where it is flat.
+bool gradientAt(const cv::Mat& blurred, int x, int y, double& nx, double& ny) {
+  const int W = blurred.cols, H = blurred.rows;
+  auto I = [&](int xx, int yy) {
+    return static_cast<double>(blurred.at<uint8_t>(std::clamp(yy, 0, H - 1), std::clamp(xx, 0, W - 1)));
   };
+  const double gx =
+      (I(x + 1, y - 1) + 2 * I(x + 1, y) + I(x + 1, y + 1)) - (I(x - 1, y - 1) + 2 * I(x - 1, y) + I(x - 1, y + 1));
+  const double gy =
+      (I(x - 1, y + 1) + 2 * I(x, y + 1) + I(x + 1, y + 1)) - (I(x - 1, y - 1) + 2 * I(x, y - 1) + I(x + 1, y - 1));
+  const double n = std::hypot(gx, gy);
+  if (n < 1e-9) return false;
+  nx = gx / n, ny = gy / n;
+  return true;
+}
 
-  // Six equal rectangles of the region's bounding rectangle, clockwise from the top left.
-  const double ymid = 0.5 * (y0 + y1);
-  const double xb[4] = {static_cast<double>(xl), xl + (xr - xl) / 3.0, xl + 2 * (xr - xl) / 3.0,
-                        static_cast<double>(xr)};
-  struct Piece {
-    double xa, xb;
-    bool top;
-  };
-  const Piece pieces[6] = {{xb[0], xb[1], true},  {xb[1], xb[2], true},  {xb[2], xb[3], true},
-                           {xb[2], xb[3], false}, {xb[1], xb[2], false}, {xb[0], xb[1], false}};
-  auto pieceOf = [&xb](int x, bool top) {
+// Six equal rectangles of the region's bounding rectangle, clockwise from the top left.
+struct Piece {
+  double xa, xb;
+  bool top;
+};
+struct Pieces {
+  double xb[4];  // column boundaries
+  Piece piece[6];
+  // The rectangle of column x in the top or the bottom row.
+  int of(int x, bool top) const {
     const int col = x < xb[1] ? 0 : (x < xb[2] ? 1 : 2);
     return top ? col : 5 - col;
-  };
+  }
+};
 
-  // Outline edge points per column.
-  std::array<std::vector<EdgePoint>, 6> pts;
+Pieces sixPieces(int xl, int xr) {
+  Pieces p{{static_cast<double>(xl), xl + (xr - xl) / 3.0, xl + 2 * (xr - xl) / 3.0, static_cast<double>(xr)}, {}};
+  const double* xb = p.xb;
+  const Piece pieces[6] = {{xb[0], xb[1], true},  {xb[1], xb[2], true},  {xb[2], xb[3], true},
+                           {xb[2], xb[3], false}, {xb[1], xb[2], false}, {xb[0], xb[1], false}};
+  std::copy(pieces, pieces + 6, p.piece);
+  return p;
+}
+
+using PiecePoints = std::array<std::vector<EdgePoint>, 6>;
+
+// Outline edge points per column (step 3): the outermost edge pixel of each column in each row of
+// rectangles, or with a prior the edge pixel nearest the prior's outline.
+PiecePoints outlineEdgePoints(const cv::Mat& edges, const cv::Mat& blurred, const ColumnExtents& ext, const Pieces& pc,
+                              bool has_prior, const ContourParams& params) {
+  const std::vector<int>&rTop = ext.rTop, &rBot = ext.rBot, &fTop = ext.fTop, &fBot = ext.fBot;
+  const double ymid = 0.5 * (ext.y0 + ext.y1);
+  PiecePoints pts;
   const int tol = static_cast<int>(std::lround(params.prior_tolerance_px));
-  for (int x = xl; x <= xr; ++x) {
+  for (int x = ext.xl; x <= ext.xr; ++x) {
     if (rTop[x] < 0) continue;
     for (int side = 0; side < 2; ++side) {
       const bool top = side == 0;
       int found = -1;
-      if (!prior.empty()) {
+      if (has_prior) {
         const int ref = top ? fTop[x] : fBot[x];
         if (ref < 0) continue;
         int best = tol + 1;
@@ -227,32 +241,26 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
       }
       if (found < 0) continue;
       EdgePoint e{x, found, 0, 0};
-      if (!gradient(x, found, e.nx, e.ny)) continue;
-      pts[pieceOf(x, top)].push_back(e);
+      if (!gradientAt(blurred, x, found, e.nx, e.ny)) continue;
+      pts[pc.of(x, top)].push_back(e);
     }
   }
+  return pts;
+}
 
-  // Support and fallback per rectangle.
-  int total_cols = 0, total_pts = 0;
-  std::array<int, 6> cols{};
-  for (int i = 0; i < 6; ++i) {
-    for (int x = static_cast<int>(std::ceil(pieces[i].xa)); x <= pieces[i].xb && x <= xr; ++x)
-      if (rTop[x] >= 0 && pieceOf(x, pieces[i].top) == i) ++cols[i];
-    total_cols += cols[i];
-    total_pts += static_cast<int>(pts[i].size());
-    result.from_edges[i] = cols[i] > 0 && pts[i].size() >= params.min_support * cols[i] && pts[i].size() >= 4;
-  }
-  result.support = total_cols ? static_cast<double>(total_pts) / total_cols : 0;
-  if (result.support < params.min_total_support) return result;
+using PieceData = std::array<std::vector<cv::Point2d>, 6>;
 
-  // Data of each rectangle: its edge points, or the fallback outline where edges are weak.
-  std::array<std::vector<cv::Point2d>, 6> data;
+// Data of each rectangle: its edge points, or the fallback outline where edges are weak (whose edge
+// points are then dropped); and the initial least-squares cubic of each rectangle into result.curves.
+PieceData initialCurves(const ColumnExtents& ext, const Pieces& pc, PiecePoints& pts, ContourResult& result) {
+  const Piece* pieces = pc.piece;
+  PieceData data;
   for (int i = 0; i < 6; ++i) {
     if (result.from_edges[i]) {
       for (const EdgePoint& e : pts[i]) data[i].emplace_back(e.x, e.y);
     } else {
-      for (int x = static_cast<int>(std::ceil(pieces[i].xa)); x <= pieces[i].xb && x <= xr; ++x) {
-        const int y = pieces[i].top ? fTop[x] : fBot[x];
+      for (int x = static_cast<int>(std::ceil(pieces[i].xa)); x <= pieces[i].xb && x <= ext.xr; ++x) {
+        const int y = pieces[i].top ? ext.fTop[x] : ext.fBot[x];
         if (y >= 0) data[i].emplace_back(x, y);
       }
       pts[i].clear();
@@ -262,7 +270,7 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
     c.half_width = std::max(1.0, 0.5 * (pieces[i].xb - pieces[i].xa));
     // Initial least-squares cubic (degree reduced when there are few points).
     const int n = static_cast<int>(data[i].size());
-    const double y_default = pieces[i].top ? y0 : y1;
+    const double y_default = pieces[i].top ? ext.y0 : ext.y1;
     if (n == 0) {
       c.c = {y_default, 0, 0, 0};
       continue;
@@ -279,8 +287,17 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
     c.c = {0, 0, 0, 0};
     for (int j = 0; j <= deg; ++j) c.c[j] = sol.at<double>(j);
   }
+  return data;
+}
 
-  // Joint refinement (CurveFit above).
+// Neighbours sharing an end: R1-R2, R2-R3 (top row) and R4-R5, R5-R6 (bottom row) at the column
+// boundaries. (R3-R4 and R6-R1 meet through the region's vertical sides.)
+constexpr int kJoins[4][2] = {{0, 1}, {1, 2}, {3, 4}, {4, 5}};
+
+// Joint refinement (CurveFit above) of result.curves.
+void refineJointly(const Pieces& pc, const PiecePoints& pts, const PieceData& data, const ContourParams& params,
+                   ContourResult& result) {
+  const Piece* pieces = pc.piece;
   CurveFit fit(params.smooth_weight);
   for (int i = 0; i < 6; ++i) {
     const Cubic& c = result.curves[i];
@@ -291,10 +308,7 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
     for (size_t k = 0; k < data[i].size(); k += stride)
       fit.points.push_back({i, (data[i][k].x - c.x_mid) / c.half_width, data[i][k].y, weight});
   }
-  // Neighbours sharing an end: R1-R2, R2-R3 (top row) and R4-R5, R5-R6 (bottom row) at the column
-  // boundaries. (R3-R4 and R6-R1 meet through the region's vertical sides.)
-  const int joins[4][2] = {{0, 1}, {1, 2}, {3, 4}, {4, 5}};
-  for (const auto& j : joins) {
+  for (const auto& j : kJoins) {
     const Cubic& a = result.curves[j[0]];
     const Cubic& b = result.curves[j[1]];
     const double x = (j[0] < 3) ? pieces[j[0]].xb : pieces[j[0]].xa;  // shared boundary
@@ -317,11 +331,14 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
   for (int i = 0; i < 6; ++i) coef[i] = result.curves[i].c;
   fit.solve(coef, params.max_iterations);
   for (int i = 0; i < 6; ++i) result.curves[i].c = coef[i];
+}
 
-  // Equation (3) at the solution, for reporting.
+// Equation (3) at the solution, for reporting: mean |sin| of the angle over the M edge points.
+double smoothnessAt(const Pieces& pc, const PiecePoints& pts, const ContourResult& result) {
+  const Piece* pieces = pc.piece;
   double xi = 0;
   int m = 0;
-  for (const auto& j : joins) {
+  for (const auto& j : kJoins) {
     const double x = (j[0] < 3) ? pieces[j[0]].xb : pieces[j[0]].xa;
     const double band = std::max(2.0, 0.25 * (pieces[j[0]].xb - pieces[j[0]].xa));
     for (int side = 0; side < 2; ++side)
@@ -333,28 +350,74 @@ ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, con
         ++m;
       }
   }
-  result.smoothness = m ? xi / m : 0;
+  return m ? xi / m : 0;
+}
 
-  // The closed contour: top curve left to right, bottom curve right to left, within the region's and
-  // (with a prior) the prior's horizontal extent.
-  const int xa = prior.empty() ? xl : std::max(xl, fl), xz = prior.empty() ? xr : std::min(xr, fr);
+// The closed contour: top curve left to right, bottom curve right to left, within the region's and
+// (with a prior) the prior's horizontal extent, filled into result.mask and clipped to the region; false
+// (result untouched) when fewer than three columns remain.
+bool fillContour(const cv::Mat& region, const ColumnExtents& ext, const Pieces& pc, bool has_prior,
+                 ContourResult& result) {
+  const int xa = !has_prior ? ext.xl : std::max(ext.xl, ext.fl), xz = !has_prior ? ext.xr : std::min(ext.xr, ext.fr);
   std::vector<cv::Point> top, bottom;
   for (int x = xa; x <= xz; ++x) {
-    if (rTop[x] < 0) continue;
-    double yt = result.curves[pieceOf(x, true)](x);
-    double yb = result.curves[pieceOf(x, false)](x);
-    yt = std::clamp(yt, static_cast<double>(rTop[x]), static_cast<double>(rBot[x]));
-    yb = std::clamp(yb, static_cast<double>(rTop[x]), static_cast<double>(rBot[x]));
+    if (ext.rTop[x] < 0) continue;
+    double yt = result.curves[pc.of(x, true)](x);
+    double yb = result.curves[pc.of(x, false)](x);
+    yt = std::clamp(yt, static_cast<double>(ext.rTop[x]), static_cast<double>(ext.rBot[x]));
+    yb = std::clamp(yb, static_cast<double>(ext.rTop[x]), static_cast<double>(ext.rBot[x]));
     if (yb < yt) continue;
     top.emplace_back(x, static_cast<int>(std::lround(yt)));
     bottom.emplace_back(x, static_cast<int>(std::lround(yb)));
   }
-  if (top.size() < 3) return result;
+  if (top.size() < 3) return false;
   std::vector<cv::Point> contour(top.begin(), top.end());
   contour.insert(contour.end(), bottom.rbegin(), bottom.rend());
   cv::Mat filled = cv::Mat::zeros(region.size(), CV_8UC1);
   cv::fillPoly(filled, std::vector<std::vector<cv::Point>>{contour}, cv::Scalar(255));
   cv::bitwise_and(filled, region, result.mask);
+  return true;
+}
+
+}  // namespace
+
+ContourResult refineContour(const cv::Mat& gray_crop, const cv::Mat& region, const cv::Mat& prior,
+                            const ContourParams& params) {
+  CV_Assert(gray_crop.type() == CV_8UC1 && region.type() == CV_8UC1 && gray_crop.size() == region.size());
+  CV_Assert(prior.empty() || (prior.type() == CV_8UC1 && prior.size() == region.size()));
+  ContourResult result;
+  const cv::Mat fallback = prior.empty() ? region : prior;
+  result.mask = fallback.clone();
+  const int W = region.cols, H = region.rows;
+  if (W < params.min_size_px || H < params.min_size_px) return result;
+
+  const ColumnExtents ext = columnExtents(region, fallback);
+  if (ext.xl < 0 || ext.xr - ext.xl + 1 < params.min_size_px || ext.y1 - ext.y0 + 1 < params.min_size_px) return result;
+  if (ext.fl < 0) return result;
+
+  cv::Mat blurred, edges;
+  cv::GaussianBlur(gray_crop, blurred, cv::Size(3, 3), 0);
+  cv::Canny(blurred, edges, params.canny_low, params.canny_high, 3, true);
+  const Pieces pc = sixPieces(ext.xl, ext.xr);
+  PiecePoints pts = outlineEdgePoints(edges, blurred, ext, pc, !prior.empty(), params);
+
+  // Support and fallback per rectangle.
+  int total_cols = 0, total_pts = 0;
+  std::array<int, 6> cols{};
+  for (int i = 0; i < 6; ++i) {
+    for (int x = static_cast<int>(std::ceil(pc.piece[i].xa)); x <= pc.piece[i].xb && x <= ext.xr; ++x)
+      if (ext.rTop[x] >= 0 && pc.of(x, pc.piece[i].top) == i) ++cols[i];
+    total_cols += cols[i];
+    total_pts += static_cast<int>(pts[i].size());
+    result.from_edges[i] = cols[i] > 0 && pts[i].size() >= params.min_support * cols[i] && pts[i].size() >= 4;
+  }
+  result.support = total_cols ? static_cast<double>(total_pts) / total_cols : 0;
+  if (result.support < params.min_total_support) return result;
+
+  const PieceData data = initialCurves(ext, pc, pts, result);
+  refineJointly(pc, pts, data, params, result);
+  result.smoothness = smoothnessAt(pc, pts, result);
+  if (!fillContour(region, ext, pc, !prior.empty(), result)) return result;
   result.refined = true;
   return result;
 }

@@ -79,12 +79,29 @@ void printSummary(const mask::ScoreSummary& s, const std::string& csv) {
   }
 }
 
-int run(const std::vector<std::string>& args) {
-  if (args.empty() || args[0] == "--help" || args[0] == "-h") {
-    std::cout << kUsage;
-    return args.empty() ? 2 : 0;
+// The `--key value` (or `--key=value`) options after the command, with number and required-key lookups.
+struct CommandOptions {
+  std::map<std::string, std::string> opt;
+
+  double num(const std::string& k, double def) {
+    if (!opt.count(k)) return def;
+    try {
+      size_t used = 0;
+      const double v = std::stod(opt[k], &used);
+      if (used != opt[k].size()) throw std::invalid_argument(k);
+      return v;
+    } catch (const std::exception&) {
+      throw Usage("--" + k + ": '" + opt[k] + "' is not a number");
+    }
   }
-  const std::string command = args[0];
+  std::string need(const std::string& k) {
+    if (!opt.count(k)) throw Usage("--" + k + " is required");
+    return opt[k];
+  }
+};
+
+// Parses the options after the command, refusing unknown keys and options without a value.
+CommandOptions parseOptions(const std::vector<std::string>& args) {
   std::map<std::string, std::string> opt;
   for (size_t i = 1; i < args.size(); ++i) {
     std::string a = args[i];
@@ -102,38 +119,11 @@ int run(const std::vector<std::string>& args) {
       "first", "last",     "csv", "max-distance", "max-occlusion", "max-truncation", "min-pixels"};
   for (const auto& [k, v] : opt)
     if (std::find(known.begin(), known.end(), k) == known.end()) throw Usage("unknown option --" + k);
-  auto num = [&opt](const std::string& k, double def) {
-    if (!opt.count(k)) return def;
-    try {
-      size_t used = 0;
-      const double v = std::stod(opt[k], &used);
-      if (used != opt[k].size()) throw std::invalid_argument(k);
-      return v;
-    } catch (const std::exception&) {
-      throw Usage("--" + k + ": '" + opt[k] + "' is not a number");
-    }
-  };
-  auto need = [&opt](const std::string& k) {
-    if (!opt.count(k)) throw Usage("--" + k + " is required");
-    return opt[k];
-  };
-  mask::ScoreOptions so;
-  so.max_distance = num("max-distance", so.max_distance);
-  so.max_occlusion = static_cast<int>(num("max-occlusion", so.max_occlusion));
-  so.max_truncation = num("max-truncation", so.max_truncation);
-  so.min_pixels = static_cast<int>(num("min-pixels", so.min_pixels));
-  so.first = static_cast<int64_t>(num("first", 0));
-  so.last = static_cast<int64_t>(num("last", -1));
-  const std::string csv = opt.count("csv") ? opt["csv"] : "";
-  const std::string sequence = need("sequence");
+  return {opt};
+}
 
-  if (command == "score") {
-    printSummary(mask::scoreSequence(need("masks"), sequence, so), csv);
-    return 0;
-  }
-  if (command != "generate") throw Usage("unknown command '" + command + "'");
-
-  const std::string variant = need("variant");
+// The mask options of a `generate` variant.
+mask::MaskOptions variantOptions(const std::string& variant) {
   mask::MaskOptions mo;
   if (variant == "box") {
     mo.contour = false;
@@ -148,17 +138,79 @@ int run(const std::vector<std::string>& args) {
   } else {
     throw Usage("unknown --variant '" + variant + "'");
   }
-  const fs::path seq(sequence);
-  const datasets::KittiCalib calib = datasets::readObjectCalib((seq / "calib.txt").string());
-  if (!calib.P[0]) throw std::runtime_error((seq / "calib.txt").string() + ": no P0");
+  return mo;
+}
+
+// Oracle boxes of one frame from its labels and motion flags (DontCare skipped), moved and turned like a
+// detector's error when perturb_m or perturb_deg is set.
+std::vector<beslam_box3d> oracleBoxes(const std::vector<datasets::TrackingLabel>& frame_labels,
+                                      const std::map<std::pair<int64_t, int64_t>, bool>& moving, int64_t frame,
+                                      double perturb_m, double perturb_deg) {
+  std::vector<beslam_box3d> boxes;
+  for (const auto& l : frame_labels) {
+    if (l.object.isDontCare()) continue;
+    beslam_box3d b = sdk::newBox();
+    b.class_id = classOf(l.object.type);
+    b.track_id = static_cast<int32_t>(l.track_id);
+    const auto it = moving.find({frame, l.track_id});
+    b.motion_state =
+        it == moving.end() ? BESLAM_MOTION_UNKNOWN : (it->second ? BESLAM_MOTION_DYNAMIC : BESLAM_MOTION_STATIC);
+    b.center_cam[0] = l.object.p_cam_bottom.x();
+    b.center_cam[1] = l.object.p_cam_bottom.y() - l.object.h / 2;
+    b.center_cam[2] = l.object.p_cam_bottom.z();
+    b.size[0] = l.object.l, b.size[1] = l.object.w, b.size[2] = l.object.h;
+    b.yaw = l.object.ry;
+    b.score = 1;
+    if (perturb_m > 0 || perturb_deg > 0) {
+      // A detector's error, deterministic per (frame, track): perturb_m in a BEV direction, +-perturb_deg.
+      const uint32_t h = static_cast<uint32_t>(frame * 2654435761u) ^ static_cast<uint32_t>(l.track_id * 40503u);
+      const double a = (h % 360) * M_PI / 180;
+      b.center_cam[0] += perturb_m * std::cos(a);
+      b.center_cam[2] += perturb_m * std::sin(a);
+      b.yaw += ((h >> 9) % 2 ? perturb_deg : -perturb_deg) * M_PI / 180;
+    }
+    boxes.push_back(b);
+  }
+  return boxes;
+}
+
+// Red: predicted, not the object; blue: object, not predicted; over the grey frame, into DIR/NNNNNN.png.
+void writeOverlay(const fs::path& seq, int64_t frame, const cv::Mat& gray, const cv::Mat& mask,
+                  const std::string& dir) {
+  const cv::Mat inst = cv::imread((seq / "instance" / (frameName(frame) + ".png")).string(), cv::IMREAD_UNCHANGED);
+  cv::Mat vis;
+  cv::cvtColor(gray, vis, cv::COLOR_GRAY2BGR);
+  if (inst.size() == mask.size() && inst.type() == CV_16UC1) {
+    vis.setTo(cv::Scalar(0, 0, 255), (mask > 0) & (inst == 0));
+    vis.setTo(cv::Scalar(255, 0, 0), (mask == 0) & (inst > 0));
+  }
+  fs::create_directories(dir);
+  cv::imwrite((fs::path(dir) / (frameName(frame) + ".png")).string(), vis);
+}
+
+// The frames' images of the sequence (image_0, else image_2), sorted; cam_index gets the camera's index.
+std::vector<fs::path> sequenceImages(const fs::path& seq, int& cam_index) {
   fs::path image_dir = seq / "image_0";
   if (!fs::is_directory(image_dir)) image_dir = seq / "image_2";
-  const int cam_index = image_dir.filename() == "image_0" ? 0 : 2;
+  cam_index = image_dir.filename() == "image_0" ? 0 : 2;
   std::vector<fs::path> images;
   for (const auto& e : fs::directory_iterator(image_dir))
     if (e.path().extension() == ".png") images.push_back(e.path());
   std::sort(images.begin(), images.end());
   if (images.empty()) throw std::runtime_error(image_dir.string() + ": no images");
+  return images;
+}
+
+// `generate`: a variant's masks from the sequence's own labels into OUT/masks, timed, then scored.
+int generate(CommandOptions& o, const mask::ScoreOptions& so, const std::string& csv, const std::string& sequence) {
+  std::map<std::string, std::string>& opt = o.opt;
+  const std::string variant = o.need("variant");
+  const mask::MaskOptions mo = variantOptions(variant);
+  const fs::path seq(sequence);
+  const datasets::KittiCalib calib = datasets::readObjectCalib((seq / "calib.txt").string());
+  if (!calib.P[0]) throw std::runtime_error((seq / "calib.txt").string() + ": no P0");
+  int cam_index = 0;
+  const std::vector<fs::path> images = sequenceImages(seq, cam_index);
   const cv::Size size = datasets::readImageSize(images.front().string());
   const datasets::Camera cam = datasets::cameraFromProjection(*calib.P[cam_index], size.width, size.height, "P");
   mask::Intrinsics K;
@@ -176,8 +228,8 @@ int run(const std::vector<std::string>& args) {
   for (auto& l : datasets::readTrackingLabels(label_file)) labels[l.frame].push_back(std::move(l));
   const auto moving = mask::readObjectMotionIfPresent((seq / "objects_motion.txt").string());
 
-  const double perturb_m = num("perturb-m", 0), perturb_deg = num("perturb-deg", 0);
-  const fs::path out_masks = fs::path(need("out")) / "masks";
+  const double perturb_m = o.num("perturb-m", 0), perturb_deg = o.num("perturb-deg", 0);
+  const fs::path out_masks = fs::path(o.need("out")) / "masks";
   fs::create_directories(out_masks);
   std::vector<double> ms;
   for (const fs::path& image : images) {
@@ -187,48 +239,14 @@ int run(const std::vector<std::string>& args) {
     std::vector<float> scan;
     const fs::path scan_path = seq / "velodyne" / (frameName(frame) + ".bin");
     if (mo.use_lidar && fs::exists(scan_path)) scan = datasets::readVelodyneBin(scan_path.string());
-    std::vector<beslam_box3d> boxes;
-    for (const auto& l : labels[frame]) {
-      if (l.object.isDontCare()) continue;
-      beslam_box3d b = sdk::newBox();
-      b.class_id = classOf(l.object.type);
-      b.track_id = static_cast<int32_t>(l.track_id);
-      const auto it = moving.find({frame, l.track_id});
-      b.motion_state =
-          it == moving.end() ? BESLAM_MOTION_UNKNOWN : (it->second ? BESLAM_MOTION_DYNAMIC : BESLAM_MOTION_STATIC);
-      b.center_cam[0] = l.object.p_cam_bottom.x();
-      b.center_cam[1] = l.object.p_cam_bottom.y() - l.object.h / 2;
-      b.center_cam[2] = l.object.p_cam_bottom.z();
-      b.size[0] = l.object.l, b.size[1] = l.object.w, b.size[2] = l.object.h;
-      b.yaw = l.object.ry;
-      b.score = 1;
-      if (perturb_m > 0 || perturb_deg > 0) {
-        // A detector's error, deterministic per (frame, track): perturb_m in a BEV direction, +-perturb_deg.
-        const uint32_t h = static_cast<uint32_t>(frame * 2654435761u) ^ static_cast<uint32_t>(l.track_id * 40503u);
-        const double a = (h % 360) * M_PI / 180;
-        b.center_cam[0] += perturb_m * std::cos(a);
-        b.center_cam[2] += perturb_m * std::sin(a);
-        b.yaw += ((h >> 9) % 2 ? perturb_deg : -perturb_deg) * M_PI / 180;
-      }
-      boxes.push_back(b);
-    }
+    const std::vector<beslam_box3d> boxes = oracleBoxes(labels[frame], moving, frame, perturb_m, perturb_deg);
     beslam_point_cloud_view view{};
     if (!scan.empty()) view.data = scan.data(), view.count = scan.size() / 4, view.stride_bytes = 16;
     cv::Mat mask = cv::Mat::zeros(img.gray.size(), CV_16UC1);
     const auto t0 = std::chrono::steady_clock::now();
     builder.generate(img.gray, view, boxes, mask);
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-    if (opt.count("overlay")) {  // red: predicted, not the object; blue: object, not predicted
-      const cv::Mat inst = cv::imread((seq / "instance" / (frameName(frame) + ".png")).string(), cv::IMREAD_UNCHANGED);
-      cv::Mat vis;
-      cv::cvtColor(img.gray, vis, cv::COLOR_GRAY2BGR);
-      if (inst.size() == mask.size() && inst.type() == CV_16UC1) {
-        vis.setTo(cv::Scalar(0, 0, 255), (mask > 0) & (inst == 0));
-        vis.setTo(cv::Scalar(255, 0, 0), (mask == 0) & (inst > 0));
-      }
-      fs::create_directories(opt["overlay"]);
-      cv::imwrite((fs::path(opt["overlay"]) / (frameName(frame) + ".png")).string(), vis);
-    }
+    if (opt.count("overlay")) writeOverlay(seq, frame, img.gray, mask, opt["overlay"]);
     if (!cv::imwrite((out_masks / (frameName(frame) + ".png")).string(), mask))
       throw std::runtime_error((out_masks / (frameName(frame) + ".png")).string() + ": cannot write");
   }
@@ -237,6 +255,31 @@ int run(const std::vector<std::string>& args) {
             << (ms.empty() ? 0 : ms[ms.size() / 2]) << "\n";
   printSummary(mask::scoreSequence(out_masks.string(), sequence, so), csv);
   return 0;
+}
+
+int run(const std::vector<std::string>& args) {
+  if (args.empty() || args[0] == "--help" || args[0] == "-h") {
+    std::cout << kUsage;
+    return args.empty() ? 2 : 0;
+  }
+  const std::string command = args[0];
+  CommandOptions o = parseOptions(args);
+  mask::ScoreOptions so;
+  so.max_distance = o.num("max-distance", so.max_distance);
+  so.max_occlusion = static_cast<int>(o.num("max-occlusion", so.max_occlusion));
+  so.max_truncation = o.num("max-truncation", so.max_truncation);
+  so.min_pixels = static_cast<int>(o.num("min-pixels", so.min_pixels));
+  so.first = static_cast<int64_t>(o.num("first", 0));
+  so.last = static_cast<int64_t>(o.num("last", -1));
+  const std::string csv = o.opt.count("csv") ? o.opt["csv"] : "";
+  const std::string sequence = o.need("sequence");
+
+  if (command == "score") {
+    printSummary(mask::scoreSequence(o.need("masks"), sequence, so), csv);
+    return 0;
+  }
+  if (command != "generate") throw Usage("unknown command '" + command + "'");
+  return generate(o, so, csv, sequence);
 }
 
 }  // namespace
