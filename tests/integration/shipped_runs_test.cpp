@@ -14,17 +14,13 @@
 #include "beslam/common/error.hpp"
 #include "beslam/pipeline/spec.hpp"
 #include "beslam/registry/registry.hpp"
+#include "beslam/test/temp_dir.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using beslam::test::readText;
 
 std::string quote(const std::string& s) {
   std::string o = "'";
@@ -92,8 +88,8 @@ TEST(ShippedPipelines, EachRunsAFewFramesOnTheSharedData) {
     const std::string cmd = std::string(BESLAM_BINARY_DIR) + "/bin/beslam run " + quote(file.string()) + args + " > " +
                             quote(log.string()) + " 2>&1 < /dev/null";
     const int status = std::system(cmd.c_str());
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << cmd << "\n" << slurp(log);
-    EXPECT_NE(slurp(out / "summary.json").find("\"status\": \"completed\""), std::string::npos) << slurp(log);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << cmd << "\n" << readText(log);
+    EXPECT_NE(readText(out / "summary.json").find("\"status\": \"completed\""), std::string::npos) << readText(log);
     ++ran;
   }
   fs::remove_all(scratch);

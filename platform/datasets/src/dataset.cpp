@@ -51,6 +51,14 @@ cv::Mat remapped(const cv::Mat& image, const cv::Mat& map1, const cv::Mat& map2)
   return out;
 }
 
+CameraCalibration requiredCameraFile(const DatasetOptions& options, const std::string& type) {
+  if (options.calibration.empty())
+    throwAt(options.root, "type " + type +
+                              " needs a camera file: set dataset.calibration (model, width, height, fx, fy, cx, cy; "
+                              "docs/datasets.md)");
+  return readCameraFile(options.calibration);
+}
+
 std::vector<double> readTimes(const std::string& path) {
   const std::string text = readFile(path);
   std::vector<double> times;

@@ -99,6 +99,10 @@ void fillImageSize(Camera& camera, const std::string& first_image);
 // The camera of `calibration` into c: c.camera, the undistortion maps when it is distorted, and the camera
 // height when it has height_over_road. `image_size` (of `image`, named in the error) must be the file's size.
 // Returns the text for the dataset's description: ", camera file cam.yaml (pinhole, radial-tangential)".
+// The camera file a dataset type without a camera of its own needs (`type`: "images", "video"): read, or an
+// error naming the root when dataset.calibration is not set.
+CameraCalibration requiredCameraFile(const DatasetOptions& options, const std::string& type);
+
 std::string useCalibration(DatasetContents& c, const CameraCalibration& calibration, const cv::Size& image_size,
                            const std::string& image);
 // With options.calibration set: the camera file replaces the layout's camera (useCalibration, checked against

@@ -53,11 +53,7 @@ bool naturalLess(const std::string& a, const std::string& b) {
 
 std::unique_ptr<Dataset> openImageFolder(const DatasetOptions& options) {
   requireDirectory(options.root, "image");
-  if (options.calibration.empty())
-    throwAt(options.root,
-            "type images needs a camera file: set dataset.calibration (model, width, height, fx, fy, cx, cy; "
-            "docs/datasets.md)");
-  const CameraCalibration calibration = readCameraFile(options.calibration);
+  const CameraCalibration calibration = requiredCameraFile(options, "images");
 
   std::vector<std::string> names;
   std::error_code ec;

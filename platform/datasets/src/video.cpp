@@ -94,11 +94,7 @@ class VideoDataset final : public Dataset {
 
 std::unique_ptr<Dataset> openVideo(const DatasetOptions& options) {
   requireFile(options.root, "video file");
-  if (options.calibration.empty())
-    throwAt(options.root,
-            "type video needs a camera file: set dataset.calibration (model, width, height, fx, fy, cx, cy; "
-            "docs/datasets.md)");
-  const CameraCalibration calibration = readCameraFile(options.calibration);
+  const CameraCalibration calibration = requiredCameraFile(options, "video");
 
   cv::VideoCapture capture;
   try {
