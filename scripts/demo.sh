@@ -6,11 +6,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
-# A build folder the tests already configured keeps its tests (and builds them too); a fresh one has none.
+# Only what a run needs (the command and the plugins: target beslam_runtime). A build folder the tests already
+# configured keeps its tests for scripts/test.sh; a fresh one is configured without them.
+tests=OFF
 if [ -f build/CMakeCache.txt ] && grep -q '^BESLAM_BUILD_TESTS:BOOL=ON' build/CMakeCache.txt &&
   dpkg-query -W -f='${Status}' libgtest-dev 2>/dev/null | grep -q "install ok installed"; then
-  scripts/build.sh
-else
-  scripts/build.sh -DBESLAM_BUILD_TESTS=OFF
+  tests=ON
 fi
+cmake -S . -B build -DCMAKE_BUILD_TYPE="${BESLAM_BUILD_TYPE:-Release}" -DBESLAM_BUILD_TESTS=$tests
+cmake --build build -j"${BESLAM_JOBS:-$(nproc 2>/dev/null || echo 2)}" --target beslam_runtime
 build/bin/beslam run configs/demo.yaml --out out/demo --overwrite "$@"
