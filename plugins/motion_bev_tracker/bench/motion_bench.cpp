@@ -30,8 +30,8 @@ namespace {
 using beslam::motion::EvalCounts;
 using beslam::motion::Params;
 
-// The LOO grid: the settings that no physical argument pins down (docs/motion.md, "How the defaults are
-// chosen"). Axes in order; the first axis varies slowest. 3 x 3 x 3 x 2 x 2 x 3 x 3 = 972 points.
+// The LOO grid: the settings that no physical argument pins down (docs/motion.md, "Leave-one-sequence-out
+// (the figure to quote)"). Axes in order; the first axis varies slowest. 3 x 3 x 3 x 2 x 2 x 3 x 3 = 972 points.
 const std::vector<std::pair<std::string, std::vector<std::string>>> kLooGrid = {
     {"ego_speed_noise", {"0", "0.01", "0.02"}},
     {"ego_turn_noise", {"0", "0.05", "0.1"}},
