@@ -164,4 +164,16 @@ YAML::Node loadYaml(const std::string& text, const std::string& file) {
 
 YAML::Node loadYamlFile(const std::string& path) { return loadYaml(readFile(path), path); }
 
+std::string yamlWhere(const std::string& file, const YAML::Node& node, const std::string& no_line) {
+  const YAML::Mark mark = node.Mark();
+  return mark.line < 0 ? file + no_line : file + ":" + std::to_string(mark.line + 1);
+}
+
+std::string yamlText(const YAML::Node& node) {
+  if (node.IsScalar()) return node.Scalar();
+  std::stringstream ss;
+  ss << node;
+  return ss.str();
+}
+
 }  // namespace beslam

@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/calib3d.hpp>
-#include <sstream>
 
 #include "beslam/common/error.hpp"
+#include "beslam/common/yaml_load.hpp"
 
 namespace beslam::datasets {
 namespace {
@@ -22,27 +22,15 @@ std::string knownKeys() {
 }
 
 // "file:line" of a node read from the file, "file" for one without a position.
-std::string at(const std::string& path, const YAML::Node& node) {
-  const YAML::Mark mark = node.Mark();
-  return mark.line < 0 ? path : path + ":" + std::to_string(mark.line + 1);
-}
-
 [[noreturn]] void fail(const std::string& path, const YAML::Node& node, const std::string& key,
                        const std::string& message) {
-  throw Error(at(path, node) + ": " + key + ": " + message);
-}
-
-std::string text(const YAML::Node& node) {
-  if (node.IsScalar()) return node.Scalar();
-  std::stringstream ss;
-  ss << node;
-  return ss.str();
+  throw Error(yamlWhere(path, node) + ": " + key + ": " + message);
 }
 
 double number(const YAML::Node& node, const std::string& path, const std::string& key, const std::string& accepted) {
   double value = 0;
   if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value))
-    fail(path, node, key, "'" + text(node) + "' is not " + accepted);
+    fail(path, node, key, "'" + yamlText(node) + "' is not " + accepted);
   return value;
 }
 
@@ -73,7 +61,7 @@ CameraCalibration readCameraFile(const std::string& path) {
     throwAt(path, "a camera file is a map with the keys model, width, height, fx, fy, cx, cy (docs/datasets.md)");
   try {
     for (const auto& kv : root) {
-      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : text(kv.first);
+      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : yamlText(kv.first);
       if (std::find(std::begin(kKeys), std::end(kKeys), key) == std::end(kKeys))
         fail(path, kv.first, key, "unknown key (known: " + knownKeys() + ")");
     }
@@ -92,20 +80,20 @@ CameraCalibration readCameraFile(const std::string& path) {
     } else if (model.IsScalar() && model.Scalar() == "fisheye") {
       c.model = CameraModel::Fisheye;
     } else {
-      fail(path, model, "model", "unknown camera model '" + text(model) + "' (accepted: pinhole, fisheye)");
+      fail(path, model, "model", "unknown camera model '" + yamlText(model) + "' (accepted: pinhole, fisheye)");
     }
 
     for (const char* key : {"width", "height"}) {
       const YAML::Node node = required(key);
       const double v = number(node, path, key, "a positive whole number of pixels");
       if (v < 1 || v > 100000 || v != std::floor(v))
-        fail(path, node, key, "'" + text(node) + "' is not a positive whole number of pixels");
+        fail(path, node, key, "'" + yamlText(node) + "' is not a positive whole number of pixels");
       (std::string(key) == "width" ? c.camera.width : c.camera.height) = static_cast<int>(v);
     }
     for (const char* key : {"fx", "fy"}) {
       const YAML::Node node = required(key);
       const double v = number(node, path, key, "a positive focal length in pixels");
-      if (v <= 0) fail(path, node, key, "'" + text(node) + "' is not a positive focal length in pixels");
+      if (v <= 0) fail(path, node, key, "'" + yamlText(node) + "' is not a positive focal length in pixels");
       (std::string(key) == "fx" ? c.camera.fx : c.camera.fy) = v;
     }
     c.camera.cx = number(required("cx"), path, "cx", "a finite principal point coordinate in pixels");
@@ -133,13 +121,13 @@ CameraCalibration readCameraFile(const std::string& path) {
 
     if (const YAML::Node fps = root["fps"]; fps.IsDefined() && !fps.IsNull()) {
       const double v = number(fps, path, "fps", "a positive number of frames per second");
-      if (v <= 0) fail(path, fps, "fps", "'" + text(fps) + "' is not a positive number of frames per second");
+      if (v <= 0) fail(path, fps, "fps", "'" + yamlText(fps) + "' is not a positive number of frames per second");
       c.fps = v;
     }
     if (const YAML::Node h = root["height_over_road"]; h.IsDefined() && !h.IsNull()) {
       const double v = number(h, path, "height_over_road", "a number of metres in (0, 100)");
       if (v <= 0 || v >= 100)
-        fail(path, h, "height_over_road", "'" + text(h) + "' is not a number of metres in (0, 100)");
+        fail(path, h, "height_over_road", "'" + yamlText(h) + "' is not a number of metres in (0, 100)");
       c.height_over_road = v;
     }
     return c;

@@ -11,10 +11,10 @@
 
 #include <cmath>
 #include <filesystem>
-#include <sstream>
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
+#include "beslam/common/yaml_load.hpp"
 #include "beslam/datasets/image_io.hpp"
 #include "beslam/datasets/tum.hpp"
 #include "dataset_impl.hpp"
@@ -50,7 +50,7 @@ std::vector<std::string> splitCommas(std::string_view line) {
 
 std::vector<double> numbers(const YAML::Node& node, const std::string& path, const std::string& key, std::size_t n,
                             const std::string& accepted) {
-  const std::string where = node.Mark().line < 0 ? path : path + ":" + std::to_string(node.Mark().line + 1);
+  const std::string where = yamlWhere(path, node);
   if (!node.IsDefined() || node.IsNull()) throwAt(path, key + ": missing (expected " + accepted + ")");
   if (!node.IsSequence() || (n > 0 && node.size() != n)) throw Error(where + ": " + key + ": expected " + accepted);
   std::vector<double> values;

@@ -44,22 +44,11 @@ namespace {
 using registry::ConfigField;
 
 // "file:line" for a node read from the file, "file (--set)" for one an override created.
-std::string at(const std::string& file, const YAML::Node& node) {
-  const YAML::Mark mark = node.Mark();
-  if (mark.line < 0) return file + " (--set)";
-  return file + ":" + std::to_string(mark.line + 1);
-}
+std::string at(const std::string& file, const YAML::Node& node) { return yamlWhere(file, node, " (--set)"); }
 
 [[noreturn]] void fail(const std::string& file, const YAML::Node& node, const std::string& key,
                        const std::string& message) {
   throw Error(at(file, node) + ": " + key + ": " + message);
-}
-
-std::string scalarText(const YAML::Node& node) {
-  if (node.IsScalar()) return node.Scalar();
-  std::stringstream ss;
-  ss << node;
-  return ss.str();
 }
 
 std::string rangeText(const ConfigField& f) {
@@ -203,7 +192,7 @@ PluginConfig validateSettings(const YAML::Node& map_in, const std::vector<Config
       case BESLAM_CONFIG_BOOL: {
         bool b = false;
         if (!node.IsScalar() || !YAML::convert<bool>::decode(node, b))
-          fail(file, node, key, "expected true or false, got '" + scalarText(node) + "'");
+          fail(file, node, key, "expected true or false, got '" + yamlText(node) + "'");
         config.add(f.key, f.type, b ? 1.0 : 0.0, "", {});
         break;
       }

@@ -22,10 +22,11 @@ import subprocess
 
 import numpy as np
 
+from ._beslam import detect_format
 from ._beslam import evaluate as _evaluate
 from ._beslam import read_trajectory
 
-__all__ = ["Run", "evaluate", "open_run", "read_trajectory", "run"]
+__all__ = ["Run", "detect_format", "evaluate", "open_run", "read_trajectory", "run"]
 
 
 def evaluate(ref, est, format="", align="none", align_first=0, max_diff=0.01, offset=0.0, delta=1,
@@ -124,10 +125,7 @@ class Run:
         """This run's final trajectory (trajectory.kitti for a KITTI-format reference, else trajectory.tum)
         scored against `reference` as `beslam eval` does; options as beslam.evaluate's."""
         reference = os.fspath(reference)
-        fmt = options.pop("format", "")
-        with open(reference) as f:
-            first = next((line for line in f if line.strip() and not line.startswith("#")), "")
-        fmt = fmt or ("kitti" if len(first.split()) == 12 else "tum")
+        fmt = options.pop("format", "") or detect_format(reference)
         est = os.path.join(self.folder, "trajectory.kitti" if fmt == "kitti" else "trajectory.tum")
         return evaluate(reference, est, format=fmt, align=align, **options)
 

@@ -1,8 +1,9 @@
 // _beslam: the C++ half of the Python package `beslam` (platform/python/beslam/__init__.py is the other).
 // Exposes the host's own trajectory readers and evaluator, so Python reads a run's files and scores them
 // exactly as `beslam eval` does: read_trajectory(path, format) -> (stamps (N,), poses (N, 4, 4)),
-// evaluate(ref, est, ...) -> the JSON text `beslam eval --json` writes. Errors arrive as ValueError with the
-// host's one-line message (naming the file). No plugin is loaded and no pipeline is run here.
+// evaluate(ref, est, ...) -> the JSON text `beslam eval --json` writes, detect_format(path) -> "kitti" | "tum". Errors
+// arrive as ValueError with the host's one-line message (naming the file). No plugin is loaded and no pipeline is run
+// here.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
@@ -62,11 +63,21 @@ std::string evaluate(const std::string& ref, const std::string& est, const std::
 
 }  // namespace
 
+std::string detectFormat(const std::string& path) {
+  try {
+    return beslam::trajectory::detectFormat(path);
+  } catch (const beslam::Error& e) {
+    throw py::value_error(e.what());
+  }
+}
+
 PYBIND11_MODULE(_beslam, m) {
   m.doc() = "BE-SLAM's trajectory readers and evaluator (the C++ half of the beslam package)";
   m.def("read_trajectory", &readTrajectory, py::arg("path"), py::arg("format") = "",
         "(stamps, poses): a KITTI or TUM trajectory file (format '' detects it) as arrays of shape (N,) and "
         "(N, 4, 4), T_world_cam; raises ValueError naming the file on bad input");
+  m.def("detect_format", &detectFormat, py::arg("path"),
+        "'kitti' or 'tum', from the column count of the file's first data row (as beslam eval detects it)");
   m.def("evaluate", &evaluate, py::arg("ref"), py::arg("est"), py::arg("format") = "", py::arg("align") = "none",
         py::arg("align_first") = 0, py::arg("max_diff") = 0.01, py::arg("offset") = 0.0, py::arg("delta") = 1,
         py::arg("all_pairs") = false, "`beslam eval --json`'s text for two trajectory files");

@@ -23,4 +23,10 @@ YAML::Node loadYaml(const std::string& text, const std::string& file);
 // loadYaml of the file's contents; a file that cannot be read is an error naming it.
 YAML::Node loadYamlFile(const std::string& path);
 
+// Where a node stands, for messages: "FILE:LINE", or FILE followed by `no_line` for a node with no place in
+// the file (one an override created: the pipeline reader passes " (--set)").
+std::string yamlWhere(const std::string& file, const YAML::Node& node, const std::string& no_line = "");
+// A node as text for messages: a scalar's value, else its YAML form.
+std::string yamlText(const YAML::Node& node);
+
 }  // namespace beslam
