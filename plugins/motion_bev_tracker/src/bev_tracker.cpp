@@ -25,6 +25,18 @@ void kalmanUpdate(Eigen::Vector4d& x, Eigen::Matrix4d& P, const Eigen::Matrix<do
 constexpr double kNoMatch = 1e6;    // cost of a gated-out pair
 constexpr double kRoadSpeed = 1.0;  // m/s: an ego slower than this gives no road direction
 constexpr double kGateChi2 = 13.8;  // a box with its own noise: innovation chi-square gate (2 dof, 99.9 %)
+// A box cut by the image border and its track's box of the frame before: at 10 Hz a car leaving the view moves
+// a fraction of its width between frames, and the cut keeps the part still in view, so the two overlap by far
+// more than two neighbouring cars' boxes do.
+constexpr double kCutBoxMinIou = 0.3;
+
+// IoU of two image rectangles (x1 y1 x2 y2).
+double boxIoU2d(const Eigen::Vector4d& a, const Eigen::Vector4d& b) {
+  const double w = std::min(a[2], b[2]) - std::max(a[0], b[0]), h = std::min(a[3], b[3]) - std::max(a[1], b[1]);
+  if (w <= 0 || h <= 0) return 0;
+  const double inter = w * h, area_a = (a[2] - a[0]) * (a[3] - a[1]), area_b = (b[2] - b[0]) * (b[3] - b[1]);
+  return inter / (area_a + area_b - inter);
+}
 
 bool carLike(int32_t c) { return c == BESLAM_CLASS_CAR || c == BESLAM_CLASS_VAN || c == BESLAM_CLASS_TRUCK; }
 
@@ -97,6 +109,11 @@ double rotatedRectIoU(const Eigen::Vector2d& c1, double yaw1, double l1, double 
 
 std::string Params::validate() const {
   if (association != "distance" && association != "iou") return "association must be distance or iou";
+  if (!(parallax_tolerance > 0 && parallax_tolerance < 1)) return "parallax_tolerance must be in (0, 1)";
+  if (parallax) {
+    const std::string problem = parallax_check.validate();
+    if (!problem.empty()) return problem;
+  }
   if (!(gate > 0)) return "gate must be > 0";
   if (!(gate_per_m >= 0)) return "gate_per_m must be >= 0";
   if (!(min_iou > 0 && min_iou < 1)) return "min_iou must be in (0, 1)";
@@ -387,8 +404,11 @@ void BevTracker::decide(Track& track, const std::optional<Eigen::Vector2d>& det_
     dyn_speed = (dyn.velocity - reference->first).norm();
     dyn_sigma = std::hypot(dyn.sigma, reference->second);
   }
+  // A recent parallax measurement within the tolerance outranks the lifted boxes' speed (parallaxEvidence).
+  const bool parallax_holds = params_.parallax && last_time_ - track.parallax_t <= params_.window_static;
   const bool dynamic_evidence =
-      displaced || (dyn.valid && dyn_speed - params_.z_dynamic * dyn_sigma > params_.dynamic_speed);
+      !parallax_holds &&
+      (displaced || (dyn.valid && dyn_speed - params_.z_dynamic * dyn_sigma > params_.dynamic_speed));
   const bool static_evidence = !dynamic_evidence && sta.valid && sta.speed_bound < params_.static_speed;
   if (dynamic_evidence) {
     ++track.dynamic_run;
@@ -628,15 +648,38 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
   // shrinking part of itself, whose centre moves with what is cut, not with the car).
   std::vector<Decision> out(n);
   std::vector<char> matched(m, 0);
+  auto keepImageBox = [](Track& t, const beslam_box3d& b, double time) {
+    if ((b.flags & BESLAM_BOX_HAS_BBOX2D) == 0) return;
+    t.bbox2d = Eigen::Vector4d(b.bbox2d[0], b.bbox2d[1], b.bbox2d[2], b.bbox2d[3]);
+    t.bbox2d_t = time;
+  };
+  for (size_t i = 0; i < n; ++i)
+    if (det_to_track[i] >= 0) matched[static_cast<size_t>(det_to_track[i])] = 1;
   for (size_t i = 0; i < n; ++i) {
     const beslam_box3d& b = boxes[i];
     Track* t = nullptr;
-    if (extrapolated || (!params_.uncertain_evidence && (b.flags & BESLAM_BOX_UNCERTAIN) != 0)) {
+    const bool uncertain = !params_.uncertain_evidence && (b.flags & BESLAM_BOX_UNCERTAIN) != 0;
+    if (uncertain && det_to_track[i] < 0 && (b.flags & BESLAM_BOX_HAS_BBOX2D) != 0) {
+      // A box cut by the image border is lifted to where its visible part would stand, which jumps away from
+      // its track in the BEV; in the image it still overlaps the track's box of the frame before.
+      const Eigen::Vector4d box2d(b.bbox2d[0], b.bbox2d[1], b.bbox2d[2], b.bbox2d[3]);
+      double best = kCutBoxMinIou;
+      for (size_t j = 0; j < m; ++j) {
+        const Track& c = tracks_[j];
+        if (matched[j] || c.bbox2d_t < 0 || now - c.bbox2d_t > 1.5 * dt) continue;
+        if (!compatible(b.class_id, c.class_id, params_.match_across_classes)) continue;
+        const double o = boxIoU2d(box2d, c.bbox2d);
+        if (o > best) best = o, det_to_track[i] = static_cast<int>(j);
+      }
+      if (det_to_track[i] >= 0) matched[static_cast<size_t>(det_to_track[i])] = 1;
+    }
+    if (extrapolated || uncertain) {
       out[i].range = range[i];
       if (det_to_track[i] < 0) continue;
       t = &tracks_[static_cast<size_t>(det_to_track[i])];
       matched[static_cast<size_t>(det_to_track[i])] = 1;
       t->last_t = now;
+      keepImageBox(*t, b, now);
       out[i].track_id = t->id;
       out[i].motion_state = T_world_cam && range[i] <= params_.max_range ? t->state : BESLAM_MOTION_UNKNOWN;
       continue;
@@ -667,6 +710,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     }
     t->class_id = carLike(b.class_id) && carLike(t->class_id) ? t->class_id : b.class_id;
     t->last_t = now;
+    keepImageBox(*t, b, now);
     t->yaw_bev = yaw[i];
     t->length = b.size[0] > 0 ? b.size[0] : t->length;
     t->width = b.size[1] > 0 ? b.size[1] : t->width;
@@ -700,6 +744,28 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
   }
   tracks_ = std::move(kept);
   return out;
+}
+
+std::optional<int32_t> BevTracker::parallaxEvidence(int32_t track_id, double depth_ratio) {
+  for (Track& t : tracks_) {
+    if (t.id != track_id) continue;
+    if (!std::isfinite(depth_ratio) || std::abs(depth_ratio - 1) > params_.parallax_tolerance) {
+      t.parallax_t = -1e18;  // the boxes' own speed is evidence again
+      return t.state;
+    }
+    t.parallax_t = last_time_;
+    // Contrary evidence breaks a dynamic run; the hysteresis is the speed tests' own. The parked position is
+    // measured anew from here: the car's own surface says it has not moved, so how far its lifted boxes have
+    // drifted since (their range error changing as the camera closes in or turns) is not a pull-out.
+    ++t.static_run;
+    t.dynamic_run = 0;
+    t.anchor_n = 0;
+    if (t.state == BESLAM_MOTION_UNKNOWN ||
+        (t.state == BESLAM_MOTION_DYNAMIC && t.static_run >= params_.stop_dwell))
+      t.state = BESLAM_MOTION_STATIC;
+    return t.state;
+  }
+  return std::nullopt;
 }
 
 void BevTracker::classify(double timestamp, const std::optional<Eigen::Isometry3d>& T_world_cam,

@@ -45,7 +45,8 @@
 //
 // No pose for a frame (the backend lost): the last two poses are carried on for at most max_miss_time. Boxes
 // placed with that guess (and, with uncertain_evidence off, boxes their detector flags uncertain) keep their
-// tracks alive and take their state, but give no evidence and start no track;
+// tracks alive and take their state, but give no evidence and start no track; an uncertain box that matches no
+// track in the BEV takes the track whose image box of the frame before overlaps its own most (IoU >= 0.3);
 // pose jitter is measured between consecutive given poses only. A world change (worldMoved: a loop correction)
 // re-expresses every track in the new world.
 //
@@ -74,6 +75,7 @@
 #include <vector>
 
 #include "beslam/data.h"
+#include "beslam/motion/parallax.hpp"
 
 namespace beslam::motion {
 
@@ -134,6 +136,17 @@ struct Params {
   int pull_out_frames = 3;            // STATIC -> DYNAMIC after this many dynamic frames in a row
   int stop_dwell = 5;                 // DYNAMIC -> STATIC after this many static frames in a row
   double max_range = 200.0;           // m: boxes farther away get a track but stay UNKNOWN
+  // Parallax evidence (parallax.hpp; for boxes lifted from one image, whose range drifts too much for the
+  // speed tests to call a parked car static): a track whose triangulated near surface lies within
+  // parallax_tolerance (a share) of its lifted box's nearest corner has static evidence, and a dynamic run is
+  // broken by it. For window_static seconds after such a measurement the lifted boxes' speed and displacement
+  // give no dynamic evidence (their range drift is what the measurement showed is not motion); a measurement
+  // outside the tolerance ends that at once. The tolerance is the lifted range's own error; what passes with it besides parked cars is a
+  // car moving along the ego's line of travel at less than 1 - 1 / (1 + tolerance) of the ego's speed (same
+  // direction) or 1 / (1 - tolerance) - 1 (oncoming): the epipolar ambiguity.
+  bool parallax = false;
+  double parallax_tolerance = 0.3;
+  ParallaxParams parallax_check;
   double default_dt = 0.1;            // s, when timestamps do not increase
 
   // Empty when valid, else the first violated constraint ("gate must be > 0").
@@ -172,6 +185,11 @@ class BevTracker {
   // std::invalid_argument on a non-finite transform or a scale <= 0.
   void worldMoved(const Eigen::Isometry3d& S_new_old, double scale);
 
+  // A parallax measurement for a track this frame (ParallaxCheck, after update() gave the ids): static evidence
+  // when the depth ratio is within parallax_tolerance of 1, none otherwise. Returns the track's state after
+  // it (nullopt for a track that no longer exists).
+  std::optional<int32_t> parallaxEvidence(int32_t track_id, double depth_ratio);
+
   void reset();
   size_t trackCount() const { return tracks_.size(); }
   const Params& params() const { return params_; }
@@ -200,6 +218,9 @@ class BevTracker {
     double yaw_bev = 0;  // footprint heading in the BEV plane
     double length = 4, width = 1.8;
     int hits = 0;
+    Eigen::Vector4d bbox2d = Eigen::Vector4d::Zero();  // the last detection's 2D box (x1 y1 x2 y2), if it had one
+    double bbox2d_t = -1;                              // its time; < 0: none
+    double parallax_t = -1e18;  // time of the last parallax measurement within the tolerance (cleared by one outside)
     std::deque<Observation> history;
     int32_t state = BESLAM_MOTION_UNKNOWN;
     int dynamic_run = 0, static_run = 0;
