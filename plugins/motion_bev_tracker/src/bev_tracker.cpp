@@ -760,8 +760,7 @@ std::optional<int32_t> BevTracker::parallaxEvidence(int32_t track_id, double dep
     ++t.static_run;
     t.dynamic_run = 0;
     t.anchor_n = 0;
-    if (t.state == BESLAM_MOTION_UNKNOWN ||
-        (t.state == BESLAM_MOTION_DYNAMIC && t.static_run >= params_.stop_dwell))
+    if (t.state == BESLAM_MOTION_UNKNOWN || (t.state == BESLAM_MOTION_DYNAMIC && t.static_run >= params_.stop_dwell))
       t.state = BESLAM_MOTION_STATIC;
     return t.state;
   }

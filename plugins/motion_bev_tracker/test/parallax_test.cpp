@@ -1,6 +1,8 @@
 // Parallax inside a car's 2D box on rendered frames: a textured car back (a plane facing the camera) in front of
 // a forward-moving camera, parked, driving along the line of travel, oncoming, or crossing the view; and what
 // the tracker makes of the measurements.
+#include "beslam/motion/parallax.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,14 +10,13 @@
 #include <random>
 
 #include "beslam/motion/bev_tracker.hpp"
-#include "beslam/motion/parallax.hpp"
 
 using beslam::motion::BevTracker;
 using beslam::motion::nearestCornerDepth;
-using beslam::motion::Params;
 using beslam::motion::ParallaxCheck;
 using beslam::motion::ParallaxMeasurement;
 using beslam::motion::ParallaxParams;
+using beslam::motion::Params;
 
 namespace {
 

@@ -141,13 +141,13 @@ struct Params {
   // parallax_tolerance (a share) of its lifted box's nearest corner has static evidence, and a dynamic run is
   // broken by it. For window_static seconds after such a measurement the lifted boxes' speed and displacement
   // give no dynamic evidence (their range drift is what the measurement showed is not motion); a measurement
-  // outside the tolerance ends that at once. The tolerance is the lifted range's own error; what passes with it besides parked cars is a
-  // car moving along the ego's line of travel at less than 1 - 1 / (1 + tolerance) of the ego's speed (same
-  // direction) or 1 / (1 - tolerance) - 1 (oncoming): the epipolar ambiguity.
+  // outside the tolerance ends that at once. The tolerance is the lifted range's own error; what passes with it besides
+  // parked cars is a car moving along the ego's line of travel at less than 1 - 1 / (1 + tolerance) of the ego's speed
+  // (same direction) or 1 / (1 - tolerance) - 1 (oncoming): the epipolar ambiguity.
   bool parallax = false;
   double parallax_tolerance = 0.3;
   ParallaxParams parallax_check;
-  double default_dt = 0.1;            // s, when timestamps do not increase
+  double default_dt = 0.1;  // s, when timestamps do not increase
 
   // Empty when valid, else the first violated constraint ("gate must be > 0").
   std::string validate() const;

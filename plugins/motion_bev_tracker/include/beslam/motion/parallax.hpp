@@ -84,7 +84,7 @@ class ParallaxCheck {
 
   ParallaxParams params_;
   double fx_, fy_, cx_, cy_;
-  int64_t frame_ = 0;                                          // calls with an image and a pose
+  int64_t frame_ = 0;                                              // calls with an image and a pose
   std::deque<std::pair<int64_t, std::vector<cv::Mat>>> pyramids_;  // the last frames' image pyramids
   std::map<int32_t, PointSet> sets_;
 };
