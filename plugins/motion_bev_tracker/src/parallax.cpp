@@ -74,9 +74,9 @@ void ParallaxCheck::seed(PointSet& set, const cv::Mat& gray, const Eigen::Isomet
   set = PointSet{T_world_cam, {}, {}, 0, frame_};
   const cv::Rect r = boxRect(box, gray.size(), params_.min_box_px, params_.box_inset);
   if (r.width < 4 || r.height < 4) return;
-  cv::Mat mask = cv::Mat::zeros(gray.size(), CV_8UC1);
-  mask(r).setTo(255);
-  cv::goodFeaturesToTrack(gray, set.first, params_.corners, 0.01, 4, mask);
+  // On the box's own pixels: the corner response of the whole image would cost a full-frame pass per box.
+  cv::goodFeaturesToTrack(gray(r), set.first, params_.corners, 0.01, 4);
+  for (cv::Point2f& p : set.first) p += cv::Point2f(static_cast<float>(r.x), static_cast<float>(r.y));
   set.latest = set.first;
 }
 
