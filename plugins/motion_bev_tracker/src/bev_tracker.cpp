@@ -30,6 +30,23 @@ constexpr double kGateChi2 = 13.8;  // a box with its own noise: innovation chi-
 // more than two neighbouring cars' boxes do.
 constexpr double kCutBoxMinIou = 0.3;
 
+// Throws std::invalid_argument on a box with a non-finite field or a negative sigma.
+void checkBoxes(const std::vector<beslam_box3d>& boxes) {
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const beslam_box3d& b = boxes[i];
+    bool ok = std::isfinite(b.yaw) && std::isfinite(b.size[0]) && std::isfinite(b.size[1]);
+    for (double v : b.center_cam) ok = ok && std::isfinite(v);
+    if ((b.flags & BESLAM_BOX_HAS_VELOCITY) != 0)
+      for (double v : b.velocity_cam) ok = ok && std::isfinite(v);
+    if ((b.flags & BESLAM_BOX_HAS_POSITION_SIGMA) != 0)
+      ok = ok && std::isfinite(b.position_sigma[0]) && std::isfinite(b.position_sigma[1]) &&
+           std::isfinite(b.range_drift) && b.position_sigma[0] >= 0 && b.position_sigma[1] >= 0 && b.range_drift >= 0;
+    if (!ok)
+      throw std::invalid_argument("motion tracker: box " + std::to_string(i) +
+                                  " has a non-finite field or a negative sigma");
+  }
+}
+
 // IoU of two image rectangles (x1 y1 x2 y2).
 double boxIoU2d(const Eigen::Vector4d& a, const Eigen::Vector4d& b) {
   const double w = std::min(a[2], b[2]) - std::max(a[0], b[0]), h = std::min(a[3], b[3]) - std::max(a[1], b[1]);
@@ -467,31 +484,18 @@ Eigen::Isometry3d BevTracker::steadyPose(double now) const {
   return T1 * scaleMotion(poses_[0].second.inverse() * T1, (now - t1) / (t1 - poses_[0].first));
 }
 
-std::vector<Decision> BevTracker::update(double timestamp, const std::optional<Eigen::Isometry3d>& T_world_cam_in,
-                                         const std::vector<beslam_box3d>& boxes) {
-  for (size_t i = 0; i < boxes.size(); ++i) {
-    const beslam_box3d& b = boxes[i];
-    bool ok = std::isfinite(b.yaw) && std::isfinite(b.size[0]) && std::isfinite(b.size[1]);
-    for (double v : b.center_cam) ok = ok && std::isfinite(v);
-    if ((b.flags & BESLAM_BOX_HAS_VELOCITY) != 0)
-      for (double v : b.velocity_cam) ok = ok && std::isfinite(v);
-    if ((b.flags & BESLAM_BOX_HAS_POSITION_SIGMA) != 0)
-      ok = ok && std::isfinite(b.position_sigma[0]) && std::isfinite(b.position_sigma[1]) &&
-           std::isfinite(b.range_drift) && b.position_sigma[0] >= 0 && b.position_sigma[1] >= 0 && b.range_drift >= 0;
-    if (!ok)
-      throw std::invalid_argument("motion tracker: box " + std::to_string(i) +
-                                  " has a non-finite field or a negative sigma");
-  }
-  // Time step.
-  double dt = params_.default_dt;
+double BevTracker::advanceTime(double timestamp, double& dt) {
   if (have_time_ && std::isfinite(timestamp) && timestamp > last_time_) dt = timestamp - last_time_;
   const double now = have_time_ ? last_time_ + dt : (std::isfinite(timestamp) ? timestamp : 0.0);
   have_time_ = true;
   last_time_ = now;
+  return now;
+}
 
-  // Camera pose: given, extrapolated from the last two, or none (camera frame, decisions UNKNOWN).
-  std::optional<Eigen::Isometry3d> T_world_cam = T_world_cam_in;
-  bool extrapolated = false;
+bool BevTracker::takePose(double now, const std::optional<Eigen::Isometry3d>& T_world_cam_in,
+                          std::optional<Eigen::Isometry3d>& T_world_cam, bool& extrapolated) {
+  T_world_cam = T_world_cam_in;
+  extrapolated = false;
   if (T_world_cam) {
     if (!T_world_cam->matrix().allFinite()) throw std::invalid_argument("motion tracker: non-finite camera pose");
     if (!pose_mode_) {  // tracks built in the camera frame cannot continue in the world frame
@@ -525,23 +529,15 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     }
   } else if (!poses_.empty() && now - poses_.back().first > params_.max_miss_time) {
     last_frame_posed_ = false;
-    // The backend has given no pose for longer than a track may coast: an extrapolated ego pose would place
-    // every parked car wrongly (a lost SLAM, a long gap). Every box is unknown, and the tracks wait,
-    // untouched, for the next real pose.
-    std::vector<Decision> unknown(boxes.size());
-    for (size_t i = 0; i < boxes.size(); ++i)
-      unknown[i].range = std::hypot(boxes[i].center_cam[0], boxes[i].center_cam[2]);
-    return unknown;
+    return false;
   } else if (!poses_.empty()) {
     T_world_cam = steadyPose(now);
     extrapolated = true;
   }
-  last_frame_posed_ = T_world_cam_in.has_value();
-  const Eigen::Isometry3d T_wc = T_world_cam ? *T_world_cam : Eigen::Isometry3d::Identity();
-  const Eigen::Matrix3d R_wc = T_wc.linear();
-  const Eigen::Vector2d cam(T_wc.translation().x(), T_wc.translation().z());
+  return true;
+}
 
-  // Predict every track to now.
+void BevTracker::predict(double dt) {
   const double q = params_.accel_sigma * params_.accel_sigma;
   Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
   F(0, 2) = F(1, 3) = dt;
@@ -553,18 +549,28 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     t.x = F * t.x;
     t.P = F * t.P * F.transpose() + Q;
   }
+}
 
-  // Detections in the world BEV.
-  const size_t n = boxes.size(), m = tracks_.size();
-  std::vector<Eigen::Vector2d> p(n);
-  std::vector<double> range(n), v_sigma(n), yaw(n);
+BevTracker::Placed BevTracker::place(const std::vector<beslam_box3d>& boxes, const Eigen::Isometry3d& T_wc,
+                                     double now) const {
+  const size_t n = boxes.size();
+  const Eigen::Matrix3d R_wc = T_wc.linear();
+  Placed out;
+  std::vector<Eigen::Vector2d>& p = out.p;
+  std::vector<double>& range = out.range;
+  std::vector<double>& v_sigma = out.v_sigma;
+  std::vector<double>& yaw = out.yaw;
+  p.resize(n), range.resize(n), v_sigma.resize(n), yaw.resize(n);
   const double settling_share =
       std::max(now - first_pose_t_ < params_.settling_time ? params_.settling_speed_noise : 0.0,
                now - scale_change_t_ < params_.settling_time ? scale_change_ : 0.0);
-  const double v_settling = settling_share * ego_speed_;
-  std::vector<Eigen::Matrix2d> cov(n), drift_cov(n, Eigen::Matrix2d::Zero());
-  std::vector<Eigen::Vector2d> line_of_sight(n, Eigen::Vector2d::Zero());  // unit BEV bearing; zero: isotropic
-  std::vector<std::optional<Eigen::Vector2d>> vel(n);
+  out.v_settling = settling_share * ego_speed_;
+  std::vector<Eigen::Matrix2d>& cov = out.cov;
+  std::vector<Eigen::Matrix2d>& drift_cov = out.drift_cov;
+  std::vector<Eigen::Vector2d>& line_of_sight = out.line_of_sight;
+  std::vector<std::optional<Eigen::Vector2d>>& vel = out.vel;
+  cov.resize(n), drift_cov.assign(n, Eigen::Matrix2d::Zero()), line_of_sight.assign(n, Eigen::Vector2d::Zero()),
+      vel.resize(n);
   for (size_t i = 0; i < n; ++i) {
     const beslam_box3d& b = boxes[i];
     const Eigen::Vector3d c_cam(b.center_cam[0], b.center_cam[1], b.center_cam[2]);
@@ -594,8 +600,16 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       vel[i] = Eigen::Vector2d(v_w.x(), v_w.z());
     }
   }
+  return out;
+}
 
-  // Cost matrix and global assignment.
+std::vector<int> BevTracker::associate(const std::vector<beslam_box3d>& boxes, const Placed& placed) const {
+  const size_t n = boxes.size(), m = tracks_.size();
+  const std::vector<Eigen::Vector2d>& p = placed.p;
+  const std::vector<double>& range = placed.range;
+  const std::vector<double>& yaw = placed.yaw;
+  const std::vector<Eigen::Matrix2d>& cov = placed.cov;
+  const std::vector<Eigen::Vector2d>& line_of_sight = placed.line_of_sight;
   std::vector<int> det_to_track(n, -1);
   if (n > 0 && m > 0) {
     std::vector<double> cost(n * m, kNoMatch);
@@ -631,6 +645,79 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     for (size_t i = 0; i < n; ++i)
       if (a[i] >= 0 && cost[i * m + static_cast<size_t>(a[i])] < kNoMatch) det_to_track[i] = a[i];
   }
+  return det_to_track;
+}
+
+int BevTracker::matchByImageBox(const beslam_box3d& b, const std::vector<char>& matched, double now, double dt) const {
+  // A box cut by the image border is lifted to where its visible part would stand, which jumps away from its
+  // track in the BEV; in the image it still overlaps the track's box of the frame before.
+  if ((b.flags & BESLAM_BOX_HAS_BBOX2D) == 0) return -1;
+  const Eigen::Vector4d box2d(b.bbox2d[0], b.bbox2d[1], b.bbox2d[2], b.bbox2d[3]);
+  double best = kCutBoxMinIou;
+  int found = -1;
+  for (size_t j = 0; j < matched.size(); ++j) {
+    const Track& c = tracks_[j];
+    if (matched[j] || c.bbox2d_t < 0 || now - c.bbox2d_t > 1.5 * dt) continue;
+    if (!compatible(b.class_id, c.class_id, params_.match_across_classes)) continue;
+    const double o = boxIoU2d(box2d, c.bbox2d);
+    if (o > best) best = o, found = static_cast<int>(j);
+  }
+  return found;
+}
+
+void BevTracker::dropMissed(size_t old_count, const std::vector<char>& matched, double now, double dt) {
+  // Tracks missed too long go (tentative ones sooner).
+  std::vector<Track> kept;
+  kept.reserve(tracks_.size());
+  for (size_t j = 0; j < tracks_.size(); ++j) {
+    Track& t = tracks_[j];
+    const bool is_old = j < old_count;
+    if (is_old && !matched[j]) {
+      const double missing = now - t.last_t;
+      const double limit =
+          t.hits < params_.min_observations ? std::min(params_.max_miss_time, 2.5 * dt) : params_.max_miss_time;
+      if (missing > limit + 1e-9) continue;
+    }
+    kept.push_back(std::move(t));
+  }
+  tracks_ = std::move(kept);
+}
+
+std::vector<Decision> BevTracker::update(double timestamp, const std::optional<Eigen::Isometry3d>& T_world_cam_in,
+                                         const std::vector<beslam_box3d>& boxes) {
+  checkBoxes(boxes);
+  // Time step.
+  double dt = params_.default_dt;
+  const double now = advanceTime(timestamp, dt);
+
+  // Camera pose: given, extrapolated from the last two, or none (camera frame, decisions UNKNOWN).
+  std::optional<Eigen::Isometry3d> T_world_cam;
+  bool extrapolated = false;
+  if (!takePose(now, T_world_cam_in, T_world_cam, extrapolated)) {
+    // The backend has given no pose for longer than a track may coast: an extrapolated ego pose would place
+    // every parked car wrongly (a lost SLAM, a long gap). Every box is unknown, and the tracks wait,
+    // untouched, for the next real pose.
+    std::vector<Decision> unknown(boxes.size());
+    for (size_t i = 0; i < boxes.size(); ++i)
+      unknown[i].range = std::hypot(boxes[i].center_cam[0], boxes[i].center_cam[2]);
+    return unknown;
+  }
+  last_frame_posed_ = T_world_cam_in.has_value();
+  const Eigen::Isometry3d T_wc = T_world_cam ? *T_world_cam : Eigen::Isometry3d::Identity();
+  const Eigen::Vector2d cam(T_wc.translation().x(), T_wc.translation().z());
+
+  predict(dt);
+
+  // Detections in the world BEV.
+  const size_t n = boxes.size(), m = tracks_.size();
+  const Placed placed = place(boxes, T_wc, now);
+  const std::vector<Eigen::Vector2d>& p = placed.p;
+  const std::vector<double>& range = placed.range;
+  const std::vector<Eigen::Matrix2d>& cov = placed.cov;
+  const std::vector<std::optional<Eigen::Vector2d>>& vel = placed.vel;
+
+  // Cost matrix and global assignment.
+  std::vector<int> det_to_track = associate(boxes, placed);
 
   // The parked tracks' apparent velocities, from their positions before this frame.
   references_.clear();
@@ -659,18 +746,8 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     const beslam_box3d& b = boxes[i];
     Track* t = nullptr;
     const bool uncertain = !params_.uncertain_evidence && (b.flags & BESLAM_BOX_UNCERTAIN) != 0;
-    if (uncertain && det_to_track[i] < 0 && (b.flags & BESLAM_BOX_HAS_BBOX2D) != 0) {
-      // A box cut by the image border is lifted to where its visible part would stand, which jumps away from
-      // its track in the BEV; in the image it still overlaps the track's box of the frame before.
-      const Eigen::Vector4d box2d(b.bbox2d[0], b.bbox2d[1], b.bbox2d[2], b.bbox2d[3]);
-      double best = kCutBoxMinIou;
-      for (size_t j = 0; j < m; ++j) {
-        const Track& c = tracks_[j];
-        if (matched[j] || c.bbox2d_t < 0 || now - c.bbox2d_t > 1.5 * dt) continue;
-        if (!compatible(b.class_id, c.class_id, params_.match_across_classes)) continue;
-        const double o = boxIoU2d(box2d, c.bbox2d);
-        if (o > best) best = o, det_to_track[i] = static_cast<int>(j);
-      }
+    if (uncertain && det_to_track[i] < 0) {
+      det_to_track[i] = matchByImageBox(b, matched, now, dt);
       if (det_to_track[i] >= 0) matched[static_cast<size_t>(det_to_track[i])] = 1;
     }
     if (extrapolated || uncertain) {
@@ -711,12 +788,12 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     t->class_id = carLike(b.class_id) && carLike(t->class_id) ? t->class_id : b.class_id;
     t->last_t = now;
     keepImageBox(*t, b, now);
-    t->yaw_bev = yaw[i];
+    t->yaw_bev = placed.yaw[i];
     t->length = b.size[0] > 0 ? b.size[0] : t->length;
     t->width = b.size[1] > 0 ? b.size[1] : t->width;
     ++t->hits;
-    t->history.push_back(
-        {now, p[i], cam, v_sigma[i], v_settling, cov[i], drift_cov[i], line_of_sight[i].squaredNorm() == 0});
+    t->history.push_back({now, p[i], cam, placed.v_sigma[i], placed.v_settling, cov[i], placed.drift_cov[i],
+                          placed.line_of_sight[i].squaredNorm() == 0});
     while (static_cast<int>(t->history.size()) > params_.max_history) t->history.pop_front();
 
     Decision& d = out[i];
@@ -727,22 +804,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     d.motion_state = (T_world_cam && range[i] <= params_.max_range) ? t->state : BESLAM_MOTION_UNKNOWN;
   }
 
-  // Drop tracks missed too long (tentative ones sooner).
-  const size_t old_count = m;
-  std::vector<Track> kept;
-  kept.reserve(tracks_.size());
-  for (size_t j = 0; j < tracks_.size(); ++j) {
-    Track& t = tracks_[j];
-    const bool is_old = j < old_count;
-    if (is_old && !matched[j]) {
-      const double missing = now - t.last_t;
-      const double limit =
-          t.hits < params_.min_observations ? std::min(params_.max_miss_time, 2.5 * dt) : params_.max_miss_time;
-      if (missing > limit + 1e-9) continue;
-    }
-    kept.push_back(std::move(t));
-  }
-  tracks_ = std::move(kept);
+  dropMissed(m, matched, now, dt);
   return out;
 }
 

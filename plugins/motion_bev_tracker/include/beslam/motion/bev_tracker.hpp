@@ -250,6 +250,30 @@ class BevTracker {
     double sigma = 0, sigma_bound = 0, speed_bound = 0;  // as in Speed, the ego-motion error included
     bool consistent = true;                              // the residuals are within max_residual of the noise
   };
+  // One frame's boxes in the world BEV, with their noise (update's stages below).
+  struct Placed {
+    std::vector<Eigen::Vector2d> p;                   // world BEV centre
+    std::vector<double> range, v_sigma, yaw;          // m from the camera; ego-motion velocity error; BEV heading
+    double v_settling = 0;                            // a settling map unit's velocity error (dynamic tests only)
+    std::vector<Eigen::Matrix2d> cov, drift_cov;      // position covariance; range-drift velocity covariance
+    std::vector<Eigen::Vector2d> line_of_sight;       // unit BEV bearing; zero: isotropic noise
+    std::vector<std::optional<Eigen::Vector2d>> vel;  // the detector's own velocity, world BEV
+  };
+  // update's stages, in order. advanceTime: the frame's time (dt in: the default step, out: the step taken).
+  double advanceTime(double timestamp, double& dt);
+  // The frame's pose (given, or the last two carried on); false when no pose has come for longer than a track
+  // may coast (every box is then unknown). Measures the pose jitter and the ego's motion.
+  bool takePose(double now, const std::optional<Eigen::Isometry3d>& T_world_cam_in,
+                std::optional<Eigen::Isometry3d>& T_world_cam, bool& extrapolated);
+  void predict(double dt);  // every track's constant-velocity prediction over dt
+  Placed place(const std::vector<beslam_box3d>& boxes, const Eigen::Isometry3d& T_wc, double now) const;
+  // Box i's track index, or -1: gated costs, one global assignment.
+  std::vector<int> associate(const std::vector<beslam_box3d>& boxes, const Placed& placed) const;
+  // An uncertain box's track by its image box (the one of the frame before overlapping most), or -1.
+  int matchByImageBox(const beslam_box3d& b, const std::vector<char>& matched, double now, double dt) const;
+  // Tracks of the first old_count that were not matched and are missed too long go.
+  void dropMissed(size_t old_count, const std::vector<char>& matched, double now, double dt);
+
   // The line fit when some position of the window has its own (range, bearing) noise; nullopt when the
   // window spans no time.
   std::optional<Fit> fitSpeedAnisotropic(const std::deque<Observation>& history, size_t first, bool dynamic_test) const;
