@@ -147,7 +147,9 @@ def main():
         last = a.first + frames - 1
         dist = s[min(last, len(s) - 1)] - s[a.first]
         ape = summary.get("ape", {})
-        sim3, se3 = ape.get("sim3_rmse", float("nan")), ape.get("se3_rmse", float("nan"))
+        # se3_rmse is null for a map that never became metric
+        sim3 = ape.get("sim3_rmse", float("nan"))
+        se3 = ape.get("se3_rmse") if ape.get("se3_rmse") is not None else float("nan")
         counters = summary.get("backend_counters", {})
         closures = []
         log = run.rstrip("/") + ".log"

@@ -735,6 +735,8 @@ TEST_F(RunTest, MotionCheckerGetsNoPoseUntilTheWorldIsMetric) {
     const std::string objects = slurp(out / "objects.txt");
     if (metric) {
       EXPECT_NE(summary.find("\"metric_from_frame\": 0"), std::string::npos) << summary;
+      EXPECT_EQ(summary.find("\"se3_rmse\": null"), std::string::npos) << summary;
+      EXPECT_NE(summary.find("\"se3_rmse\": "), std::string::npos) << summary;
       EXPECT_NE(r.out.find("map in metres from frame 0"), std::string::npos) << r.out;
       EXPECT_TRUE(objects.find(" static\n") != std::string::npos || objects.find(" dynamic\n") != std::string::npos)
           << "a checker with metric poses decides some boxes:\n"
@@ -742,6 +744,9 @@ TEST_F(RunTest, MotionCheckerGetsNoPoseUntilTheWorldIsMetric) {
     } else {
       EXPECT_NE(summary.find("\"metric\": false"), std::string::npos) << summary;
       EXPECT_NE(r.out.find("map scale: not metric"), std::string::npos) << r.out;
+      // No SE(3) APE for a map without a unit: null in the summary, not a number in the map's unit.
+      EXPECT_NE(summary.find("\"se3_rmse\": null"), std::string::npos) << summary;
+      EXPECT_NE(r.out.find("no SE(3) APE: the map has no scale"), std::string::npos) << r.out;
       EXPECT_EQ(objects.find(" static\n"), std::string::npos) << objects;
       EXPECT_EQ(objects.find(" dynamic\n"), std::string::npos) << objects;
       EXPECT_NE(summary.find("\"unknown\": 12"), std::string::npos) << summary;

@@ -90,6 +90,8 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+nlohmann::json orNull(bool present, const nlohmann::json& value) { return present ? value : nlohmann::json(nullptr); }
+
 // APE/RPE with the configured alignment, plus Sim(3) and SE(3) APE side by side: with a metric map,
 // SE(3) APE close to Sim(3) APE says the scale is right.
 void evaluate(const PipelineSpec& spec, datasets::Dataset& dataset, const std::vector<registry::PoseEntry>& final_poses,
@@ -120,17 +122,17 @@ void evaluate(const PipelineSpec& spec, datasets::Dataset& dataset, const std::v
     const eval::EvalResult r_se3 = with(eval::AlignmentType::kSe3);
     summary.ape_sim3_rmse = r_sim3.ape.trans.rmse;
     summary.ape_se3_rmse = r_se3.ape.trans.rmse;
+    // SE(3) APE measures the trajectory in metres: a map that never became metric has none (its unit against
+    // metres would be a number without meaning), and says null.
     json["ape"] = {{"sim3_rmse", r_sim3.ape.trans.rmse},
                    {"sim3_scale", r_sim3.alignment.scale},
-                   {"se3_rmse", r_se3.ape.trans.rmse}};
+                   {"se3_rmse", orNull(summary.metric_from_frame >= 0, r_se3.ape.trans.rmse)}};
   } catch (const Error& e) {
     // A degenerate or too short trajectory cannot be aligned: the run is still good, say why.
     summary.evaluation_error = e.what();
     json["evaluation"] = {{"error", e.what()}};
   }
 }
-
-nlohmann::json orNull(bool present, const nlohmann::json& value) { return present ? value : nlohmann::json(nullptr); }
 
 // What a run writes into its folder (and --overwrite removes): files, then folders.
 const char* const kRunFiles[] = {
