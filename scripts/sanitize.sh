@@ -21,7 +21,8 @@ only=${BESLAM_SANITIZE_ONLY:-}
 unit_tests=(abi_layout_test common_test formats_test datasets_test eval_test pipeline_spec_test pipeline_samples_test
   static_map_test motion_score_test object_score_test mask_common_test motion_bev_tracker_test detector_replay_test
   registry_test)
-fuzzers=(pipeline_yaml label_rows detection_rows nuscenes calibration image ply_mesh)
+fuzzers=(pipeline_yaml label_rows detection_rows nuscenes calibration image ply_mesh trajectory times_poses bench_matrix
+  velodyne map_file vocabulary)
 selected=("${unit_tests[@]}" "${fuzzers[@]}")
 [ "$only" = fuzz ] && selected=("${fuzzers[@]}")
 [ "$set_name" = full ] && selected=()

@@ -24,6 +24,8 @@ std::int64_t daysFromCivil(std::int64_t y, unsigned m, unsigned d) {
   return era * 146097 + static_cast<std::int64_t>(doe) - 719468;
 }
 
+}  // namespace
+
 std::vector<long double> readRawTimestamps(const std::string& path) {
   const std::string text = readFile(path);
   std::vector<long double> times;
@@ -48,8 +50,6 @@ std::vector<long double> readRawTimestamps(const std::string& path) {
   }
   return times;
 }
-
-}  // namespace
 
 std::unique_ptr<Dataset> openKittiRaw(const DatasetOptions& options) {
   requireDirectory(options.root, "KITTI raw root");
