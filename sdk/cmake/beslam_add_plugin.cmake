@@ -45,7 +45,7 @@ function(beslam_add_plugin target)
     LIBRARY_OUTPUT_DIRECTORY ${out})
   # clang links the sanitizer runtimes into the executable only: a sanitised plugin's references to them
   # resolve at load time, so --no-undefined cannot hold there.
-  if(NOT (BESLAM_SANITIZE AND CMAKE_CXX_COMPILER_ID MATCHES "Clang"))
+  if(NOT ((BESLAM_SANITIZE OR BESLAM_TSAN) AND CMAKE_CXX_COMPILER_ID MATCHES "Clang"))
     target_link_options(${target} PRIVATE -Wl,--no-undefined)
   endif()
   set_property(GLOBAL APPEND PROPERTY BESLAM_ALL_PLUGINS ${target})

@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -27,6 +29,15 @@ void acceptErrors(Read&& read) {
   try {
     read();
   } catch (const beslam::Error&) {
+  }
+}
+
+// A property a reader promises for what it accepts (finite numbers, increasing times, ...): a quiet wrong
+// answer is a finding like a crash, so a broken promise aborts with `what` for libFuzzer to report.
+inline void require(bool holds, const char* what) {
+  if (!holds) {
+    std::fprintf(stderr, "fuzz: broken promise: %s\n", what);
+    std::abort();
   }
 }
 

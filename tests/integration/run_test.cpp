@@ -126,11 +126,22 @@ TEST_F(RunTest, WritesEveryOutput) {
   EXPECT_NE(r.out.find("frames 6, tracked 6, keyframes 3"), std::string::npos) << r.out;
   // Ground truth is the replayed file itself: zero error.
   EXPECT_NE(r.out.find("APE translation RMSE 0 m"), std::string::npos) << r.out;
-  for (const char* f :
-       {"trajectory.tum", "trajectory.kitti", "trajectory_online.tum", "keyframes.tum", "pipeline.resolved.yaml",
-        "timing.csv", "summary.json", "objects.txt", "masks/000005.png", "samples/000000.jpg", "samples/000005.jpg"})
+  for (const char* f : {"trajectory.tum", "trajectory.kitti", "trajectory_online.tum", "keyframes.tum",
+                        "pipeline.resolved.yaml", "timing.csv", "summary.json", "objects.txt", "masks/000005.png",
+                        "samples/000000.jpg", "samples/000005.jpg", "frames.csv"})
     EXPECT_TRUE(fs::exists(dir_ / "out" / f)) << f;
   EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
+  // The per-frame journal: every frame, what it tracked and saw (two boxes a frame, all static; a keyframe
+  // every second frame).
+  const std::string frames = slurp(dir_ / "out/frames.csv");
+  EXPECT_EQ(lines(frames), kFrames + 1) << frames;
+  EXPECT_EQ(frames.rfind("frame,timestamp,state,keyframe,tracked_points,features,detections,static,dynamic,unknown,"
+                         "masked,metric\n",
+                         0),
+            0u)
+      << frames;
+  EXPECT_NE(frames.find("\n5,0.5,ok,"), std::string::npos) << frames;
+  EXPECT_NE(frames.find(",2,2,0,0,"), std::string::npos) << "two boxes, both static: " << frames;
   EXPECT_EQ(dataLines(slurp(dir_ / "out/keyframes.tum")), 3);
   const std::string timing = slurp(dir_ / "out/timing.csv");
   EXPECT_EQ(lines(timing), kFrames + 1);
@@ -421,6 +432,18 @@ TEST_F(RunTest, SigkillKeepsTheFinishedFrames) {
   EXPECT_EQ(dataLines(tum), 3) << tum;
   EXPECT_EQ(tum.back(), '\n');
   EXPECT_EQ(lines(slurp(dir_ / "out/trajectory.kitti")), 3);
+  // The per-frame journal holds the same three frames, whole rows, in order.
+  const std::string frames = slurp(dir_ / "out/frames.csv");
+  EXPECT_EQ(lines(frames), 1 + 3) << frames;
+  EXPECT_EQ(frames.back(), '\n');
+  std::istringstream rows(frames);
+  std::string row;
+  std::getline(rows, row);  // the header
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_TRUE(std::getline(rows, row)) << frames;
+    EXPECT_EQ(row.rfind(std::to_string(i) + ",", 0), 0u) << row;
+    EXPECT_NE(row.find(",ok,"), std::string::npos) << row;
+  }
   std::ofstream gt(dir_ / "gt.kitti");
   for (int i = 0; i < 3; ++i) gt << "1 0 0 " << 0.5 * i << " 0 1 0 0 0 0 1 " << 0.1 * i * i << "\n";
   gt.close();

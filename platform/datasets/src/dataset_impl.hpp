@@ -59,6 +59,14 @@ std::string joinPath(const std::string& a, const std::string& b);
 // on anything else.
 std::vector<double> readTimes(const std::string& path);
 
+// A KITTI raw timestamps.txt ("2011-09-26 13:02:25.964389445" a line, blank lines skipped): seconds since
+// 1970 (long double keeps the nanoseconds); throws "path:line: ..." on anything else.
+std::vector<long double> readRawTimestamps(const std::string& path);
+
+// EuRoC's state_groundtruth_estimate0/data.csv: T_world_body by time (seconds), strictly increasing; throws
+// "path:line: ..." on anything else.
+trajectory::Trajectory readEurocGroundTruth(const std::string& path);
+
 // KITTI's cameras sit 1.65 m over the road (Geiger et al. 2013, the recording platform); a sequence that
 // `beslam synth` rendered says its own in sequence_dir/manifest.yaml (config.camera.mount_height).
 // A manifest without a readable, positive height is an error naming the file.

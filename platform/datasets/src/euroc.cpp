@@ -131,8 +131,9 @@ EurocSensor readSensorYaml(const std::string& path) {
   }
 }
 
-// state_groundtruth_estimate0/data.csv: T_world_body by time (seconds), sorted.
-trajectory::Trajectory readGroundTruth(const std::string& path) {
+}  // namespace
+
+trajectory::Trajectory readEurocGroundTruth(const std::string& path) {
   const std::string text = readFile(path);
   const auto lines = splitLines(text);
   trajectory::Trajectory gt;
@@ -163,8 +164,6 @@ trajectory::Trajectory readGroundTruth(const std::string& path) {
   if (gt.size() == 0) throwAt(path, "holds no poses");
   return gt;
 }
-
-}  // namespace
 
 std::unique_ptr<Dataset> openEuroc(const DatasetOptions& options) {
   requireDirectory(options.root, "EuRoC");
@@ -220,7 +219,7 @@ std::unique_ptr<Dataset> openEuroc(const DatasetOptions& options) {
   std::string gt_text;
   const std::string gt_path = joinPath(joinPath(mav, "state_groundtruth_estimate0"), "data.csv");
   if (isFile(gt_path)) {
-    const trajectory::Trajectory T_world_body = readGroundTruth(gt_path);
+    const trajectory::Trajectory T_world_body = readEurocGroundTruth(gt_path);
     trajectory::Trajectory selected;
     for (const FrameEntry& f : c.frames)
       if (const auto T = poseAt(T_world_body, f.timestamp, options.gt_max_dt))

@@ -24,6 +24,8 @@ std::int64_t daysFromCivil(std::int64_t y, unsigned m, unsigned d) {
   return era * 146097 + static_cast<std::int64_t>(doe) - 719468;
 }
 
+}  // namespace
+
 std::vector<long double> readRawTimestamps(const std::string& path) {
   const std::string text = readFile(path);
   std::vector<long double> times;
@@ -36,7 +38,7 @@ std::vector<long double> readRawTimestamps(const std::string& path) {
     if (std::sscanf(line.c_str(), " %4d-%2d-%2d %2d:%2d:%lf %n", &year, &month, &day, &hour, &minute, &second,
                     &consumed) < 6 ||
         static_cast<std::size_t>(consumed) != line.size() || month < 1 || month > 12 || day < 1 || day > 31 ||
-        hour > 23 || minute > 59 || second < 0 || second >= 61)
+        hour < 0 || hour > 23 || minute < 0 || minute > 59 || !(second >= 0 && second < 61))  // NaN too
       throwAt(path, "expected a timestamp like 2011-09-26 13:02:25.964389445, got '" + line + "'",
               static_cast<int>(i + 1));
     // long double keeps sub-microsecond resolution on ~1.3e9 s epoch values before the subtraction.
@@ -44,12 +46,16 @@ std::vector<long double> readRawTimestamps(const std::string& path) {
         static_cast<long double>(daysFromCivil(year, static_cast<unsigned>(month), static_cast<unsigned>(day)) * 86400 +
                                  hour * 3600 + minute * 60) +
         static_cast<long double>(second);
+    if (!times.empty() && !(seconds > times.back()))
+      throwAt(path,
+              "timestamp " + line +
+                  " is not after the previous one (timestamps must increase strictly, one line a frame in frame "
+                  "order)",
+              static_cast<int>(i + 1));
     times.push_back(seconds);
   }
   return times;
 }
-
-}  // namespace
 
 std::unique_ptr<Dataset> openKittiRaw(const DatasetOptions& options) {
   requireDirectory(options.root, "KITTI raw root");

@@ -425,6 +425,17 @@ TEST(KittiRaw, LayoutErrors) {
   EXPECT_BESLAM_ERROR(openDataset(o), fx.drive + "/image_00/timestamps.txt", "2 timestamps", "3 images");
   writeText(fx.drive + "/image_00/timestamps.txt", "2011-09-26 13:02:25.964389445\nyesterday\nnow\n");
   EXPECT_BESLAM_ERROR(openDataset(o), fx.drive + "/image_00/timestamps.txt:2:", "'yesterday'");
+  // The times_poses fuzz target's promises (tests/fuzz/corpus/times_poses/raw-nan-seconds.txt,
+  // raw-backwards.txt): sscanf reads "nan" as seconds, and times that go back were taken as they were.
+  writeText(fx.drive + "/image_00/timestamps.txt",
+            "2011-09-26 13:02:25.964389445\n2011-09-26 13:02:nan\n2011-09-26 13:02:26.2\n");
+  EXPECT_BESLAM_ERROR(openDataset(o), fx.drive + "/image_00/timestamps.txt:2:", "'2011-09-26 13:02:nan'");
+  writeText(fx.drive + "/image_00/timestamps.txt",
+            "2011-09-26 13:02:25.964389445\n2011-09-26 13:02:26.1\n2011-09-26 13:02:26.1\n");
+  EXPECT_BESLAM_ERROR(openDataset(o), fx.drive + "/image_00/timestamps.txt:3:", "is not after the previous one");
+  writeText(fx.drive + "/image_00/timestamps.txt",
+            "2011-09-26 13:-1:25.964389445\n2011-09-26 13:02:26.1\n2011-09-26 13:02:26.2\n");
+  EXPECT_BESLAM_ERROR(openDataset(o), fx.drive + "/image_00/timestamps.txt:1:", "expected a timestamp like");
   std::filesystem::remove(fx.date + "/calib_cam_to_cam.txt");
   EXPECT_BESLAM_ERROR(openDataset(o), fx.date + "/calib_cam_to_cam.txt", "missing calibration file");
   DatasetOptions bad = o;

@@ -138,7 +138,7 @@ void evaluate(const PipelineSpec& spec, datasets::Dataset& dataset, const std::v
 const char* const kRunFiles[] = {
     "summary.json",           "trajectory.tum", "trajectory.kitti", "trajectory_online.tum", "keyframes.tum",
     "pipeline.resolved.yaml", "timing.csv",     "objects.txt",      "objects.json",          "map.ply",
-    "map_points.ply",         "static_map.bt"};
+    "map_points.ply",         "static_map.bt",  "frames.csv"};
 const char* const kRunFolders[] = {"masks", "samples", "objects"};
 
 std::string share(double value) {
@@ -211,39 +211,75 @@ void claimOutputFolder(const std::string& out_dir, bool overwrite) {
   }
 }
 
-TrajectoryJournal::TrajectoryJournal(const std::string& out_dir)
-    : tum_path_((fs::path(out_dir) / "trajectory.tum").string()),
-      kitti_path_((fs::path(out_dir) / "trajectory.kitti").string()) {
-  tum_ = ::open(tum_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
-  if (tum_ < 0) throwAt(tum_path_, std::string("cannot create: ") + std::strerror(errno));
-  kitti_ = ::open(kitti_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
-  if (kitti_ < 0) throwAt(kitti_path_, std::string("cannot create: ") + std::strerror(errno));
-  append(tum_, tum_path_, formats::kTumHeader);
+namespace {
+
+const char* trackingStateName(int32_t state) {
+  switch (state) {
+    case BESLAM_TRACKING_OK:
+      return "ok";
+    case BESLAM_TRACKING_LOST:
+      return "lost";
+    case BESLAM_TRACKING_NOT_INITIALIZED:
+      return "not_initialised";
+    default:
+      return "unknown";
+  }
 }
 
-TrajectoryJournal::~TrajectoryJournal() { close(); }
+}  // namespace
 
-void TrajectoryJournal::close() {
-  if (tum_ >= 0) ::close(tum_);
-  if (kitti_ >= 0) ::close(kitti_);
-  tum_ = kitti_ = -1;
+RunJournal::RunJournal(const std::string& out_dir) {
+  tum_.path = (fs::path(out_dir) / "trajectory.tum").string();
+  kitti_.path = (fs::path(out_dir) / "trajectory.kitti").string();
+  frames_.path = (fs::path(out_dir) / "frames.csv").string();
+  for (File* f : {&tum_, &kitti_, &frames_}) {
+    f->fd = ::open(f->path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
+    if (f->fd < 0) {
+      const int err = errno;
+      close();
+      throwAt(f->path, std::string("cannot create: ") + std::strerror(err));
+    }
+  }
+  append(tum_, formats::kTumHeader);
+  append(frames_, kFramesCsvHeader);
 }
 
-void TrajectoryJournal::add(double stamp, const Eigen::Isometry3d& T_world_cam) {
-  append(tum_, tum_path_, formats::tumRow(stamp, T_world_cam));
-  append(kitti_, kitti_path_, formats::kittiRow(T_world_cam));
+RunJournal::~RunJournal() { close(); }
+
+void RunJournal::close() {
+  for (File* f : {&tum_, &kitti_, &frames_}) {
+    if (f->fd >= 0) ::close(f->fd);
+    f->fd = -1;
+  }
 }
 
-void TrajectoryJournal::append(int fd, const std::string& path, const std::string& row) {
-  if (fd < 0) return;
+void RunJournal::addPose(double stamp, const Eigen::Isometry3d& T_world_cam) {
+  append(tum_, formats::tumRow(stamp, T_world_cam));
+  append(kitti_, formats::kittiRow(T_world_cam));
+}
+
+void RunJournal::addFrame(const FrameJournalRow& r) {
+  std::ostringstream row;
+  row << std::setprecision(17) << r.index << ',' << r.timestamp << std::setprecision(6) << ','
+      << trackingStateName(r.state) << ',' << (r.keyframe ? 1 : 0) << ',' << r.tracked_points << ',';
+  if (r.features >= 0) row << r.features;
+  row << ',' << r.detections << ',' << r.detections_static << ',' << r.detections_dynamic << ',' << r.detections_unknown
+      << ',' << (r.masked ? 1 : 0) << ',' << (r.metric ? 1 : 0) << '\n';
+  append(frames_, row.str());
+}
+
+void RunJournal::append(File& file, const std::string& row) {
+  if (file.fd < 0) return;
   size_t done = 0;
   while (done < row.size()) {
-    const ssize_t n = ::write(fd, row.data() + done, row.size() - done);
+    const ssize_t n = ::write(file.fd, row.data() + done, row.size() - done);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
-      std::cerr << "warning: " << path << ": cannot append the frame's pose (" << std::strerror(errno)
-                << "); the trajectory is written again at the end of the run\n";
-      close();
+      std::cerr << "warning: " << file.path << ": cannot append the frame's row (" << std::strerror(errno)
+                << (&file == &frames_ ? "); frames.csv stops here\n"
+                                      : "); the trajectory is written again at the end of the run\n");
+      ::close(file.fd);
+      file.fd = -1;
       return;
     }
     done += static_cast<size_t>(n);

@@ -63,22 +63,42 @@ class OutputLock {
 // nothing else in the folder.
 void claimOutputFolder(const std::string& out_dir, bool overwrite);
 
-// trajectory.tum and trajectory.kitti written row by row as frames finish (each row one write(2), so a
-// killed process leaves whole rows). writeRunOutputs later replaces both with the final trajectory. A
-// failed write is a warning (the journal stops; the run goes on).
-class TrajectoryJournal {
+// One finished frame as frames.csv records it.
+struct FrameJournalRow {
+  int64_t index = 0;  // the dataset's frame number
+  double timestamp = 0;
+  int32_t state = 0;  // BESLAM_TRACKING_*
+  bool keyframe = false, metric = false, masked = false;
+  int32_t tracked_points = 0;
+  double features = -1;  // the backend's "features" counter; -1: it gave none
+  int64_t detections = 0, detections_static = 0, detections_dynamic = 0, detections_unknown = 0;
+};
+
+// What survives a run that dies: written row by row as frames finish (each row one write(2) to a file
+// opened with O_APPEND, so a killed process leaves whole rows):
+//   trajectory.tum, trajectory.kitti  each tracked frame's pose; writeRunOutputs later replaces both with
+//                                     the final trajectory;
+//   frames.csv                        every frame: kFramesCsvHeader's columns (kept as it is at the end).
+// A failed write is a warning (that file's journal stops; the run goes on).
+class RunJournal {
  public:
-  explicit TrajectoryJournal(const std::string& out_dir);
-  ~TrajectoryJournal();
-  TrajectoryJournal(const TrajectoryJournal&) = delete;
-  TrajectoryJournal& operator=(const TrajectoryJournal&) = delete;
-  void add(double stamp, const Eigen::Isometry3d& T_world_cam);
+  static constexpr const char* kFramesCsvHeader =
+      "frame,timestamp,state,keyframe,tracked_points,features,detections,static,dynamic,unknown,masked,metric\n";
+  explicit RunJournal(const std::string& out_dir);
+  ~RunJournal();
+  RunJournal(const RunJournal&) = delete;
+  RunJournal& operator=(const RunJournal&) = delete;
+  void addPose(double stamp, const Eigen::Isometry3d& T_world_cam);
+  void addFrame(const FrameJournalRow& row);
   void close();
 
  private:
-  void append(int fd, const std::string& path, const std::string& row);
-  std::string tum_path_, kitti_path_;
-  int tum_ = -1, kitti_ = -1;
+  struct File {
+    std::string path;
+    int fd = -1;
+  };
+  void append(File& file, const std::string& row);
+  File tum_, kitti_, frames_;
 };
 
 // summary.json of a run that failed after it started: how far it got and why it ended.

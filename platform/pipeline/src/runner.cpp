@@ -225,10 +225,10 @@ class Run {
   }
 
   RunSummary execute() {
-    journal_ = std::make_unique<detail::TrajectoryJournal>(out_dir_);
+    journal_ = std::make_unique<detail::RunJournal>(out_dir_);
     try {
       runFrames();
-      journal_->close();  // the final trajectory replaces it
+      journal_->close();  // the final trajectory replaces its poses; frames.csv stays as it is
       detail::writeRunOutputs(spec_, out_dir_, dataset_record_, *dataset_, *backend_, record_, static_map_.get(),
                               summary_);
     } catch (const std::exception& e) {
@@ -277,9 +277,10 @@ class Run {
       if (f.mask_marked) ++summary_.frames_with_masks;
       track(f);
       if (f.tracked.result.state == BESLAM_TRACKING_OK)
-        journal_->add(f.frame.timestamp, formats::toIsometry(f.tracked.result.T_world_cam));
+        journal_->addPose(f.frame.timestamp, formats::toIsometry(f.tracked.result.T_world_cam));
       reconstruct(f);
       write(f);
+      journalFrame(f);
       // A frame's total is its share of the loop's wall time: with prefetching, its load, detection and
       // mask overlapped the frame before and are not in it (their own columns still say what they cost).
       const double total = std::chrono::duration<double, std::milli>(Clock::now() - t_frame).count();
@@ -435,6 +436,26 @@ class Run {
     StageTimer timer(f.timing, "detector");
     f.boxes = detector_->detect(f.view);
     checkBoxes(f.boxes, detector_->plugin(), f.frame);
+  }
+
+  // frames.csv: the finished frame's row (what it tracked and what it saw), appended at once.
+  void journalFrame(const FrameState& f) {
+    detail::FrameJournalRow row;
+    row.index = f.frame.index;
+    row.timestamp = f.frame.timestamp;
+    row.state = f.tracked.result.state;
+    row.keyframe = f.tracked.result.is_keyframe != 0;
+    row.tracked_points = f.tracked.result.tracked_points;
+    row.metric = f.tracked.worldIsMetric();
+    row.masked = f.mask_marked;
+    for (const auto& [name, value] : f.tracked.counters)
+      if (name == "features") row.features = value;
+    row.detections = static_cast<int64_t>(f.boxes.size());
+    for (const beslam_box3d& b : f.boxes)
+      ++(b.motion_state == BESLAM_MOTION_STATIC    ? row.detections_static
+         : b.motion_state == BESLAM_MOTION_DYNAMIC ? row.detections_dynamic
+                                                   : row.detections_unknown);
+    journal_->addFrame(row);
   }
 
   // classify: each box's motion state.
@@ -623,8 +644,8 @@ class Run {
   const RunOptions& options_;
   registry::HostLog log_;
   std::string out_dir_, abs_out_dir_;
-  std::unique_ptr<detail::OutputLock> lock_;            // held for the run's whole life
-  std::unique_ptr<detail::TrajectoryJournal> journal_;  // the tracked frames' poses, as they finish
+  std::unique_ptr<detail::OutputLock> lock_;     // held for the run's whole life
+  std::unique_ptr<detail::RunJournal> journal_;  // the tracked frames' poses and frames.csv, as they finish
   bool sample_warned_ = false;
   std::unique_ptr<datasets::Dataset> dataset_;
   detail::DatasetRecord dataset_record_;

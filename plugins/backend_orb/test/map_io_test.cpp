@@ -175,6 +175,32 @@ TEST_F(MapFileTest, CorruptFileIsRefused) {
   expectOneError(loadError(path("missing.bin")), path("missing.bin"), "cannot open");
 }
 
+// Found by the map_file fuzz target (tests/fuzz/corpus/map_file/found-keypoint-outside-image.map): a keypoint
+// at x = -2.8e24 loaded, and the feature grid's cell index overflowed int (undefined behaviour). A keypoint
+// outside the map's image is now the file's error.
+TEST(MapFile, AKeypointOutsideTheImageIsRefused) {
+  const std::string found = BESLAM_SOURCE_DIR "/tests/fuzz/corpus/map_file/found-keypoint-outside-image.map";
+  MapFileInfo expected;  // the fuzz target's camera and pyramid
+  expected.camera = Camera{160, 120, 100, 100, 80, 60};
+  expected.levels = 3;
+  expected.scale_factor = 1.2;
+  const ScalePyramid pyramid(3, 1.2);
+  for (const std::string name : {"found-keypoint-outside-image.map", "two-keyframes.map"}) {
+    const std::string file = BESLAM_SOURCE_DIR "/tests/fuzz/corpus/map_file/" + name;
+    Map map;
+    std::vector<ObjectLandmark> landmarks;
+    try {
+      loadMapFile(file, expected, pyramid, map, landmarks);
+      EXPECT_EQ(file, BESLAM_SOURCE_DIR "/tests/fuzz/corpus/map_file/two-keyframes.map") << "loaded";
+      EXPECT_EQ(map.numKeyFrames(), 2u);
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(file, found) << e.what();
+      expectOneError(e.what(), found, "outside the 160x120 image");
+      EXPECT_EQ(map.numKeyFrames(), 0u);
+    }
+  }
+}
+
 TEST_F(MapFileTest, TruncatedFileIsRefused) {
   const std::string bytes = readBytes(path("map.bin"));
   for (size_t keep : {bytes.size() - 1, bytes.size() / 3, size_t{14}}) {

@@ -156,6 +156,18 @@ TEST(Vocabulary, DamagedFilesGiveOneClearErrorNamingTheFile) {
   EXPECT_NE(e.find("missing.bvoc"), std::string::npos) << e;
 }
 
+// Found by the vocabulary fuzz target (tests/fuzz/corpus/vocabulary/found-weight-not-an-idf.bvoc): a file
+// whose checksum fits but whose word weights are no idf (7.6e7 here; an infinite one would make every bag of
+// words holding it NaN) loaded without a word. Now one error naming the file and the node.
+TEST(VocabularyFile, AWeightThatIsNotAnIdfIsRefused) {
+  const std::string found = BESLAM_SOURCE_DIR "/tests/fuzz/corpus/vocabulary/found-weight-not-an-idf.bvoc";
+  const std::string e = loadError(found);
+  EXPECT_NE(e.find(found + ": not a usable ORB vocabulary: node 14 has weight 75716800"), std::string::npos) << e;
+  EXPECT_NE(e.find("not an idf in [0, 100]"), std::string::npos) << e;
+  // The seeds the fuzz target trained from the shipped vocabulary load.
+  EXPECT_EQ(loadError(BESLAM_SOURCE_DIR "/tests/fuzz/corpus/vocabulary/k3-l2.bvoc"), "");
+}
+
 TEST(Vocabulary, ScoresRankTheViewOfTheSamePlaceFirst) {
   const Vocabulary vocabulary = Vocabulary::train(trainingDescriptors(), {});
   // Database: every 6th frame (0, 6, ..., 36); queries: the frames one step further on (0.4 m later),

@@ -439,6 +439,11 @@ MapFileInfo loadMapFile(const std::string& path, const MapFileInfo& expected, co
         kp.octave = r.u8();
         if (!std::isfinite(kp.pt.x) || !std::isfinite(kp.pt.y) || !std::isfinite(kp.angle))
           r.fail("non-finite keypoint");
+        // Keypoints are found in the image; one outside it (found by fuzzing: -2.8e24) would overflow the
+        // feature grid's cell index.
+        if (!(kp.pt.x >= 0 && kp.pt.x < info.camera.width && kp.pt.y >= 0 && kp.pt.y < info.camera.height))
+          r.fail("keypoint at (" + std::to_string(kp.pt.x) + ", " + std::to_string(kp.pt.y) + ") outside the " +
+                 std::to_string(info.camera.width) + "x" + std::to_string(info.camera.height) + " image");
         if (kp.octave >= info.levels) r.fail("keypoint octave " + std::to_string(kp.octave) + " out of range");
         f->labels[i] = r.u16();
         r.bytes(&f->colours[i][0], 3);

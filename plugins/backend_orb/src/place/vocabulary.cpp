@@ -21,6 +21,7 @@ namespace {
 constexpr char kMagic[8] = {'B', 'S', 'L', 'M', 'V', 'O', 'C', '\0'};
 constexpr size_t kHeaderBytes = 8 + 5 * 4;
 constexpr size_t kNodeBytes = 4 + 32 + 4;
+constexpr float kMaxWeight = 100;  // ln of the image count: 44 for 2^64 images
 constexpr uint32_t kWeightingTfIdf = 1;
 
 // Deterministic on every platform: splitmix64 for seeds, our own uniform draw.
@@ -351,6 +352,12 @@ Vocabulary Vocabulary::load(const std::string& path) {
     n.weight = get<float>(in, at);
     if ((i == 0) != (n.parent == kNoParent) || (i > 0 && n.parent >= i))
       throw fail("node " + std::to_string(i) + " has an invalid parent");
+    // An idf is ln(images / images with the word): finite, 0 or more, and far below 100. Found by fuzzing: a
+    // file with an idf of 7.6e7 loaded; an infinite one would make every bag of words holding that word NaN
+    // (inf / inf), and place recognition would then match nothing, silently.
+    if (!(n.weight >= 0 && n.weight <= kMaxWeight))
+      throw fail("node " + std::to_string(i) + " has weight " + std::to_string(n.weight) + ", not an idf in [0, " +
+                 std::to_string(static_cast<int>(kMaxWeight)) + "]");
   }
   v.buildDerived();
   return v;
