@@ -41,4 +41,20 @@ inline void require(bool holds, const char* what) {
   }
 }
 
+// For LLVMFuzzerInitialize: with BESLAM_FUZZ_WRITE_SEEDS set, the target writes its own seed inputs into that
+// folder (write(dir)) and the process ends; otherwise 0, and fuzzing goes on.
+template <class Write>
+int writeSeedsIfAsked(Write&& write) {
+  if (const char* dir = std::getenv("BESLAM_FUZZ_WRITE_SEEDS")) {
+    write(dir);
+    std::exit(0);
+  }
+  return 0;
+}
+
+// Writes `value` as 8 little-endian bytes at `at` of `bytes` (a file's size or checksum field made to fit).
+inline void putLittleEndian64(std::string& bytes, size_t at, uint64_t value) {
+  for (int i = 0; i < 8; ++i) bytes[at + static_cast<size_t>(i)] = static_cast<char>((value >> (8 * i)) & 0xff);
+}
+
 }  // namespace beslam::fuzz

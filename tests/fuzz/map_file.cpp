@@ -92,13 +92,7 @@ void loadAndRoundTrip(const std::string& path) {
 
 }  // namespace
 
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  if (const char* dir = std::getenv("BESLAM_FUZZ_WRITE_SEEDS")) {
-    writeSeeds(dir);
-    std::exit(0);
-  }
-  return 0;
-}
+extern "C" int LLVMFuzzerInitialize(int*, char***) { return beslam::fuzz::writeSeedsIfAsked(writeSeeds); }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   loadAndRoundTrip(beslam::fuzz::writeScratch(data, size, "map.bin"));
@@ -106,10 +100,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::string bytes(reinterpret_cast<const char*>(data), size);
     const uint64_t payload = size - kHeaderBytes - kTrailerBytes;
     const uint64_t sum = orb::fnv1a(bytes.data() + kHeaderBytes, payload);
-    for (int i = 0; i < 8; ++i) {
-      bytes[12 + i] = static_cast<char>((payload >> (8 * i)) & 0xff);
-      bytes[size - 8 + i] = static_cast<char>((sum >> (8 * i)) & 0xff);
-    }
+    beslam::fuzz::putLittleEndian64(bytes, 12, payload);
+    beslam::fuzz::putLittleEndian64(bytes, size - 8, sum);
     loadAndRoundTrip(
         beslam::fuzz::writeScratch(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), "map-fitted.bin"));
   }

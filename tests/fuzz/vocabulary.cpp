@@ -80,20 +80,14 @@ void check(const std::string& path) {
 
 }  // namespace
 
-extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  if (const char* dir = std::getenv("BESLAM_FUZZ_WRITE_SEEDS")) {
-    writeSeeds(dir);
-    std::exit(0);
-  }
-  return 0;
-}
+extern "C" int LLVMFuzzerInitialize(int*, char***) { return beslam::fuzz::writeSeedsIfAsked(writeSeeds); }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   check(beslam::fuzz::writeScratch(data, size, "vocabulary.bvoc"));
   if (size > 8) {
     std::string bytes(reinterpret_cast<const char*>(data), size);
     const uint64_t sum = beslam::orb::fnv1a(bytes.data(), size - 8);
-    for (int i = 0; i < 8; ++i) bytes[size - 8 + i] = static_cast<char>((sum >> (8 * i)) & 0xff);
+    beslam::fuzz::putLittleEndian64(bytes, size - 8, sum);
     check(beslam::fuzz::writeScratch(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), "fitted.bvoc"));
   }
   return 0;
