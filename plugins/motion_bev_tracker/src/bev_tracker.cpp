@@ -740,7 +740,7 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     t.bbox2d = Eigen::Vector4d(b.bbox2d[0], b.bbox2d[1], b.bbox2d[2], b.bbox2d[3]);
     t.bbox2d_t = time;
   };
-  for (size_t i = 0; i < n; ++i)
+  for (size_t i = 0; i < n; ++i)  // the tracks the assignment gave a box (matchByImageBox adds more)
     if (det_to_track[i] >= 0) matched[static_cast<size_t>(det_to_track[i])] = 1;
   for (size_t i = 0; i < n; ++i) {
     const beslam_box3d& b = boxes[i];
@@ -754,7 +754,6 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
       out[i].range = range[i];
       if (det_to_track[i] < 0) continue;
       t = &tracks_[static_cast<size_t>(det_to_track[i])];
-      matched[static_cast<size_t>(det_to_track[i])] = 1;
       t->last_t = now;
       keepImageBox(*t, b, now);
       out[i].track_id = t->id;
@@ -763,7 +762,6 @@ std::vector<Decision> BevTracker::update(double timestamp, const std::optional<E
     }
     if (det_to_track[i] >= 0) {
       t = &tracks_[static_cast<size_t>(det_to_track[i])];
-      matched[static_cast<size_t>(det_to_track[i])] = 1;
       // Kalman update: position (and velocity when the detector gives one).
       if (vel[i]) {
         Eigen::Vector4d z;
