@@ -59,11 +59,14 @@ class Checker : public YAML::EventHandler {
               lineOf(mark));
   }
 
-  // A child of the innermost open collection: a map's key is checked against the map's other keys.
+  // A child of the innermost open collection: a map's key must be a scalar (every reader names keys by
+  // their text) and is checked against the map's other keys.
   void child(const YAML::Mark& mark, const std::string* scalar) {
     if (stack_.empty()) return;
     Open& parent = stack_.back();
-    if (parent.is_map && parent.items % 2 == 0 && scalar) {
+    if (parent.is_map && parent.items % 2 == 0 && !scalar)
+      throwAt(file_, "a key must be a plain name (not a list, a map, an alias or empty)", lineOf(mark));
+    if (parent.is_map && parent.items % 2 == 0) {
       const auto [it, inserted] = parent.keys.emplace(*scalar, lineOf(mark));
       if (!inserted)
         throwAt(file_,

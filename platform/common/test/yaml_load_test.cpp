@@ -49,6 +49,17 @@ TEST(YamlLoad, ADuplicateKeyNamesBothLines) {
   EXPECT_NO_THROW(beslam::loadYaml("a: {x: 1}\nb: {x: 1}\nc: [x, x]\n", "p.yaml"));
 }
 
+// Found by the bench_matrix fuzz target: a map written as a key ("{label: a}: ...") made yaml-cpp's
+// as<std::string>() throw a bad-conversion exception past every reader's checks.
+TEST(YamlLoad, AKeyThatIsNotAPlainNameIsRefused) {
+  const std::string expected = "a key must be a plain name (not a list, a map, an alias or empty)";
+  EXPECT_EQ(errorOf("sequences:\n  - {label: a}:\n  - {label: b}\n"), "p.yaml:2: " + expected);
+  EXPECT_EQ(errorOf("[1, 2]: x\n"), "p.yaml:1: " + expected);
+  EXPECT_EQ(errorOf("a: &k x\n*k : y\n"), "p.yaml:2: " + expected);
+  EXPECT_EQ(errorOf("? \n: y\n"), "p.yaml:2: " + expected);
+  EXPECT_NO_THROW(beslam::loadYaml("\"quoted key\": 1\n'1': 2\n3: [a, b]\n", "p.yaml"));
+}
+
 // Probe: a 1.2 KB alias bomb used to hang every reader that walked it; now one error, at once.
 TEST(YamlLoad, AnAliasBombIsRefused) {
   const std::string bomb = aliasBomb();

@@ -101,8 +101,8 @@ TEST_F(PipelineSpecTest, SyntaxErrorNamesFileAndLine) {
 // Found by the pipeline_yaml fuzzer (tests/fuzz): a map or a sequence used as a key reached yaml-cpp's
 // string conversion and escaped as a YAML exception.
 TEST_F(PipelineSpecTest, NonScalarKeysAreOneError) {
-  expectError("? {a: 1}\n: 2\n", {"pipeline.yaml:1:", "keys must be plain names"});
-  expectError(std::string(kGood) + "output:\n  ? [x, y]\n  : 3\n", {"pipeline.yaml:", "keys must be plain names"});
+  expectError("? {a: 1}\n: 2\n", {"pipeline.yaml:1:", "a key must be a plain name"});
+  expectError(std::string(kGood) + "output:\n  ? [x, y]\n  : 3\n", {"pipeline.yaml:", "a key must be a plain name"});
   expectError("# t: rpeAde+#lt\n:\n t: rpeAde+#lt\n:\n?  : rpeAde+#lt\n:\n", {"pipeline.yaml"});
 }
 
