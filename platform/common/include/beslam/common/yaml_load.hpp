@@ -1,9 +1,10 @@
 // YAML files as every host reader loads them: checked event by event before yaml-cpp builds the node
 // tree, so that what yaml-cpp would take silently or could not finish is one error naming the file and
 // line instead: a key given twice in one map (yaml-cpp keeps the first and drops the second without a
-// word), a key that is not a plain scalar (a list, map, alias or nothing: readers would throw on it), nesting deeper than kMaxYamlDepth, and a document larger than kMaxYamlNodes nodes once its
-// aliases are expanded (a "billion laughs" file of a kilobyte expands to billions of nodes: every reader
-// that walks it would hang). Syntax errors are "FILE:LINE: YAML syntax error: ...".
+// word), a key that is not a plain scalar (a list, map, alias or nothing: readers would throw on it), nesting deeper
+// than kMaxYamlDepth, and a document larger than kMaxYamlNodes nodes once its aliases are expanded (a "billion laughs"
+// file of a kilobyte expands to billions of nodes: every reader that walks it would hang). Syntax errors are
+// "FILE:LINE: YAML syntax error: ...".
 #pragma once
 
 #include <yaml-cpp/yaml.h>
