@@ -7,6 +7,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "beslam/common/error.hpp"
+#include "beslam/common/file_io.hpp"
 #include "beslam/common/yaml_load.hpp"
 
 namespace beslam::datasets {
@@ -47,16 +48,14 @@ std::string CameraCalibration::modelText() const {
 }
 
 CameraCalibration readCameraFile(const std::string& path) {
-  YAML::Node root;
+  std::string text;
   try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
+    text = readFile(path);
+  } catch (const Error&) {
     throwAt(path, "cannot read the camera file (dataset.calibration)");
-  } catch (const YAML::ParserException& e) {
-    throwAt(path, "YAML syntax error: " + e.msg, e.mark.line + 1);
-  } catch (const YAML::Exception& e) {
-    throwAt(path, "cannot read YAML: " + e.msg);
   }
+  // Duplicate keys, alias bombs, deep nesting and keys that are not names are errors (beslam/common/yaml_load.hpp).
+  YAML::Node root = loadYaml(text, path);
   if (!root.IsMap())
     throwAt(path, "a camera file is a map with the keys model, width, height, fx, fy, cx, cy (docs/datasets.md)");
   try {

@@ -8,6 +8,7 @@
 
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
+#include "beslam/common/yaml_load.hpp"
 #include "beslam/datasets/image_io.hpp"
 #include "beslam/datasets/velodyne.hpp"
 #include "dataset_impl.hpp"
@@ -87,7 +88,7 @@ double kittiCameraHeight(const std::string& sequence_dir) {
   if (!isFile(manifest)) return 1.65;
   double height = 0;
   try {
-    const YAML::Node node = YAML::LoadFile(manifest)["config"]["camera"]["mount_height"];
+    const YAML::Node node = loadYamlFile(manifest)["config"]["camera"]["mount_height"];
     if (node) height = node.as<double>();
   } catch (const YAML::Exception& e) {
     throw Error(manifest + ": cannot read config.camera.mount_height (" + e.what() + ")");

@@ -68,12 +68,7 @@ std::vector<double> numbers(const YAML::Node& node, const std::string& path, con
 EurocSensor readSensorYaml(const std::string& path) {
   std::string text = readFile(path);
   if (text.rfind("%YAML", 0) == 0) text = text.substr(std::min(text.size(), text.find('\n')));  // OpenCV's directive
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throwAt(path, "YAML syntax error: " + e.msg, e.mark.line + 1);
-  }
+  YAML::Node root = loadYaml(text, path);  // the checks of beslam/common/yaml_load.hpp
   if (!root.IsMap()) throwAt(path, "expected a map (EuRoC sensor.yaml: intrinsics, resolution, T_BS, ...)");
   try {
     EurocSensor s;
