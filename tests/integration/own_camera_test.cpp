@@ -1,24 +1,30 @@
 // Your own camera, end to end (docs/datasets.md): `beslam synth` renders a short static drive (100 frames,
 // 80 m); the test writes its frames as a folder of images distorted with a known radial-tangential model
-// plus a camera file, as an EuRoC/ASL folder and as an MJPG video. `beslam run` with backend_orb on the distorted
-// folder (undistorted by the host with the camera file) must track every frame with a Sim(3) APE within 15 % of the
-// same run on the undistorted images, while the same distorted images with the distortion left out of the camera file
-// end at least 10 times further from the truth; the EuRoC folder (sensor.yaml's camera, ground truth through T_BS) must
-// give the distorted folder's APE within 5 %, and the video must track too. Ground truth reaches the other runs through
-// dataset.ego_poses. Seeded backend; the outcome does not depend on the machine's speed.
+// plus a camera file, as an EuRoC/ASL folder and as an MJPG video, and runs `beslam run` with backend_orb on
+// each, five backend seeds for the folder:
+// - the host's undistortion is exact: a control folder, made by undistorting the distorted images with
+//   OpenCV's own maps and run as a pinhole camera, gives the distorted route's APE to the last digit on every
+//   seed (so the camera file's model, its maps and their use are right);
+// - the distorted folder tracks every frame, and the median of its Sim(3) APE stays under twice the median
+//   on the undistorted images, while the same images with the distortion left out of the camera file end at
+//   least 10 times further from the truth;
+// - the EuRoC folder (sensor.yaml's camera, ground truth through T_BS) gives the distorted folder's APE within
+//   5 %; the video tracks.
+// Ground truth reaches the runs through dataset.ego_poses. Seeded backend; nothing depends on the machine's speed.
 //
-// Why 15 % and not the 5 %: on this drive the reference run's own APE moves by up to 25 % with the
-// backend's seed alone (0.028 to 0.036 m over seeds 1-6), and the distorted camera sees its periphery up to
-// 13 % more coarsely (k1 = -0.2) before the host resamples it: over seeds 1-6 the distorted route measured
-// 0.036 to 0.037 m against 0.028 to 0.036 m (seed 1: 0.0375 against 0.0342 m, +9.6 %). Leaving the
-// distortion out of the camera file gives some 4 m. The renderer's blur is raised to 1 px: with its default
-// 0.4 px the rendered edges alias, and the resampling of the distorted route alone halves the APE.
+// Why "under twice" and not "within 5 %": on this rendered drive the APE is governed by how the images were
+// resampled, not by the camera model. Twenty seeds (BESLAM_OWN_CAMERA_SEEDS=12-31) put the distorted route
+// 22 % above the undistorted one; making the distorted images with a Lanczos kernel instead of a bilinear one
+// moves that to +91 %, and undistorting those with a bicubic kernel to -43 % (docs/notes, the distortion
+// study). The renderer's blur is raised to 1 px: with its default 0.4 px the rendered edges alias.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -33,6 +39,20 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kFrames = 100;  // the static loop's first 80 m: enough for backend_orb to initialise and map
+// Fresh seeds (earlier tolerances were set looking at seeds 1-6); BESLAM_OWN_CAMERA_SEEDS=12-31 measures others.
+std::vector<int> seeds() {
+  const char* env = std::getenv("BESLAM_OWN_CAMERA_SEEDS");
+  if (!env) return {7, 8, 9, 10, 11};
+  int first = 0, last = 0;
+  if (std::sscanf(env, "%d-%d", &first, &last) != 2 || last < first) {
+    ADD_FAILURE() << "BESLAM_OWN_CAMERA_SEEDS: expected FIRST-LAST, got '" << env << "'";
+    return {7};
+  }
+  std::vector<int> out;
+  for (int s = first; s <= last; ++s) out.push_back(s);
+  return out;
+}
+const std::vector<int> kSeeds = seeds();
 const cv::Matx33d kK(718.856, 0, 607.1928, 0, 718.856, 185.2157, 0, 0, 1);  // beslam synth's default camera
 const std::vector<double> kD = {-0.2, 0.05, 0.001, -0.0005, 0.0};           // k1 k2 p1 p2 k3
 
@@ -124,16 +144,22 @@ void writeEuroc(const fs::path& dir, const fs::path& distorted, const std::vecto
          << "distortion_coefficients: [" << kD[0] << ", " << kD[1] << ", " << kD[2] << ", " << kD[3] << "]\n";
 }
 
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
 struct RunResult {
   int tracked = -1;
   double sim3 = -1;
   std::string summary;
 };
 
-RunResult runOn(const fs::path& dir, const std::string& name, const std::string& sets) {
+RunResult runOn(const fs::path& dir, const std::string& name, const std::string& sets, int seed = 7) {
   const fs::path out = dir / name;
-  const int code =
-      run("run " + (dir / "pipeline.yaml").string() + " " + sets + " --out " + out.string(), dir / (name + ".log"));
+  const int code = run("run " + (dir / "pipeline.yaml").string() + " " + sets +
+                           " --set backend.seed=" + std::to_string(seed) + " --out " + out.string(),
+                       dir / (name + ".log"));
   RunResult r;
   EXPECT_EQ(code, 0) << name << ": " << slurp(dir / (name + ".log"));
   if (code != 0) return r;
@@ -159,10 +185,13 @@ TEST(OwnCamera, DistortedFolderWithCameraFileMatchesTheUndistortedRunAndAVideoTr
       << slurp(dir / "synth.log");
   const fs::path images = dir / "synth/sequences/00/image_0";
 
-  // The distorted folder (times.txt beside the images) and an MJPG video of the undistorted frames.
+  // The distorted folder (times.txt beside the images), the control (the distorted images undistorted with
+  // OpenCV's own maps, as the host does, saved as a pinhole folder) and an MJPG video of the undistorted frames.
   fs::create_directories(dir / "distorted");
+  fs::create_directories(dir / "resampled");
   fs::copy_file(dir / "synth/sequences/00/times.txt", dir / "distorted/times.txt");
-  cv::Mat map;
+  fs::copy_file(dir / "synth/sequences/00/times.txt", dir / "resampled/times.txt");
+  cv::Mat map, undistort1, undistort2;
   // (MJPG frames have an even width: the video keeps the first 1240 columns, the principal point stays.)
   cv::VideoWriter video((dir / "drive.avi").string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0,
                         cv::Size(1240, 376), false);
@@ -171,10 +200,15 @@ TEST(OwnCamera, DistortedFolderWithCameraFileMatchesTheUndistortedRunAndAVideoTr
     std::snprintf(name, sizeof name, "%06d.png", i);
     const cv::Mat pinhole = cv::imread((images / name).string(), cv::IMREAD_GRAYSCALE);
     ASSERT_FALSE(pinhole.empty()) << images / name;
-    if (map.empty()) map = distortionMap(pinhole.size());
-    cv::Mat distorted;
+    if (map.empty()) {
+      map = distortionMap(pinhole.size());
+      cv::initUndistortRectifyMap(kK, kD, cv::noArray(), kK, pinhole.size(), CV_16SC2, undistort1, undistort2);
+    }
+    cv::Mat distorted, resampled;
     cv::remap(pinhole, distorted, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    cv::remap(distorted, resampled, undistort1, undistort2, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
     ASSERT_TRUE(cv::imwrite((dir / "distorted" / name).string(), distorted));
+    ASSERT_TRUE(cv::imwrite((dir / "resampled" / name).string(), resampled));
     if (video.isOpened()) video.write(pinhole(cv::Rect(0, 0, 1240, 376)).clone());
   }
   const bool have_video = video.isOpened();
@@ -183,31 +217,48 @@ TEST(OwnCamera, DistortedFolderWithCameraFileMatchesTheUndistortedRunAndAVideoTr
   std::ofstream(dir / "distorted.yaml") << cameraFile(true);
   std::ofstream(dir / "video.yaml") << cameraFile(false, 1240);
   std::ofstream(dir / "pipeline.yaml") << "dataset: {type: images}\n"
-                                       << "backend: {plugin: backend_orb, features: 3000, seed: 1}\n"
+                                       << "backend: {plugin: backend_orb, features: 3000}\n"
                                        << "output: {samples: 0}\n";
   const std::string poses = " --set dataset.ego_poses=" + (dir / "synth/poses/00.txt").string();
+  const std::string pinhole_sets = " --set dataset.calibration=" + (dir / "pinhole.yaml").string() + poses;
+  const std::string distorted_sets = "--set dataset.root=" + (dir / "distorted").string() +
+                                     " --set dataset.calibration=" + (dir / "distorted.yaml").string() + poses;
 
-  // The reference: the rendered (undistorted) images, timestamps from the camera file's fps.
-  const RunResult ref = runOn(dir, "undistorted",
-                              "--set dataset.root=" + images.string() +
-                                  " --set dataset.calibration=" + (dir / "pinhole.yaml").string() + poses);
-  const RunResult dis = runOn(dir, "distorted",
-                              "--set dataset.root=" + (dir / "distorted").string() +
-                                  " --set dataset.calibration=" + (dir / "distorted.yaml").string() + poses);
+  // Per seed: the rendered (undistorted) images, the distorted folder with its camera file, the control.
+  std::vector<double> ref_ape, dis_ape;
+  RunResult dis;  // the first seed's distorted run, for the EuRoC comparison below
+  for (const int seed : kSeeds) {
+    const std::string tag = "_seed" + std::to_string(seed);
+    const RunResult r = runOn(dir, "undistorted" + tag, "--set dataset.root=" + images.string() + pinhole_sets, seed);
+    const RunResult d = runOn(dir, "distorted" + tag, distorted_sets, seed);
+    const RunResult c =
+        runOn(dir, "resampled" + tag, "--set dataset.root=" + (dir / "resampled").string() + pinhole_sets, seed);
+    EXPECT_EQ(r.tracked, kFrames) << r.summary;
+    EXPECT_EQ(d.tracked, kFrames) << d.summary;
+    ASSERT_GT(r.sim3, 0) << r.summary;
+    ASSERT_GT(d.sim3, 0) << d.summary;
+    // The host's undistortion is OpenCV's: the control is the same run.
+    EXPECT_EQ(c.sim3, d.sim3) << "seed " << seed << ": " << c.summary;
+    std::printf("[ own camera ] seed %d: Sim(3) APE undistorted %.4f m, distorted + camera file %.4f m (%+.1f %%), "
+                "the control %.4f m\n",
+                seed, r.sim3, d.sim3, 100.0 * (d.sim3 - r.sim3) / r.sim3, c.sim3);
+    ref_ape.push_back(r.sim3);
+    dis_ape.push_back(d.sim3);
+    if (seed == kSeeds.front()) dis = d;
+  }
+  const double ref_median = median(ref_ape), dis_median = median(dis_ape);
+  std::printf("[ own camera ] medians of %zu seeds: undistorted %.4f m (%.4f-%.4f), distorted %.4f m (%.4f-%.4f), "
+              "%+.1f %%\n",
+              kSeeds.size(), ref_median, *std::min_element(ref_ape.begin(), ref_ape.end()),
+              *std::max_element(ref_ape.begin(), ref_ape.end()), dis_median,
+              *std::min_element(dis_ape.begin(), dis_ape.end()), *std::max_element(dis_ape.begin(), dis_ape.end()),
+              100.0 * (dis_median - ref_median) / ref_median);
+  EXPECT_LT(dis_median, 2 * ref_median) << "undistorted " << ref_median << " m, distorted " << dis_median << " m";
+
   const RunResult ignored = runOn(dir, "distortion_ignored",
-                                  "--set dataset.root=" + (dir / "distorted").string() +
-                                      " --set dataset.calibration=" + (dir / "pinhole.yaml").string() + poses);
-  EXPECT_EQ(ref.tracked, kFrames) << ref.summary;
-  EXPECT_EQ(dis.tracked, kFrames) << dis.summary;
-  ASSERT_GT(ref.sim3, 0) << ref.summary;
-  ASSERT_GT(dis.sim3, 0) << dis.summary;
-  std::printf(
-      "[ own camera ] Sim(3) APE undistorted %.4f m, distorted + camera file %.4f m (%+.1f %%), distortion "
-      "ignored %.4f m\n",
-      ref.sim3, dis.sim3, 100.0 * (dis.sim3 - ref.sim3) / ref.sim3, ignored.sim3);
-  EXPECT_LT(std::abs(dis.sim3 - ref.sim3), 0.15 * ref.sim3)
-      << "undistorted " << ref.sim3 << " m, distorted " << dis.sim3 << " m";
-  EXPECT_GT(ignored.sim3, 10 * ref.sim3) << "the distortion matters: without it the run should be far off";
+                                  "--set dataset.root=" + (dir / "distorted").string() + pinhole_sets, kSeeds.front());
+  std::printf("[ own camera ] distortion left out of the camera file: %.4f m\n", ignored.sim3);
+  EXPECT_GT(ignored.sim3, 10 * ref_median) << "the distortion matters: without it the run should be far off";
   EXPECT_NE(dis.summary.find("camera file distorted.yaml (pinhole, radial-tangential, undistorted)"), std::string::npos)
       << dis.summary;
 
@@ -215,7 +266,7 @@ TEST(OwnCamera, DistortedFolderWithCameraFileMatchesTheUndistortedRunAndAVideoTr
   // timestamps (absolute, from data.csv) and the ground truth's route differ from the distorted folder's run.
   writeEuroc(dir, dir / "distorted", readKittiPoses(dir / "synth/poses/00.txt"));
   const RunResult euroc =
-      runOn(dir, "euroc", "--set dataset.type=euroc --set dataset.root=" + (dir / "euroc").string());
+      runOn(dir, "euroc", "--set dataset.type=euroc --set dataset.root=" + (dir / "euroc").string(), kSeeds.front());
   std::printf("[ own camera ] EuRoC layout: %d of %d frames tracked, Sim(3) APE %.4f m\n", euroc.tracked, kFrames,
               euroc.sim3);
   EXPECT_EQ(euroc.tracked, kFrames) << euroc.summary;
@@ -227,11 +278,12 @@ TEST(OwnCamera, DistortedFolderWithCameraFileMatchesTheUndistortedRunAndAVideoTr
   } else {
     const RunResult vid = runOn(dir, "video",
                                 "--set dataset.type=video --set dataset.root=" + (dir / "drive.avi").string() +
-                                    " --set dataset.calibration=" + (dir / "video.yaml").string() + poses);
+                                    " --set dataset.calibration=" + (dir / "video.yaml").string() + poses,
+                                kSeeds.front());
     std::printf("[ own camera ] video: %d of %d frames tracked, Sim(3) APE %.4f m\n", vid.tracked, kFrames, vid.sim3);
     EXPECT_GE(vid.tracked, kFrames * 9 / 10) << vid.summary;
     EXPECT_GT(vid.sim3, 0) << vid.summary;
-    EXPECT_LT(vid.sim3, 2 * ref.sim3 + 0.05) << vid.summary;
+    EXPECT_LT(vid.sim3, 2 * ref_median + 0.05) << vid.summary;
   }
   if (HasFailure())
     std::printf("[ own camera ] the data and runs stay in %s\n", dir.c_str());
