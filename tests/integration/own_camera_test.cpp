@@ -239,20 +239,21 @@ TEST(OwnCamera, DistortedFolderWithCameraFileMatchesTheUndistortedRunAndAVideoTr
     ASSERT_GT(d.sim3, 0) << d.summary;
     // The host's undistortion is OpenCV's: the control is the same run.
     EXPECT_EQ(c.sim3, d.sim3) << "seed " << seed << ": " << c.summary;
-    std::printf("[ own camera ] seed %d: Sim(3) APE undistorted %.4f m, distorted + camera file %.4f m (%+.1f %%), "
-                "the control %.4f m\n",
-                seed, r.sim3, d.sim3, 100.0 * (d.sim3 - r.sim3) / r.sim3, c.sim3);
+    std::printf(
+        "[ own camera ] seed %d: Sim(3) APE undistorted %.4f m, distorted + camera file %.4f m (%+.1f %%), "
+        "the control %.4f m\n",
+        seed, r.sim3, d.sim3, 100.0 * (d.sim3 - r.sim3) / r.sim3, c.sim3);
     ref_ape.push_back(r.sim3);
     dis_ape.push_back(d.sim3);
     if (seed == kSeeds.front()) dis = d;
   }
   const double ref_median = median(ref_ape), dis_median = median(dis_ape);
-  std::printf("[ own camera ] medians of %zu seeds: undistorted %.4f m (%.4f-%.4f), distorted %.4f m (%.4f-%.4f), "
-              "%+.1f %%\n",
-              kSeeds.size(), ref_median, *std::min_element(ref_ape.begin(), ref_ape.end()),
-              *std::max_element(ref_ape.begin(), ref_ape.end()), dis_median,
-              *std::min_element(dis_ape.begin(), dis_ape.end()), *std::max_element(dis_ape.begin(), dis_ape.end()),
-              100.0 * (dis_median - ref_median) / ref_median);
+  std::printf(
+      "[ own camera ] medians of %zu seeds: undistorted %.4f m (%.4f-%.4f), distorted %.4f m (%.4f-%.4f), "
+      "%+.1f %%\n",
+      kSeeds.size(), ref_median, *std::min_element(ref_ape.begin(), ref_ape.end()),
+      *std::max_element(ref_ape.begin(), ref_ape.end()), dis_median, *std::min_element(dis_ape.begin(), dis_ape.end()),
+      *std::max_element(dis_ape.begin(), dis_ape.end()), 100.0 * (dis_median - ref_median) / ref_median);
   EXPECT_LT(dis_median, 2 * ref_median) << "undistorted " << ref_median << " m, distorted " << dis_median << " m";
 
   const RunResult ignored = runOn(dir, "distortion_ignored",
