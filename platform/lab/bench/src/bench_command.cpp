@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -18,7 +19,10 @@
 #include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
+#include "beslam/motion_score/motion_score.hpp"
+#include "beslam/object_score/object_score.hpp"
 #include "beslam/report/report.hpp"
+#include "beslam/static_map/score.hpp"
 
 extern char** environ;
 namespace fs = std::filesystem;
@@ -28,15 +32,17 @@ namespace beslam::bench {
 namespace {
 
 constexpr const char* kUsage =
-    "usage: beslam bench MATRIX.yaml [--out DIR] [--jobs N] [--emit slurm]\n"
+    "usage: beslam bench MATRIX.yaml [--out DIR] [--jobs N] [--seeds A,B,...] [--emit slurm]\n"
     "       beslam bench --merge DIR\n"
     "       beslam bench --cell K DIR\n"
     "\n"
     "Runs every cell of an ablation matrix (pipelines x sequences x seeds; docs/benchmarks.md) as an\n"
     "ordinary `beslam run` into DIR/runs/<pipeline>/<sequence>/seed<N>, skipping finished cells, then writes\n"
-    "DIR/tables.md, tables.json, table1.csv, table3.csv, objects.csv and DIR/report/index.html.\n"
+    "DIR/tables.md, tables.json, the CSV tables and DIR/report/index.html; a pipeline's scoring steps\n"
+    "(score: [motion, objects, static_map]) score its finished cells first, into CELL/eval_<step>.json.\n"
     "  --out DIR       bench folder (default out/bench/<matrix name>)\n"
     "  --jobs N        cells run at once (default 1)\n"
+    "  --seeds A,B,... these backend seeds instead of the matrix's (its seed_key; integers, each once)\n"
     "  --emit slurm    write DIR/bench.json and DIR/bench.sbatch (one array task a cell) and run nothing\n"
     "  --merge DIR     tables and report from the finished cells of DIR\n"
     "  --cell K DIR    run cell K of DIR/bench.json (what each Slurm array task does)\n";
@@ -44,6 +50,27 @@ constexpr const char* kUsage =
 struct Usage : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+// "42,1,2": whole numbers, each once.
+std::vector<int64_t> seedList(const std::string& text) {
+  std::vector<int64_t> seeds;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    std::size_t used = 0;
+    int64_t v = 0;
+    try {
+      v = std::stoll(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (item.empty() || used != item.size())
+      throw Usage("--seeds: '" + item + "' is not an integer (expected a list such as 42,1,2)");
+    if (std::find(seeds.begin(), seeds.end(), v) != seeds.end()) throw Usage("--seeds: " + item + " is listed twice");
+    seeds.push_back(v);
+  }
+  if (seeds.empty()) throw Usage("--seeds: expected a list such as 42,1,2");
+  return seeds;
+}
 
 int cliInteger(const std::string& flag, const std::string& text, int lo, int hi) {
   try {
@@ -91,13 +118,12 @@ json describe(const Matrix& m, const std::vector<Cell>& cells, const std::string
             {"binary", binary},
             {"seeds", m.seeds},
             {"cells", json::array()}};
-  for (const auto& c : cells)
-    j["cells"].push_back({{"index", c.index},
-                          {"pipeline", c.pipeline},
-                          {"sequence", c.sequence},
-                          {"seed", c.seed},
-                          {"dir", c.dir},
-                          {"args", c.args}});
+  for (const auto& c : cells) {
+    json cell = {{"index", c.index}, {"pipeline", c.pipeline}, {"sequence", c.sequence},
+                 {"seed", c.seed},   {"dir", c.dir},           {"args", c.args}};
+    if (!c.score.empty()) cell["score"] = c.score;  // absent otherwise: older bench folders stay valid
+    j["cells"].push_back(cell);
+  }
   return j;
 }
 
@@ -230,18 +256,52 @@ void writeDescription(const std::string& dir, const json& bench) {
 }
 
 void finish(const std::string& dir, std::ostream& out) {
+  scoreCells(dir);
   const json tables = writeTables(dir);
   report::writeBenchReport(dir);
   out << readFile((fs::path(dir) / "tables.md").string()) << "\n"
-      << "tables: " << dir << "/tables.md, tables.json, table1.csv, table3.csv, objects.csv\n"
+      << "tables: " << dir << "/tables.md, tables.json and CSV files beside them\n"
       << "report: " << dir << "/report/index.html\n";
 }
 
 }  // namespace
 
+void scoreCells(const std::string& out_dir) {
+  const json bench = readBench(out_dir);
+  for (const auto& c : bench["cells"]) {
+    if (!c.contains("score")) continue;
+    const fs::path dir = fs::path(out_dir) / c.at("dir").get<std::string>();
+    if (!cellFinished(dir.string())) continue;
+    const auto run_time = fs::last_write_time(dir / "summary.json");
+    for (const auto& step_json : c["score"]) {
+      const std::string step = step_json.get<std::string>();
+      const fs::path score = dir / ("eval_" + step + ".json");
+      std::error_code ec;
+      if (fs::exists(score, ec) && fs::last_write_time(score, ec) >= run_time) continue;
+      const std::vector<std::string> args = {"--run", dir.string(), "--json", score.string()};
+      std::ostringstream quiet, message;
+      int status = 2;
+      if (step == "motion")
+        status = motion_score::runCommand(args, quiet, message);
+      else if (step == "objects")
+        status = object_score::runCommand(args, quiet, message);
+      else if (step == "static_map")
+        status = static_map::runEvalCommand(args, quiet, message);
+      else
+        message << "unknown scoring step";
+      if (status != 0) {
+        std::string why = message.str();
+        while (!why.empty() && why.back() == '\n') why.pop_back();
+        throwAt(dir.string(), "scoring step '" + step + "' failed: " + why);
+      }
+    }
+  }
+}
+
 int runBenchCommand(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   try {
     std::string matrix_path, out_dir, emit, merge_dir, cell_dir;
+    std::vector<int64_t> seeds;
     int jobs = 1, cell = -1;
     for (size_t i = 0; i < args.size(); ++i) {
       const std::string& a = args[i];
@@ -256,6 +316,8 @@ int runBenchCommand(const std::vector<std::string>& args, std::ostream& out, std
         out_dir = value();
       else if (a == "--jobs") {
         jobs = cliInteger("--jobs", value(), 1, 256);
+      } else if (a == "--seeds") {
+        seeds = seedList(value());
       } else if (a == "--emit") {
         emit = value();
         if (emit != "slurm") throw Usage("--emit: only 'slurm' is supported, got '" + emit + "'");
@@ -307,7 +369,8 @@ int runBenchCommand(const std::vector<std::string>& args, std::ostream& out, std
     }
 
     if (matrix_path.empty()) throw Usage("no matrix file given");
-    const Matrix m = loadMatrix(matrix_path);
+    Matrix m = loadMatrix(matrix_path);
+    if (!seeds.empty()) m.seeds = seeds;
     if (out_dir.empty()) out_dir = "out/bench/" + m.name;
     out_dir = fs::absolute(out_dir).lexically_normal().string();
     if (out_dir.size() > 1 && out_dir.back() == '/') out_dir.pop_back();

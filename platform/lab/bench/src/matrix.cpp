@@ -177,7 +177,7 @@ Matrix loadMatrix(const std::string& path) {
                    m.sequences.push_back(s);
                  });
 
-  r.labelledList(doc, "pipelines", "file", {"label", "file", "set", "sequences"},
+  r.labelledList(doc, "pipelines", "file", {"label", "file", "set", "sequences", "score"},
                  [&](const YAML::Node& e, const std::string& where, const std::string& label) {
                    PipelineEntry p;
                    p.label = label;
@@ -194,6 +194,21 @@ Matrix loadMatrix(const std::string& path) {
                        for (const auto& q : m.sequences) known |= q.label == s;
                        if (!known) r.fail(l, where + ".sequences: no sequence is labelled '" + s + "'");
                        p.sequences.push_back(s);
+                     }
+                   }
+                   if (e["score"].IsDefined()) {
+                     const YAML::Node steps = e["score"];
+                     std::string known;
+                     for (const auto& k : kScoreSteps) known += (known.empty() ? "" : ", ") + k;
+                     if (!steps.IsSequence() || steps.size() == 0)
+                       r.fail(steps, where + ".score: expected a list of scoring steps (" + known + ")");
+                     for (const auto& n : steps) {
+                       const std::string step = r.scalar(n, where + ".score");
+                       if (std::find(kScoreSteps.begin(), kScoreSteps.end(), step) == kScoreSteps.end())
+                         r.fail(n, where + ".score: unknown step '" + step + "' (known: " + known + ")");
+                       if (std::find(p.score.begin(), p.score.end(), step) != p.score.end())
+                         r.fail(n, where + ".score: '" + step + "' is listed twice");
+                       p.score.push_back(step);
                      }
                    }
                    m.pipelines.push_back(p);
@@ -247,6 +262,7 @@ std::vector<Cell> makeCells(const Matrix& m, const std::string& out_dir) {
         for (const auto& x : s.sets) c.args.insert(c.args.end(), {"--set", x});
         for (const auto& x : p.sets) c.args.insert(c.args.end(), {"--set", x});
         c.args.insert(c.args.end(), {"--set", m.seed_key + "=" + std::to_string(seed)});
+        c.score = p.score;
         cells.push_back(c);
       }
   return cells;

@@ -129,6 +129,7 @@ json writeTables(const std::string& out_dir) {
   struct Run {
     json summary;
     RunTiming timing;
+    std::map<std::string, json> scores;  // scoring step -> its eval_<step>.json (absent: not scored)
   };
   std::vector<std::string> pipelines, sequences;
   std::map<std::pair<std::string, std::string>, std::vector<Run>> runs;  // (sequence, pipeline)
@@ -142,10 +143,21 @@ json writeTables(const std::string& out_dir) {
     const fs::path dir = fs::path(out_dir) / c.at("dir").get<std::string>();
     if (!cellFinished(dir.string())) continue;
     ++finished;
-    runs[{s, p}].push_back({json::parse(readFile((dir / "summary.json").string())), readTiming(dir / "timing.csv")});
+    Run run{json::parse(readFile((dir / "summary.json").string())), readTiming(dir / "timing.csv"), {}};
+    for (const auto& step : kScoreSteps) {
+      const fs::path score = dir / ("eval_" + step + ".json");
+      if (!c.contains("score") || !fs::exists(score)) continue;
+      try {
+        run.scores[step] = json::parse(readFile(score.string()));
+      } catch (const json::exception& e) {
+        throwAt(score.string(), std::string("not a score file: ") + e.what());
+      }
+    }
+    runs[{s, p}].push_back(std::move(run));
   }
 
   json t1 = json::array(), t3 = json::array(), objects = json::array();
+  json motion = json::array(), reconstruction = json::array(), static_map = json::array();
   for (const auto& s : sequences)
     for (const auto& p : pipelines) {
       if (!planned.count({s, p})) continue;
@@ -176,6 +188,65 @@ json writeTables(const std::string& out_dir) {
       for (const auto& r : rs) not_metric += std::isfinite(num(r.summary, {"world", "metric_from_frame"})) ? 0 : 1;
       o["not_metric_runs"] = not_metric;
       objects.push_back(o);
+
+      // The scoring steps' results: a row where at least one run of the cell was scored.
+      auto scored = [&](const std::string& step, auto f) {
+        std::vector<double> v;
+        for (const auto& r : rs)
+          if (r.scores.count(step)) v.push_back(f(r.scores.at(step)));
+        return statJson(v);
+      };
+      auto share = [](const json& j, const char* part, const char* whole) {
+        const double w = num(j, {whole});
+        return w > 0 ? num(j, {part}) / w : NAN;
+      };
+      auto scoredRuns = [&](const std::string& step) {
+        int n = 0;
+        for (const auto& r : rs) n += r.scores.count(step) ? 1 : 0;
+        return n;
+      };
+      if (scoredRuns("motion") > 0) {
+        json m = {{"sequence", s}, {"pipeline", p}, {"runs", scoredRuns("motion")}};
+        m["f1_dynamic"] = scored("motion", [](const json& j) { return num(j, {"f1_dynamic"}); });
+        m["moving_called_static"] =
+            scored("motion", [&](const json& j) { return share(j, "moving_static", "moving"); });
+        m["standing_called_dynamic"] =
+            scored("motion", [&](const json& j) { return share(j, "standing_dynamic", "standing"); });
+        m["standing_near_called_static"] =
+            scored("motion", [&](const json& j) { return share(j, "standing_near_static", "standing_near"); });
+        motion.push_back(m);
+      }
+      if (scoredRuns("objects") > 0) {
+        json o2 = {{"sequence", s}, {"pipeline", p}, {"runs", scoredRuns("objects")}};
+        o2["reconstructed"] = scored("objects", [](const json& j) { return num(j, {"reconstructed"}); });
+        o2["parked_in_view_correct_share"] =
+            scored("objects", [&](const json& j) { return share(j, "parked_in_view_correct", "parked_in_view"); });
+        o2["false_share"] = scored("objects", [&](const json& j) { return share(j, "false", "reconstructed"); });
+        o2["centre_error_m"] = scored("objects", [](const json& j) { return num(j, {"median_centre_error_m"}); });
+        o2["yaw_error_deg"] = scored("objects", [](const json& j) { return num(j, {"median_yaw_error_deg"}); });
+        o2["heading_within_10_deg_share"] = scored("objects", [](const json& j) {
+          int parked = 0, within = 0;  // reconstructions of parked cars with a heading error
+          if (j.contains("objects") && j["objects"].is_array())
+            for (const auto& x : j["objects"]) {
+              const double yaw = num(x, {"yaw_error_deg"});
+              if (!x.value("parked", false) || !(yaw >= 0)) continue;
+              ++parked, within += yaw <= 10 ? 1 : 0;
+            }
+          return parked ? double(within) / parked : NAN;
+        });
+        o2["chamfer_m"] = scored("objects", [](const json& j) { return num(j, {"median_chamfer_m"}); });
+        o2["shape_chamfer_m"] = scored("objects", [](const json& j) { return num(j, {"median_shape_chamfer_m"}); });
+        reconstruction.push_back(o2);
+      }
+      if (scoredRuns("static_map") > 0) {
+        json m = {{"sequence", s}, {"pipeline", p}, {"runs", scoredRuns("static_map")}};
+        m["occupied"] = scored("static_map", [](const json& j) { return num(j, {"occupied"}); });
+        m["in_moving_paths"] = scored("static_map", [](const json& j) { return num(j, {"in_moving_paths"}); });
+        m["in_parked_cars"] = scored("static_map", [](const json& j) { return num(j, {"in_parked_cars"}); });
+        m["parked_cars_mapped_share"] = scored(
+            "static_map", [&](const json& j) { return share(j, "parked_cars_near_mapped", "parked_cars_near"); });
+        static_map.push_back(m);
+      }
     }
   for (const auto& p : pipelines) {
     std::vector<double> sem, trk, tot;
@@ -198,7 +269,10 @@ json writeTables(const std::string& out_dir) {
               {"sequences", sequences},
               {"table1", t1},
               {"table3", t3},
-              {"objects", objects}};
+              {"objects", objects},
+              {"motion", motion},
+              {"reconstruction", reconstruction},
+              {"static_map", static_map}};
 
   // Markdown
   std::ostringstream md;
@@ -230,6 +304,38 @@ json writeTables(const std::string& out_dir) {
        << fmt(r["map_points_static"], 0) << " | " << fmt(r["map_points"], 0) << " | " << fmt(r["metric_from_frame"], 0)
        << " | " << r["not_metric_runs"] << " |\n";
 
+  if (!motion.empty()) {
+    md << "\n## Motion states (scoring step `motion`: `beslam eval-motion`; shares of scored car detections)\n\n"
+       << "| sequence | pipeline | runs | F1 (dynamic) | moving called static | standing called dynamic | "
+          "standing nearby called static |\n"
+       << "|---|---|---|---|---|---|---|\n";
+    for (const auto& r : motion)
+      md << "| " << r["sequence"].get<std::string>() << " | " << r["pipeline"].get<std::string>() << " | " << r["runs"]
+         << " | " << fmt(r["f1_dynamic"], 3) << " | " << fmt(r["moving_called_static"], 3) << " | "
+         << fmt(r["standing_called_dynamic"], 3) << " | " << fmt(r["standing_near_called_static"], 3) << " |\n";
+  }
+  if (!reconstruction.empty()) {
+    md << "\n## Reconstructed objects (scoring step `objects`: `beslam eval-objects`)\n\n"
+       << "| sequence | pipeline | runs | reconstructed | parked in view, correct | false | centre error m | yaw "
+          "error deg | heading within 10 deg | Chamfer m | shape-only Chamfer m |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const auto& r : reconstruction)
+      md << "| " << r["sequence"].get<std::string>() << " | " << r["pipeline"].get<std::string>() << " | " << r["runs"]
+         << " | " << fmt(r["reconstructed"], 0) << " | " << fmt(r["parked_in_view_correct_share"], 3) << " | "
+         << fmt(r["false_share"], 3) << " | " << fmt(r["centre_error_m"], 3) << " | " << fmt(r["yaw_error_deg"], 1)
+         << " | " << fmt(r["heading_within_10_deg_share"], 3) << " | " << fmt(r["chamfer_m"], 3) << " | "
+         << fmt(r["shape_chamfer_m"], 3) << " |\n";
+  }
+  if (!static_map.empty()) {
+    md << "\n## Static map (scoring step `static_map`: `beslam eval-static-map`; voxels)\n\n"
+       << "| sequence | pipeline | runs | occupied | in moving cars' paths | in parked cars | parked cars mapped |\n"
+       << "|---|---|---|---|---|---|---|\n";
+    for (const auto& r : static_map)
+      md << "| " << r["sequence"].get<std::string>() << " | " << r["pipeline"].get<std::string>() << " | " << r["runs"]
+         << " | " << fmt(r["occupied"], 0) << " | " << fmt(r["in_moving_paths"], 0) << " | "
+         << fmt(r["in_parked_cars"], 0) << " | " << fmt(r["parked_cars_mapped_share"], 3) << " |\n";
+  }
+
   // CSV: one column per median / min / max, full precision.
   auto csv = [&](const json& rows, const std::vector<std::string>& keys, const std::vector<std::string>& stats) {
     std::ostringstream o;
@@ -259,6 +365,19 @@ json writeTables(const std::string& out_dir) {
   writeFileAtomic((out / "objects.csv").string(),
                   csv(objects, {"sequence", "pipeline", "runs", "not_metric_runs"},
                       {"static", "dynamic", "unknown", "map_points_static", "map_points", "metric_from_frame"}));
+  if (!motion.empty())
+    writeFileAtomic((out / "motion.csv").string(), csv(motion, {"sequence", "pipeline", "runs"},
+                                                       {"f1_dynamic", "moving_called_static", "standing_called_dynamic",
+                                                        "standing_near_called_static"}));
+  if (!reconstruction.empty())
+    writeFileAtomic((out / "reconstruction.csv").string(),
+                    csv(reconstruction, {"sequence", "pipeline", "runs"},
+                        {"reconstructed", "parked_in_view_correct_share", "false_share", "centre_error_m",
+                         "yaw_error_deg", "heading_within_10_deg_share", "chamfer_m", "shape_chamfer_m"}));
+  if (!static_map.empty())
+    writeFileAtomic((out / "static_map.csv").string(),
+                    csv(static_map, {"sequence", "pipeline", "runs"},
+                        {"occupied", "in_moving_paths", "in_parked_cars", "parked_cars_mapped_share"}));
   writeFileAtomic((out / "tables.md").string(), md.str());
   writeFileAtomic((out / "tables.json").string(), all.dump(1) + "\n");
   return all;

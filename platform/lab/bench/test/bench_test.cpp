@@ -13,6 +13,7 @@
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -123,6 +124,12 @@ TEST(BenchMatrix, BadFilesGiveOneErrorNamingFileAndProblem) {
   expectError(goodMatrix("  - {label: x, file: " + kAblation + "synth_beslam.yaml, set: [backend.no_such_key=1]}\n"),
               "pipeline 'x' on sequence 'ds'");
   expectError("seeds: [1\n", "YAML syntax error");
+  expectError(goodMatrix("  - {label: x, file: " + kAblation + "synth_beslam.yaml, score: [speed]}\n"),
+              "score: unknown step 'speed' (known: motion, objects, static_map)");
+  expectError(goodMatrix("  - {label: x, file: " + kAblation + "synth_beslam.yaml, score: [motion, motion]}\n"),
+              "'motion' is listed twice");
+  expectError(goodMatrix("  - {label: x, file: " + kAblation + "synth_beslam.yaml, score: motion}\n"),
+              "expected a list of scoring steps");
 }
 
 TEST(BenchCommand, BadMatrixIsOneLineAndExitOne) {
@@ -134,6 +141,27 @@ TEST(BenchCommand, BadMatrixIsOneLineAndExitOne) {
   EXPECT_EQ(r.err.rfind("beslam: error: " + (dir / "m.yaml").string() + ":", 0), 0u) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out" / "bench.json"));
   EXPECT_EQ(shell(kBeslam + " bench --jobs 0 x.yaml", dir).code, 2);
+}
+
+// --seeds replaces the matrix's seeds (a figure measured on other seeds is one flag away); a bad list is a
+// usage error naming the item.
+TEST(BenchCommand, SeedsFlagReplacesTheMatrixSeeds) {
+  const fs::path dir = tempDir("seeds");
+  write(dir / "m.yaml", goodMatrix());
+  const Result r = shell(
+      kBeslam + " bench " + (dir / "m.yaml").string() + " --seeds 7,31 --emit slurm --out " + (dir / "out").string(),
+      dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json bench = json::parse(readText(dir / "out/bench.json"));
+  std::set<int64_t> seeds;
+  for (const auto& c : bench["cells"]) seeds.insert(c["seed"].get<int64_t>());
+  EXPECT_EQ(seeds, (std::set<int64_t>{7, 31}));
+  for (const std::string bad : {"7,x", "7,7", "", "3.5"}) {
+    const Result e =
+        shell(kBeslam + " bench " + (dir / "m.yaml").string() + " --seeds '" + bad + "' --emit slurm", dir);
+    EXPECT_EQ(e.code, 2) << bad;
+    EXPECT_NE(e.err.find("--seeds"), std::string::npos) << e.err;
+  }
 }
 
 namespace {
@@ -196,6 +224,34 @@ void expectTablesMatchSummaries(const fs::path& out, int cells) {
   }
 }
 
+// The motion table (scoring step `motion`): one row per scored pipeline, each figure the median / min / max
+// of the cells' eval_motion.json; unscored pipelines have no row and no file.
+void expectMotionTableMatchesScores(const fs::path& out, int runs) {
+  const json t = json::parse(readText(out / "tables.json"));
+  const json bench = json::parse(readText(out / "bench.json"));
+  ASSERT_EQ(t["motion"].size(), 1u) << t["motion"].dump();
+  const json& row = t["motion"][0];
+  EXPECT_EQ(row["pipeline"], "beslam");
+  EXPECT_EQ(row["runs"], runs);
+  std::vector<double> f1, moving_static;
+  for (const auto& c : bench["cells"]) {
+    const fs::path score = out / c["dir"].get<std::string>() / "eval_motion.json";
+    ASSERT_EQ(fs::exists(score), c["pipeline"] == "beslam") << score;
+    if (!fs::exists(score)) continue;
+    const json j = json::parse(readText(score));
+    f1.push_back(j["f1_dynamic"].get<double>());
+    moving_static.push_back(j["moving"].get<double>() > 0 ? j["moving_static"].get<double>() / j["moving"].get<double>()
+                                                          : 0);
+  }
+  EXPECT_EQ(row["f1_dynamic"]["median"].get<double>(), median(f1));
+  EXPECT_EQ(row["moving_called_static"]["max"].get<double>(),
+            *std::max_element(moving_static.begin(), moving_static.end()));
+  EXPECT_GT(row["f1_dynamic"]["median"].get<double>(), 0.5);  // the checker works on dynamic_street
+  EXPECT_NE(readText(out / "tables.md").find("## Motion states"), std::string::npos);
+  EXPECT_TRUE(fs::exists(out / "motion.csv"));
+  EXPECT_FALSE(fs::exists(out / "reconstruction.csv"));
+}
+
 // A matrix of 60 synthetic dynamic_street frames (rendered once into the build tree's cache) with the
 // given seeds and pipelines: "plain" (no semantics) and/or "beslam" (the full pipeline).
 void writeTinyMatrix(const fs::path& file, const std::string& name, const std::string& seeds,
@@ -207,7 +263,7 @@ void writeTinyMatrix(const fs::path& file, const std::string& name, const std::s
                      "pipelines:\n";
   for (const std::string& label : pipelines)
     yaml += "  - {label: " + label + ", file: " + kAblation +
-            (label == "plain" ? "synth_no_semantics.yaml" : "synth_beslam.yaml") + "}\n";
+            (label == "plain" ? "synth_no_semantics.yaml}\n" : "synth_beslam.yaml, score: [motion]}\n");
   write(file, yaml);
 }
 
@@ -223,6 +279,7 @@ TEST(BenchCommand, TinyBenchTablesResumeSlurmAndMerge) {
   EXPECT_NE(r.err.find("[4/4 cells]"), std::string::npos) << r.err;
   EXPECT_NE(r.out.find("## Table I"), std::string::npos);
   expectTablesMatchSummaries(out, 4);
+  expectMotionTableMatchesScores(out, 2);
   for (const char* f :
        {"tables.md", "table1.csv", "table3.csv", "objects.csv", "report/index.html", "report/lib/three.min.js",
         "report/lib/OrbitControls.js", "report/lib/chart.min.js", "report/data/run_3.js"})
@@ -230,10 +287,22 @@ TEST(BenchCommand, TinyBenchTablesResumeSlurmAndMerge) {
 
   // Resume: nothing runs again.
   const auto stamp = fs::last_write_time(out / "runs/beslam/ds/seed2/summary.json");
+  const auto score_stamp = fs::last_write_time(out / "runs/beslam/ds/seed2/eval_motion.json");
   r = shell(kBeslam + " bench " + (dir / "m.yaml").string() + " --out " + out.string() + " --jobs 2", dir);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("4 already finished, 0 to run"), std::string::npos) << r.err;
   EXPECT_EQ(fs::last_write_time(out / "runs/beslam/ds/seed2/summary.json"), stamp);
+  EXPECT_EQ(fs::last_write_time(out / "runs/beslam/ds/seed2/eval_motion.json"), score_stamp);  // not scored again
+  {  // a scoring step that cannot run (no reconstructor, so no objects.json) is one error naming cell and step
+    json bench = json::parse(readText(out / "bench.json"));
+    bench["cells"][1]["score"] = {"objects"};
+    std::ofstream(out / "bench.json") << bench.dump();
+    r = shell(kBeslam + " bench --merge " + out.string(), dir);
+    EXPECT_EQ(r.code, 1) << r.err;
+    EXPECT_NE(r.err.find("runs/beslam/ds/seed1: scoring step 'objects' failed: "), std::string::npos) << r.err;
+    bench["cells"][1]["score"] = {"motion"};
+    std::ofstream(out / "bench.json") << bench.dump();
+  }
 
   // A broken summary is not a finished cell: --cell reruns it.
   {  // an interrupted run (SIGINT) writes a summary too: not finished

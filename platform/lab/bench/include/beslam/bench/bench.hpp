@@ -12,9 +12,14 @@
 //   beslam.log.
 // - OUT/bench.json (written before any cell starts) freezes the cell list and the command of each cell, so
 //   `--cell K OUT`, `--merge OUT` and the emitted Slurm script need only the folder.
+// - A pipeline may ask for scoring steps (`score: [motion, objects, static_map]`): once its cells are
+//   finished, each is scored as `beslam eval-motion|eval-objects|eval-static-map --run CELL` would, into
+//   CELL/eval_<step>.json (scored again only when the run is newer than that file). The steps need the
+//   truth of a synthetic sequence; a step that fails is one error naming the cell and the step.
 // - Tables are computed from finished cells only (medians over seeds, even counts: mean of the middle
 //   two; min and max) and written atomically: OUT/tables.md, OUT/tables.json, OUT/table1.csv,
-//   OUT/table3.csv, OUT/objects.csv.
+//   OUT/table3.csv, OUT/objects.csv, and with scoring steps OUT/motion.csv, OUT/reconstruction.csv,
+//   OUT/static_map.csv.
 #pragma once
 
 #include <cstdint>
@@ -36,7 +41,11 @@ struct PipelineEntry {
   std::string file;  // absolute
   std::vector<std::string> sets;
   std::vector<std::string> sequences;  // labels; empty = every sequence
+  std::vector<std::string> score;      // scoring steps: motion, objects, static_map (kScoreSteps)
 };
+
+// The scoring steps a pipeline may ask for, each the `beslam eval-<step>` command of the same name.
+inline const std::vector<std::string> kScoreSteps = {"motion", "objects", "static_map"};
 
 struct Matrix {
   std::string path;  // the matrix file as given
@@ -51,8 +60,9 @@ struct Cell {
   int index = 0;
   std::string pipeline, sequence;
   int64_t seed = 0;
-  std::string dir;                // relative to the bench folder
-  std::vector<std::string> args;  // arguments after the binary: run FILE --out DIR --quiet --set ...
+  std::string dir;                 // relative to the bench folder
+  std::vector<std::string> args;   // arguments after the binary: run FILE --out DIR --quiet --set ...
+  std::vector<std::string> score;  // the pipeline's scoring steps
 };
 
 Matrix loadMatrix(const std::string& path);
@@ -67,6 +77,10 @@ struct Stat {
   int n = 0;
 };
 std::optional<Stat> stat(std::vector<double> values);
+
+// Runs the scoring steps of every finished cell whose scores are missing or older than its run (reads
+// OUT/bench.json). Throws beslam::Error naming the cell and the step when one fails.
+void scoreCells(const std::string& out_dir);
 
 // Tables from the finished cells of a bench folder (reads OUT/bench.json); returns the JSON written.
 nlohmann::json writeTables(const std::string& out_dir);
