@@ -216,18 +216,13 @@ Eigen::Matrix3d rotY(double a) {
 
 }  // namespace
 
-// The report data of one run (folder `run`): see the header for what it holds.
-json runData(const fs::path& run, const std::string& label, size_t max_points, const fs::path& samples_out,
-             const std::string& samples_rel, std::vector<std::string>* warnings = nullptr) {
+namespace {
+
+// The summary figures the page shows; what the page cannot show goes to `warnings`, said once here
+// rather than by empty plots.
+json summaryData(const fs::path& run, const json& summary, std::vector<std::string>* warnings) {
   const fs::path summary_path = run / "summary.json";
-  json summary;
-  try {
-    summary = json::parse(readFile(summary_path.string()));
-  } catch (const json::exception& e) {
-    throwAt(summary_path.string(), std::string("not a run summary: ") + e.what());
-  }
-  json d = {{"label", label}, {"dir", fs::absolute(run).lexically_normal().string()}};
-  if (warnings) {  // what the page will not show, said once here rather than by empty plots
+  if (warnings) {
     if (summary.contains("status") && summary["status"].is_string() && summary["status"] != "completed")
       warnings->push_back(summary_path.string() + ": the run did not complete (" +
                           summary["status"].get<std::string>() + "); the report shows what it left");
@@ -237,71 +232,95 @@ json runData(const fs::path& run, const std::string& label, size_t max_points, c
     if (!fs::exists(run / "timing.csv"))
       warnings->push_back((run / "timing.csv").string() + ": missing; the timing plot is empty");
   }
+  json d;
   for (const char* k : {"pipeline", "dataset", "frames", "tracked", "keyframes", "median_frame_ms", "ape", "detections",
                         "world", "map_points", "plugins", "frames_with_masks", "untracked_frames"})
-    if (summary.contains(k)) d["summary"][k] = summary[k];
+    if (summary.contains(k)) d[k] = summary[k];
   if (summary.contains("evaluation")) {
     const json& ev = summary["evaluation"];
     for (const char* k : {"ape", "rpe"})
-      if (ev.contains(k) && ev[k].contains("trans")) d["summary"]["eval_" + std::string(k) + "_trans"] = ev[k]["trans"];
+      if (ev.contains(k) && ev[k].contains("trans")) d["eval_" + std::string(k) + "_trans"] = ev[k]["trans"];
     if (ev.contains("alignment"))
-      d["summary"]["alignment"] = {{"type", ev["alignment"].value("type", "")},
-                                   {"scale", ev["alignment"].value("scale", 1.0)}};
+      d["alignment"] = {{"type", ev["alignment"].value("type", "")}, {"scale", ev["alignment"].value("scale", 1.0)}};
   }
+  return d;
+}
 
-  // Estimated trajectory (the map's frame).
+// The estimated trajectory (the map's frame), empty without trajectory.tum.
+std::vector<Pose> readEstimate(const fs::path& run) {
   std::vector<Pose> est;
   if (fs::exists(run / "trajectory.tum")) {
     const trajectory::Trajectory t = trajectory::readTum((run / "trajectory.tum").string());
     for (size_t i = 0; i < t.size(); ++i) est.push_back({t.stamps[i], t.poses[i].translation(), t.poses[i].linear()});
   }
+  return est;
+}
 
-  // Ground truth (KITTI layout the summary names) and frame stamps.
+// Ground truth of the KITTI layout the summary names, and its frame stamps; `note` says why there is none.
+struct GroundTruth {
   std::vector<double> times;
-  std::vector<Pose> gt;
-  std::string gt_note;
-  if (summary.contains("dataset_path") && summary["dataset_path"].is_string()) {
-    const fs::path seq = summary["dataset_path"].get<std::string>();
-    times = readTimes(seq / "times.txt");
-    const fs::path poses = seq.parent_path().parent_path() / "poses" / (seq.filename().string() + ".txt");
-    if (fs::exists(poses) && !times.empty()) {
-      const trajectory::Trajectory g = trajectory::readKitti(poses.string());
-      for (size_t i = 0; i < g.size() && i < times.size(); ++i)
-        gt.push_back({times[i], g.poses[i].translation(), g.poses[i].linear()});
-    } else {
-      gt_note = "no ground truth at " + poses.string();
-    }
-  } else {
-    gt_note = "the summary names no KITTI dataset path";
-  }
-  std::vector<double> est_stamps;
-  for (const auto& p : est) est_stamps.push_back(p.stamp);
+  std::vector<Pose> poses;
+  std::string note;
+};
 
-  // Alignment of the run's own evaluation: p_gt = s R p_est + t.
-  double s = 1;
+GroundTruth readGroundTruth(const json& summary) {
+  GroundTruth g;
+  if (!summary.contains("dataset_path") || !summary["dataset_path"].is_string()) {
+    g.note = "the summary names no KITTI dataset path";
+    return g;
+  }
+  const fs::path seq = summary["dataset_path"].get<std::string>();
+  g.times = readTimes(seq / "times.txt");
+  const fs::path poses = seq.parent_path().parent_path() / "poses" / (seq.filename().string() + ".txt");
+  if (fs::exists(poses) && !g.times.empty()) {
+    const trajectory::Trajectory t = trajectory::readKitti(poses.string());
+    for (size_t i = 0; i < t.size() && i < g.times.size(); ++i)
+      g.poses.push_back({g.times[i], t.poses[i].translation(), t.poses[i].linear()});
+  } else {
+    g.note = "no ground truth at " + poses.string();
+  }
+  return g;
+}
+
+// The alignment of the run's own evaluation: p_gt = scale R p_est + t.
+struct Alignment {
+  double scale = 1;
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d tr = Eigen::Vector3d::Zero();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+};
+
+Alignment alignmentOf(const json& summary) {
+  Alignment al;
   if (summary.contains("evaluation") && summary["evaluation"].contains("alignment")) {
     const json& a = summary["evaluation"]["alignment"];
-    s = a.value("scale", 1.0);
+    al.scale = a.value("scale", 1.0);
     for (int i = 0; i < 3; ++i) {
-      tr[i] = a["translation"][i].get<double>();
-      for (int j = 0; j < 3; ++j) R(i, j) = a["rotation"][i][j].get<double>();
+      al.t[i] = a["translation"][i].get<double>();
+      for (int j = 0; j < 3; ++j) al.R(i, j) = a["rotation"][i][j].get<double>();
     }
   }
-  std::vector<double> gt_stamps;
-  for (const auto& p : gt) gt_stamps.push_back(p.stamp);
+  return al;
+}
 
+std::vector<double> stampsOf(const std::vector<Pose>& poses) {
+  std::vector<double> stamps;
+  for (const auto& p : poses) stamps.push_back(p.stamp);
+  return stamps;
+}
+
+// The plotted series: the aligned estimate against the truth (top view), APE and scale over time.
+json seriesData(const std::vector<Pose>& est, const GroundTruth& gt, const Alignment& a) {
+  const std::vector<double> gt_stamps = stampsOf(gt.poses);
   // Paired series: frame index, aligned estimate, ground truth.
   std::vector<long> frame;
   std::vector<Eigen::Vector3d> al, raw, ref;
   for (const auto& p : est) {
-    const long g = gt.empty() ? -1 : nearest(gt_stamps, p.stamp);
+    const long g = gt.poses.empty() ? -1 : nearest(gt_stamps, p.stamp);
     if (g < 0) continue;
     frame.push_back(g);
-    al.push_back(s * (R * p.p) + tr);
+    al.push_back(a.scale * (a.R * p.p) + a.t);
     raw.push_back(p.p);
-    ref.push_back(gt[g].p);
+    ref.push_back(gt.poses[g].p);
   }
   json top = {{"est", json::array()},           {"gt", json::array()},
               {"frame", json::array()},         {"ape", json::array()},
@@ -312,7 +331,7 @@ json runData(const fs::path& run, const std::string& label, size_t max_points, c
     top["est"].push_back({r3(al[k].x()), r3(al[k].z())});
     top["ape"].push_back(r3((al[k] - ref[k]).norm()));
   }
-  for (size_t k : thin(gt.size())) top["gt"].push_back({r3(gt[k].p.x()), r3(gt[k].p.z())});
+  for (size_t k : thin(gt.poses.size())) top["gt"].push_back({r3(gt.poses[k].p.x()), r3(gt.poses[k].p.z())});
   // Scale over time: distance travelled by the estimate over that of the truth, in a window of 20 frames
   // (after the run's alignment, and as run); windows where the truth moved under 1 m are left out.
   constexpr size_t W = 20;
@@ -329,65 +348,69 @@ json runData(const fs::path& run, const std::string& label, size_t max_points, c
     top["scale_frame"].push_back(sf[k]), top["scale_aligned"].push_back(r3(sa[k])),
         top["scale_raw"].push_back(r3(sr[k]));
   top["window"] = W;
-  top["note"] = gt_note;
-  d["series"] = top;
+  top["note"] = gt.note;
+  return top;
+}
 
-  d["timing"] = timingData(run / "timing.csv");
-
-  // Detections per frame and one box per object track (its last observation, in the map's frame).
-  if (fs::exists(run / "objects.txt")) {
-    std::ifstream in(run / "objects.txt");
-    std::map<long, std::array<int, 3>> per_frame;
-    std::map<long, std::pair<long, std::vector<double>>> last;  // track -> (frame, h w l x y z ry)
-    std::map<long, std::string> last_state;
-    std::string line;
-    for (int row = 1; std::getline(in, line); ++row) {
-      std::istringstream ls(line);
-      std::vector<std::string> f;
-      for (std::string w; ls >> w;) f.push_back(w);
-      if (f.size() < 19) continue;
-      const long fr = std::stol(f[0]), track = std::stol(f[1]);
-      const std::string& st = f.back();
-      auto& c = per_frame[fr];
-      c[st == "static" ? 0 : st == "dynamic" ? 1 : 2]++;
-      if (track >= 0) {
-        std::vector<double> b;
-        for (int k = 10; k <= 16; ++k) b.push_back(std::stod(f[k]));
-        last[track] = {fr, b};
-        last_state[track] = st;
-      }
+// Detections per frame (d["counts"]) and one box per object track, its last observation in the map's
+// frame (d["boxes"]), from objects.txt; nothing without it.
+void detectionData(const fs::path& run, const std::vector<double>& times, const std::vector<Pose>& est, json& d) {
+  if (!fs::exists(run / "objects.txt")) return;
+  const std::vector<double> est_stamps = stampsOf(est);
+  std::ifstream in(run / "objects.txt");
+  std::map<long, std::array<int, 3>> per_frame;
+  std::map<long, std::pair<long, std::vector<double>>> last;  // track -> (frame, h w l x y z ry)
+  std::map<long, std::string> last_state;
+  std::string line;
+  for (int row = 1; std::getline(in, line); ++row) {
+    std::istringstream ls(line);
+    std::vector<std::string> f;
+    for (std::string w; ls >> w;) f.push_back(w);
+    if (f.size() < 19) continue;
+    const long fr = std::stol(f[0]), track = std::stol(f[1]);
+    const std::string& st = f.back();
+    auto& c = per_frame[fr];
+    c[st == "static" ? 0 : st == "dynamic" ? 1 : 2]++;
+    if (track >= 0) {
+      std::vector<double> b;
+      for (int k = 10; k <= 16; ++k) b.push_back(std::stod(f[k]));
+      last[track] = {fr, b};
+      last_state[track] = st;
     }
-    json cf = json::array(), cs = json::array(), cd = json::array(), cu = json::array();
-    std::vector<long> frames;
-    for (const auto& kv : per_frame) frames.push_back(kv.first);
-    for (size_t k : thin(frames.size())) {
-      const auto& c = per_frame[frames[k]];
-      cf.push_back(frames[k]), cs.push_back(c[0]), cd.push_back(c[1]), cu.push_back(c[2]);
-    }
-    d["counts"] = {{"frame", cf}, {"static", cs}, {"dynamic", cd}, {"unknown", cu}};
-    json boxes = json::array();
-    for (const auto& [track, fb] : last) {
-      if (fb.first < 0 || fb.first >= static_cast<long>(times.size())) continue;
-      const long e = nearest(est_stamps, times[fb.first]);
-      if (e < 0) continue;
-      const auto& b = fb.second;  // h w l x y z ry, bottom centre in the camera frame
-      json corners = json::array();
-      for (int k = 0; k < 8; ++k) {
-        const double x = (k == 0 || k == 1 || k == 4 || k == 5 ? 0.5 : -0.5) * b[2];
-        const double z = (k == 0 || k == 3 || k == 4 || k == 7 ? 0.5 : -0.5) * b[1];
-        const double y = k < 4 ? 0.0 : -b[0];
-        const Eigen::Vector3d pc = rotY(b[6]) * Eigen::Vector3d(x, y, z) + Eigen::Vector3d(b[3], b[4], b[5]);
-        const Eigen::Vector3d pw = est[e].R * pc + est[e].p;
-        corners.push_back(r2(pw.x())), corners.push_back(r2(pw.y())), corners.push_back(r2(pw.z()));
-      }
-      boxes.push_back({{"track", track}, {"state", last_state[track]}, {"corners", corners}});
-      if (boxes.size() >= 1000) break;
-    }
-    d["boxes"] = boxes;
   }
+  json cf = json::array(), cs = json::array(), cd = json::array(), cu = json::array();
+  std::vector<long> frames;
+  for (const auto& kv : per_frame) frames.push_back(kv.first);
+  for (size_t k : thin(frames.size())) {
+    const auto& c = per_frame[frames[k]];
+    cf.push_back(frames[k]), cs.push_back(c[0]), cd.push_back(c[1]), cu.push_back(c[2]);
+  }
+  d["counts"] = {{"frame", cf}, {"static", cs}, {"dynamic", cd}, {"unknown", cu}};
+  json boxes = json::array();
+  for (const auto& [track, fb] : last) {
+    if (fb.first < 0 || fb.first >= static_cast<long>(times.size())) continue;
+    const long e = nearest(est_stamps, times[fb.first]);
+    if (e < 0) continue;
+    const auto& b = fb.second;  // h w l x y z ry, bottom centre in the camera frame
+    json corners = json::array();
+    for (int k = 0; k < 8; ++k) {
+      const double x = (k == 0 || k == 1 || k == 4 || k == 5 ? 0.5 : -0.5) * b[2];
+      const double z = (k == 0 || k == 3 || k == 4 || k == 7 ? 0.5 : -0.5) * b[1];
+      const double y = k < 4 ? 0.0 : -b[0];
+      const Eigen::Vector3d pc = rotY(b[6]) * Eigen::Vector3d(x, y, z) + Eigen::Vector3d(b[3], b[4], b[5]);
+      const Eigen::Vector3d pw = est[e].R * pc + est[e].p;
+      corners.push_back(r2(pw.x())), corners.push_back(r2(pw.y())), corners.push_back(r2(pw.z()));
+    }
+    boxes.push_back({{"track", track}, {"state", last_state[track]}, {"corners", corners}});
+    if (boxes.size() >= 1000) break;
+  }
+  d["boxes"] = boxes;
+}
 
-  // The 3D view: map points, trajectory, keyframes (camera centres and optical axes), ground truth
-  // brought into the map's frame (inverse of the alignment).
+// The 3D view: map points, trajectory, keyframes (camera centres and optical axes), ground truth
+// brought into the map's frame (inverse of the alignment).
+json viewData(const fs::path& run, const std::vector<Pose>& est, const GroundTruth& gt, const Alignment& a,
+              size_t max_points) {
   json view;
   view["map"] = readMap(run / "map_points.ply", max_points);
   view["objects"] = readObjectMeshes(run);
@@ -405,30 +428,56 @@ json runData(const fs::path& run, const std::string& label, size_t max_points, c
   }
   view["keyframes"] = kfs;
   json gpath = json::array();
-  if (!gt.empty() && s > 0)
-    for (size_t k : thin(gt.size())) {
-      const Eigen::Vector3d q = R.transpose() * (gt[k].p - tr) / s;
+  if (!gt.poses.empty() && a.scale > 0)
+    for (size_t k : thin(gt.poses.size())) {
+      const Eigen::Vector3d q = a.R.transpose() * (gt.poses[k].p - a.t) / a.scale;
       gpath.push_back(r2(q.x())), gpath.push_back(r2(q.y())), gpath.push_back(r2(q.z()));
     }
   view["ground_truth"] = gpath;
-  d["view"] = view;
+  return view;
+}
 
-  // Sample frames the runner drew (masks and features), copied beside the report.
+// Sample frames the runner drew (masks and features), copied beside the report; their paths from it.
+json sampleData(const fs::path& run, const fs::path& samples_out, const std::string& samples_rel) {
   json samples = json::array();
-  if (fs::is_directory(run / "samples")) {
-    std::vector<fs::path> pngs;
-    for (const auto& e : fs::directory_iterator(run / "samples"))
-      if (e.path().extension() == ".png" || e.path().extension() == ".jpg" || e.path().extension() == ".jpeg")
-        pngs.push_back(e.path());
-    std::sort(pngs.begin(), pngs.end());
-    const size_t step = std::max<size_t>(1, (pngs.size() + kMaxSamples - 1) / kMaxSamples);
-    if (!pngs.empty()) makeDirectories(samples_out.string());
-    for (size_t i = 0; i < pngs.size(); i += step) {
-      writeFileAtomic((samples_out / pngs[i].filename()).string(), readFile(pngs[i].string()));
-      samples.push_back(samples_rel + "/" + pngs[i].filename().string());
-    }
+  if (!fs::is_directory(run / "samples")) return samples;
+  std::vector<fs::path> pngs;
+  for (const auto& e : fs::directory_iterator(run / "samples"))
+    if (e.path().extension() == ".png" || e.path().extension() == ".jpg" || e.path().extension() == ".jpeg")
+      pngs.push_back(e.path());
+  std::sort(pngs.begin(), pngs.end());
+  const size_t step = std::max<size_t>(1, (pngs.size() + kMaxSamples - 1) / kMaxSamples);
+  if (!pngs.empty()) makeDirectories(samples_out.string());
+  for (size_t i = 0; i < pngs.size(); i += step) {
+    writeFileAtomic((samples_out / pngs[i].filename()).string(), readFile(pngs[i].string()));
+    samples.push_back(samples_rel + "/" + pngs[i].filename().string());
   }
-  d["samples"] = samples;
+  return samples;
+}
+
+}  // namespace
+
+// The report data of one run (folder `run`): see the header for what it holds.
+json runData(const fs::path& run, const std::string& label, size_t max_points, const fs::path& samples_out,
+             const std::string& samples_rel, std::vector<std::string>* warnings = nullptr) {
+  const fs::path summary_path = run / "summary.json";
+  json summary;
+  try {
+    summary = json::parse(readFile(summary_path.string()));
+  } catch (const json::exception& e) {
+    throwAt(summary_path.string(), std::string("not a run summary: ") + e.what());
+  }
+  json d = {{"label", label}, {"dir", fs::absolute(run).lexically_normal().string()}};
+  const json shown = summaryData(run, summary, warnings);
+  if (!shown.is_null()) d["summary"] = shown;
+  const std::vector<Pose> est = readEstimate(run);
+  const GroundTruth gt = readGroundTruth(summary);
+  const Alignment alignment = alignmentOf(summary);
+  d["series"] = seriesData(est, gt, alignment);
+  d["timing"] = timingData(run / "timing.csv");
+  detectionData(run, gt.times, est, d);
+  d["view"] = viewData(run, est, gt, alignment, max_points);
+  d["samples"] = sampleData(run, samples_out, samples_rel);
   return d;
 }
 
