@@ -24,13 +24,13 @@
 #include <string>
 #include <vector>
 
-#include "beslam/common/cli_args.hpp"
 #include "beslam/datasets/image_io.hpp"
 #include "beslam/datasets/kitti_calib.hpp"
 #include "beslam/datasets/labels.hpp"
 #include "beslam/datasets/velodyne.hpp"
 #include "beslam/mask_common/mask_builder.hpp"
 #include "beslam/mask_common/score.hpp"
+#include "beslam/sdk/cli_args.hpp"
 #include "beslam/sdk/detector.hpp"
 
 namespace fs = std::filesystem;

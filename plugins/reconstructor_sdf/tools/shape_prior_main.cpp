@@ -18,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include "beslam/common/cli_args.hpp"
 #include "beslam/formats/error.hpp"
+#include "beslam/sdk/cli_args.hpp"
 #include "car_set.hpp"
 #include "fit/object_fit.hpp"
 #include "shape/shape_prior.hpp"

@@ -15,10 +15,10 @@
 #include <sstream>
 
 #include "beslam/bench/bench.hpp"
-#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/report/report.hpp"
+#include "beslam/sdk/cli_args.hpp"
 
 extern char** environ;
 namespace fs = std::filesystem;
