@@ -29,7 +29,6 @@
 #include <vector>
 
 #include "beslam/bench/bench.hpp"
-#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/interrupt.hpp"
 #include "beslam/eval/eval.hpp"
@@ -39,6 +38,7 @@
 #include "beslam/pipeline/spec.hpp"
 #include "beslam/registry/registry.hpp"
 #include "beslam/report/report.hpp"
+#include "beslam/sdk/cli_args.hpp"
 #include "beslam/static_map/score.hpp"
 #ifdef BESLAM_WITH_SIM
 #include "beslam/sim/synth.hpp"

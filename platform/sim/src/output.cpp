@@ -15,10 +15,10 @@
 #include <sstream>
 #include <thread>
 
-#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/common/yaml_set.hpp"
+#include "beslam/sdk/cli_args.hpp"
 #include "beslam/sim/synth.hpp"
 #include "presets.hpp"
 #include "world.hpp"

@@ -7,10 +7,10 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/datasets/labels.hpp"
+#include "beslam/sdk/cli_args.hpp"
 #include "beslam/static_map/score.hpp"
 #include "beslam/static_map/static_map.hpp"
 #include "beslam/trajectory/trajectory.hpp"

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "beslam/common/cli_args.hpp"
+#include "beslam/sdk/cli_args.hpp"
 #include "features/orb_extractor.hpp"
 #include "place/vocabulary.hpp"
 

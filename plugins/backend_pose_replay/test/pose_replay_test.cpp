@@ -9,7 +9,7 @@
 #include <map>
 #include <memory>
 
-#include "beslam/common/error.hpp"
+#include "beslam/formats/error.hpp"
 #include "beslam/test/plugin_harness.hpp"
 #include "beslam/test/temp_dir.hpp"
 

@@ -13,8 +13,8 @@
 #include <random>
 #include <string>
 
-#include "beslam/datasets/kitti_calib.hpp"
-#include "beslam/datasets/labels.hpp"
+#include "beslam/formats/kitti_calib.hpp"
+#include "beslam/formats/labels.hpp"
 #include "beslam/sdk/views.hpp"
 #include "beslam/test/abi_harness.hpp"
 
@@ -39,8 +39,8 @@ bool haveObject() {
 bool haveSeq06() { return fs::exists(kSeq06 + "/image_0/000020.png") && fs::exists(kSeq06 + "/calib.txt"); }
 
 beslam_camera seq06Camera(const cv::Mat& image) {
-  const beslam::datasets::KittiCalib calib = beslam::datasets::readOdometryCalib(kSeq06 + "/calib.txt");
-  const beslam::datasets::Camera c = beslam::datasets::cameraFromProjection(*calib.P[0], image.cols, image.rows, "P0");
+  const beslam::formats::KittiCalib calib = beslam::formats::readOdometryCalib(kSeq06 + "/calib.txt");
+  const beslam::formats::Camera c = beslam::formats::cameraFromProjection(*calib.P[0], image.cols, image.rows, "P0");
   return {sizeof(beslam_camera), c.width, c.height, 0, c.fx, c.fy, c.cx, c.cy};
 }
 
@@ -114,14 +114,14 @@ TEST(ImageDetector, Kitti000008LiftedDistancesAgainstLabels) {
   if (!haveObject()) GTEST_SKIP() << "KITTI object 000008 not found under " << kObject << " (shared data absent)";
   const cv::Mat image = cv::imread(kObject + "/image_2/000008.png", cv::IMREAD_COLOR);
   ASSERT_FALSE(image.empty());
-  const beslam::datasets::KittiCalib calib = beslam::datasets::readObjectCalib(kObject + "/calib/000008.txt");
-  const beslam::datasets::Camera c = beslam::datasets::cameraFromProjection(*calib.P[2], image.cols, image.rows, "P2");
+  const beslam::formats::KittiCalib calib = beslam::formats::readObjectCalib(kObject + "/calib/000008.txt");
+  const beslam::formats::Camera c = beslam::formats::cameraFromProjection(*calib.P[2], image.cols, image.rows, "P2");
   DnnOptions dnn;
   dnn.model = kCfg, dnn.weights = kWeights;
   Detector2D detector(dnn);
   const GroundLifter lifter({sizeof(beslam_camera), c.width, c.height, 0, c.fx, c.fy, c.cx, c.cy}, LiftOptions{});
-  const std::vector<beslam::datasets::ObjectLabel> labels =
-      beslam::datasets::readObjectLabels(kObject + "/label_2/000008.txt");
+  const std::vector<beslam::formats::ObjectLabel> labels =
+      beslam::formats::readObjectLabels(kObject + "/label_2/000008.txt");
   std::vector<double> errors;
   int flagged = 0, cars = 0;
   for (const Detection2D& d : detector.detect(image)) {
@@ -133,7 +133,7 @@ TEST(ImageDetector, Kitti000008LiftedDistancesAgainstLabels) {
       continue;
     }
     double best_iou = 0;
-    const beslam::datasets::ObjectLabel* match = nullptr;
+    const beslam::formats::ObjectLabel* match = nullptr;
     for (const auto& l : labels) {
       if (l.type != "Car") continue;
       const cv::Rect2d r(l.x1, l.y1, l.x2 - l.x1, l.y2 - l.y1);
@@ -167,7 +167,7 @@ LabelScore scoreOn000008(const DnnOptions& dnn) {
   Detector2D detector(dnn);
   const std::vector<Detection2D> detections = detector.detect(image);
   LabelScore score;
-  for (const auto& l : beslam::datasets::readObjectLabels(kObject + "/label_2/000008.txt")) {
+  for (const auto& l : beslam::formats::readObjectLabels(kObject + "/label_2/000008.txt")) {
     if (l.type != "Car") continue;
     ++score.labels;
     const cv::Rect2d r(l.x1, l.y1, l.x2 - l.x1, l.y2 - l.y1);

@@ -16,12 +16,12 @@
 #include <string>
 #include <vector>
 
-#include "beslam/datasets/kitti_calib.hpp"
-#include "beslam/datasets/labels.hpp"
 #include "beslam/detector_image/image_detector.hpp"
+#include "beslam/formats/kitti_calib.hpp"
+#include "beslam/formats/labels.hpp"
 
 namespace fs = std::filesystem;
-namespace ds = beslam::datasets;
+namespace formats = beslam::formats;
 using namespace beslam::detector_image;
 
 int main(int argc, char** argv) {
@@ -41,20 +41,20 @@ int main(int argc, char** argv) {
     lift.camera_height = argc > 6 ? std::stod(argv[6]) : 1.65;
     if (argc > 7) dnn.score_threshold = std::stod(argv[7]);
     const std::string image_dir = fs::is_directory(folder + "/image_2") ? folder + "/image_2" : folder + "/image_0";
-    const auto entries = ds::readCalibEntries(folder + "/calib.txt", {"P0", "P1", "P2", "P3", "Tr"});
+    const auto entries = formats::readCalibEntries(folder + "/calib.txt", {"P0", "P1", "P2", "P3", "Tr"});
     const auto p = entries.count("P2") && image_dir.back() == '2' ? entries.at("P2") : entries.at("P0");
-    ds::Matrix34d P;
+    formats::Matrix34d P;
     for (int i = 0; i < 12; ++i) P(i / 4, i % 4) = p.values.at(static_cast<size_t>(i));
     std::vector<fs::path> images;
     for (const auto& e : fs::directory_iterator(image_dir)) images.push_back(e.path());
     std::sort(images.begin(), images.end());
     if (images.empty()) throw std::runtime_error(image_dir + ": no images");
     const cv::Mat first = cv::imread(images.front().string(), cv::IMREAD_COLOR);
-    const ds::Camera c = ds::cameraFromProjection(P, first.cols, first.rows, "P");
+    const formats::Camera c = formats::cameraFromProjection(P, first.cols, first.rows, "P");
     Detector2D detector(dnn);
     const GroundLifter lifter({sizeof(beslam_camera), c.width, c.height, 0, c.fx, c.fy, c.cx, c.cy}, lift);
-    std::map<int64_t, std::vector<ds::ObjectLabel>> labels;
-    for (const ds::TrackingLabel& l : ds::readTrackingLabels(labels_path))
+    std::map<int64_t, std::vector<formats::ObjectLabel>> labels;
+    for (const formats::TrackingLabel& l : formats::readTrackingLabels(labels_path))
       if (l.object.type == "Car") labels[l.frame].push_back(l.object);
     std::vector<double> errors;
     int truth = 0, found = 0, flagged_matches = 0;
@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
       for (const Detection2D& d : detector.detect(image))
         if (d.class_id == BESLAM_CLASS_CAR) boxes.push_back(lifter.lift(d)), rects.push_back(d.box);
       std::vector<bool> used(boxes.size(), false);
-      for (const ds::ObjectLabel& l : labels[frame]) {
+      for (const formats::ObjectLabel& l : labels[frame]) {
         const double distance = std::hypot(l.p_cam_bottom.x(), l.p_cam_bottom.z());
         if (distance > max_distance) continue;
         ++truth;

@@ -6,7 +6,7 @@
 
 namespace beslam::detector_lidar::eval {
 
-beslam_box3d labelToBox(const datasets::ObjectLabel& label, int32_t class_id) {
+beslam_box3d labelToBox(const formats::ObjectLabel& label, int32_t class_id) {
   beslam_box3d box{};
   box.class_id = class_id;
   box.track_id = -1;

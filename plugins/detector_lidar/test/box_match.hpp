@@ -6,12 +6,12 @@
 #include <vector>
 
 #include "beslam/data.h"
-#include "beslam/datasets/labels.hpp"
+#include "beslam/formats/labels.hpp"
 
 namespace beslam::detector_lidar::eval {
 
 // A label as an ABI box: centre lifted from KITTI's bottom centre by half the height.
-beslam_box3d labelToBox(const datasets::ObjectLabel& label, int32_t class_id);
+beslam_box3d labelToBox(const formats::ObjectLabel& label, int32_t class_id);
 
 // BEV (x, z) distance between two box centres.
 double bevDistance(const beslam_box3d& a, const beslam_box3d& b);

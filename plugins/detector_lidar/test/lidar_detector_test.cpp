@@ -10,10 +10,10 @@
 #include <limits>
 #include <string>
 
-#include "beslam/datasets/image_io.hpp"
-#include "beslam/datasets/kitti_calib.hpp"
-#include "beslam/datasets/labels.hpp"
-#include "beslam/datasets/velodyne.hpp"
+#include "beslam/formats/image_io.hpp"
+#include "beslam/formats/kitti_calib.hpp"
+#include "beslam/formats/labels.hpp"
+#include "beslam/formats/velodyne.hpp"
 #include "beslam/sdk/views.hpp"
 #include "beslam/test/abi_harness.hpp"
 #include "box_match.hpp"
@@ -42,15 +42,15 @@ struct KittiFrame {
 };
 
 KittiFrame loadKitti000008() {
-  namespace ds = beslam::datasets;
+  namespace formats = beslam::formats;
   KittiFrame f;
-  const ds::KittiCalib calib = ds::readObjectCalib(kObjectRoot + "/calib/000008.txt");
-  f.T_cam_lidar = *ds::T_cami_velo(calib, 2);
-  const cv::Size size = ds::readImageSize(kObjectRoot + "/image_2/000008.png");
-  const ds::Camera cam = ds::cameraFromProjection(*calib.P[2], size.width, size.height, "P2");
+  const formats::KittiCalib calib = formats::readObjectCalib(kObjectRoot + "/calib/000008.txt");
+  f.T_cam_lidar = *formats::T_cami_velo(calib, 2);
+  const cv::Size size = formats::readImageSize(kObjectRoot + "/image_2/000008.png");
+  const formats::Camera cam = formats::cameraFromProjection(*calib.P[2], size.width, size.height, "P2");
   f.camera = {sizeof(beslam_camera), cam.width, cam.height, 0, cam.fx, cam.fy, cam.cx, cam.cy};
-  f.scan = ds::readVelodyneBin(kObjectRoot + "/velodyne/000008.bin");
-  for (const ds::ObjectLabel& label : ds::readObjectLabels(kObjectRoot + "/label_2/000008.txt"))
+  f.scan = formats::readVelodyneBin(kObjectRoot + "/velodyne/000008.bin");
+  for (const formats::ObjectLabel& label : formats::readObjectLabels(kObjectRoot + "/label_2/000008.txt"))
     if (label.type == "Car") f.cars.push_back(eval::labelToBox(label, BESLAM_CLASS_CAR));
   return f;
 }

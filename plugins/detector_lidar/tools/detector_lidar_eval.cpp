@@ -25,16 +25,16 @@
 #include <string>
 #include <vector>
 
-#include "beslam/datasets/image_io.hpp"
-#include "beslam/datasets/kitti_calib.hpp"
-#include "beslam/datasets/labels.hpp"
-#include "beslam/datasets/velodyne.hpp"
 #include "beslam/detector_lidar/lidar_detector.hpp"
+#include "beslam/formats/image_io.hpp"
+#include "beslam/formats/kitti_calib.hpp"
+#include "beslam/formats/labels.hpp"
+#include "beslam/formats/velodyne.hpp"
 #include "box_match.hpp"
 #include "synthetic_scan.hpp"
 
 namespace fs = std::filesystem;
-namespace ds = beslam::datasets;
+namespace formats = beslam::formats;
 namespace eval = beslam::detector_lidar::eval;
 
 namespace {
@@ -210,15 +210,15 @@ int main(int argc, char** argv) {
     if (mode == "object") {
       const std::string root = argv[2], index = argv[3];
       const double match = argc > 4 ? std::stod(argv[4]) : 0.5;
-      const ds::KittiCalib calib = ds::readObjectCalib(root + "/calib/" + index + ".txt");
-      const cv::Size size = ds::readImageSize(root + "/image_2/" + index + ".png");
-      const ds::Camera c = ds::cameraFromProjection(*calib.P[2], size.width, size.height, "P2");
+      const formats::KittiCalib calib = formats::readObjectCalib(root + "/calib/" + index + ".txt");
+      const cv::Size size = formats::readImageSize(root + "/image_2/" + index + ".png");
+      const formats::Camera c = formats::cameraFromProjection(*calib.P[2], size.width, size.height, "P2");
       const beslam::detector_lidar::LidarDetector detector(
-          options, *ds::T_cami_velo(calib, 2),
+          options, *formats::T_cami_velo(calib, 2),
           beslam_camera{sizeof(beslam_camera), c.width, c.height, 0, c.fx, c.fy, c.cx, c.cy});
-      const std::vector<float> scan = ds::readVelodyneBin(root + "/velodyne/" + index + ".bin");
+      const std::vector<float> scan = formats::readVelodyneBin(root + "/velodyne/" + index + ".bin");
       std::vector<beslam_box3d> truth;
-      for (const ds::ObjectLabel& l : ds::readObjectLabels(root + "/label_2/" + index + ".txt"))
+      for (const formats::ObjectLabel& l : formats::readObjectLabels(root + "/label_2/" + index + ".txt"))
         if (l.type == "Car") truth.push_back(eval::labelToBox(l, BESLAM_CLASS_CAR));
       Totals totals;
       for (int warm = 0; warm < 4; ++warm) timedDetect(detector, scan, totals);  // timing: one frame, five runs
@@ -260,16 +260,16 @@ int main(int argc, char** argv) {
       const std::string folder = argv[2], labels = argv[3];
       const double max_distance = argc > 4 ? std::stod(argv[4]) : 30.0;
       const double match = argc > 5 ? std::stod(argv[5]) : 0.5;
-      const auto entries = ds::readCalibEntries(folder + "/calib.txt", {"P0", "P1", "P2", "P3", "Tr"});
-      auto find = [&](std::initializer_list<const char*> names) -> const ds::CalibEntry* {
+      const auto entries = formats::readCalibEntries(folder + "/calib.txt", {"P0", "P1", "P2", "P3", "Tr"});
+      auto find = [&](std::initializer_list<const char*> names) -> const formats::CalibEntry* {
         for (const char* n : names) {
           auto it = entries.find(n);
           if (it != entries.end()) return &it->second;
         }
         return nullptr;
       };
-      const ds::CalibEntry* tr = find({"Tr_velo_to_cam", "Tr_velo_cam", "Tr"});
-      const ds::CalibEntry* p = find({"P2", "P0"});
+      const formats::CalibEntry* tr = find({"Tr_velo_to_cam", "Tr_velo_cam", "Tr"});
+      const formats::CalibEntry* p = find({"P2", "P0"});
       if (tr == nullptr || tr->values.size() != 12 || p == nullptr || p->values.size() != 12) {
         std::fprintf(stderr, "%s/calib.txt: needs Tr_velo_to_cam (or Tr) and P2 (or P0) with 12 values\n",
                      folder.c_str());
@@ -277,28 +277,28 @@ int main(int argc, char** argv) {
       }
       Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
       for (int i = 0; i < 12; ++i) T.matrix()(i / 4, i % 4) = tr->values[static_cast<size_t>(i)];
-      if (const ds::CalibEntry* r0 = find({"R0_rect", "R_rect"}); r0 != nullptr && r0->values.size() == 9) {
+      if (const formats::CalibEntry* r0 = find({"R0_rect", "R_rect"}); r0 != nullptr && r0->values.size() == 9) {
         Eigen::Isometry3d R = Eigen::Isometry3d::Identity();
         R.linear() = rows3(r0->values);
         T = R * T;
       }
-      ds::Matrix34d P;
+      formats::Matrix34d P;
       for (int i = 0; i < 12; ++i) P(i / 4, i % 4) = p->values[static_cast<size_t>(i)];
-      T = ds::T_cami_rect0(P) * T;
+      T = formats::T_cami_rect0(P) * T;
       std::optional<beslam_camera> camera;
       for (const char* dir : {"image_2", "image_0"}) {
         if (!fs::is_directory(folder + "/" + dir)) continue;
         std::vector<fs::path> images;
         for (const auto& e : fs::directory_iterator(folder + "/" + dir)) images.push_back(e.path());
         if (images.empty()) continue;
-        const cv::Size size = ds::readImageSize(std::min_element(images.begin(), images.end())->string());
-        const ds::Camera c = ds::cameraFromProjection(P, size.width, size.height, "P");
+        const cv::Size size = formats::readImageSize(std::min_element(images.begin(), images.end())->string());
+        const formats::Camera c = formats::cameraFromProjection(P, size.width, size.height, "P");
         camera = beslam_camera{sizeof(beslam_camera), c.width, c.height, 0, c.fx, c.fy, c.cx, c.cy};
         break;
       }
       const beslam::detector_lidar::LidarDetector detector(options, T, camera);
       std::map<int64_t, std::vector<beslam_box3d>> truth;
-      for (const ds::TrackingLabel& l : ds::readTrackingLabels(labels))
+      for (const formats::TrackingLabel& l : formats::readTrackingLabels(labels))
         if (l.object.type == "Car") truth[l.frame].push_back(eval::labelToBox(l.object, BESLAM_CLASS_CAR));
       std::vector<fs::path> scans;
       for (const auto& e : fs::directory_iterator(folder + "/velodyne"))
@@ -307,7 +307,7 @@ int main(int argc, char** argv) {
       Totals totals;
       for (const fs::path& s : scans) {
         const int64_t frame = std::stoll(s.stem().string());
-        const std::vector<float> scan = ds::readVelodyneBin(s.string());
+        const std::vector<float> scan = formats::readVelodyneBin(s.string());
         std::vector<Eigen::Vector3d> p_cam;
         if (std::getenv("BESLAM_EVAL_VERBOSE") != nullptr)
           for (size_t i = 0; i + 3 < scan.size(); i += 4)

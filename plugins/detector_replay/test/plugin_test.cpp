@@ -6,7 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "beslam/common/error.hpp"
+#include "beslam/formats/error.hpp"
 #include "beslam/test/plugin_harness.hpp"
 #include "beslam/test/temp_dir.hpp"
 

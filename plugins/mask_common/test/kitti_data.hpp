@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "beslam/datasets/kitti_calib.hpp"
-#include "beslam/datasets/labels.hpp"
-#include "beslam/datasets/velodyne.hpp"
+#include "beslam/formats/kitti_calib.hpp"
+#include "beslam/formats/labels.hpp"
+#include "beslam/formats/velodyne.hpp"
 #include "beslam/mask_common/lidar.hpp"
 #include "beslam/sdk/detector.hpp"
 
@@ -28,18 +28,18 @@ struct Camera0Scan {
 };
 inline Camera0Scan camera0Scan000008() {
   const std::string dir = kittiObjectDir();
-  const datasets::KittiCalib calib = datasets::readObjectCalib(dir + "/calib/000008.txt");
-  const std::vector<float> scan = datasets::readVelodyneBin(dir + "/velodyne/000008.bin");
-  const datasets::Camera cam = datasets::cameraFromProjection(*calib.P[0], 1242, 375, "P0");
+  const formats::KittiCalib calib = formats::readObjectCalib(dir + "/calib/000008.txt");
+  const std::vector<float> scan = formats::readVelodyneBin(dir + "/velodyne/000008.bin");
+  const formats::Camera cam = formats::cameraFromProjection(*calib.P[0], 1242, 375, "P0");
   Camera0Scan out;
   out.K.fx = cam.fx, out.K.fy = cam.fy, out.K.cx = cam.cx, out.K.cy = cam.cy;
   out.K.width = cam.width, out.K.height = cam.height;
-  out.pts = lidarToCamera(scan.data(), scan.size() / 4, 4, *datasets::T_cami_velo(calib, 0), out.K, 0.5, 120);
+  out.pts = lidarToCamera(scan.data(), scan.size() / 4, 4, *formats::T_cami_velo(calib, 0), out.K, 0.5, 120);
   return out;
 }
 
 // A KITTI label (bottom centre) as an ABI box (geometric centre).
-inline beslam_box3d boxFromLabel(const datasets::ObjectLabel& l, int id) {
+inline beslam_box3d boxFromLabel(const formats::ObjectLabel& l, int id) {
   beslam_box3d b = sdk::newBox();
   b.class_id = BESLAM_CLASS_CAR;
   b.track_id = id;

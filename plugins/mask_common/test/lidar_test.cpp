@@ -20,13 +20,13 @@ using namespace beslam::mask;
 TEST(LidarChain, MatchesKittiProjectionOf000008) {
   if (!fixture::haveKitti000008()) GTEST_SKIP() << "KITTI object 000008 not in " << fixture::kittiObjectDir();
   const std::string dir = fixture::kittiObjectDir();
-  const datasets::KittiCalib calib = datasets::readObjectCalib(dir + "/calib/000008.txt");
-  const std::vector<float> scan = datasets::readVelodyneBin(dir + "/velodyne/000008.bin");
+  const formats::KittiCalib calib = formats::readObjectCalib(dir + "/calib/000008.txt");
+  const std::vector<float> scan = formats::readVelodyneBin(dir + "/velodyne/000008.bin");
   ASSERT_GT(scan.size(), 4000u);
-  const datasets::Camera cam = datasets::cameraFromProjection(*calib.P[2], 1242, 375, "P2");
+  const formats::Camera cam = formats::cameraFromProjection(*calib.P[2], 1242, 375, "P2");
   Intrinsics K;
   K.fx = cam.fx, K.fy = cam.fy, K.cx = cam.cx, K.cy = cam.cy, K.width = cam.width, K.height = cam.height;
-  const Eigen::Isometry3d T = *datasets::T_cami_velo(calib, 2);
+  const Eigen::Isometry3d T = *formats::T_cami_velo(calib, 2);
   const CameraPoints pts = lidarToCamera(scan.data(), scan.size() / 4, 4, T, K, 0.5, 120);
   ASSERT_GT(pts.size(), 1000u);
   // Hand-composed KITTI chain: x = P2 * R0_rect * Tr_velo_to_cam * X (homogeneous), u = x0/x2, v = x1/x2.
@@ -63,7 +63,7 @@ TEST(LidarChain, LabelledCarsOf000008HoldTheirPoints) {
   // Labels are in rectified camera 0: the chain up to R0_rect.
   const CameraPoints pts = fixture::camera0Scan000008().pts;
   int id = 0, cars = 0;
-  for (const auto& l : datasets::readObjectLabels(dir + "/label_2/000008.txt")) {
+  for (const auto& l : formats::readObjectLabels(dir + "/label_2/000008.txt")) {
     if (l.type != "Car") continue;
     ++cars;
     const beslam_box3d b = fixture::boxFromLabel(l, id++);

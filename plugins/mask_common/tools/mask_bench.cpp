@@ -24,13 +24,13 @@
 #include <string>
 #include <vector>
 
-#include "beslam/common/cli_args.hpp"
-#include "beslam/datasets/image_io.hpp"
-#include "beslam/datasets/kitti_calib.hpp"
-#include "beslam/datasets/labels.hpp"
-#include "beslam/datasets/velodyne.hpp"
+#include "beslam/formats/image_io.hpp"
+#include "beslam/formats/kitti_calib.hpp"
+#include "beslam/formats/labels.hpp"
+#include "beslam/formats/velodyne.hpp"
 #include "beslam/mask_common/mask_builder.hpp"
 #include "beslam/mask_common/score.hpp"
+#include "beslam/sdk/cli_args.hpp"
 #include "beslam/sdk/detector.hpp"
 
 namespace fs = std::filesystem;
@@ -143,7 +143,7 @@ mask::MaskOptions variantOptions(const std::string& variant) {
 
 // Oracle boxes of one frame from its labels and motion flags (DontCare skipped), moved and turned like a
 // detector's error when perturb_m or perturb_deg is set.
-std::vector<beslam_box3d> oracleBoxes(const std::vector<datasets::TrackingLabel>& frame_labels,
+std::vector<beslam_box3d> oracleBoxes(const std::vector<formats::TrackingLabel>& frame_labels,
                                       const std::map<std::pair<int64_t, int64_t>, bool>& moving, int64_t frame,
                                       double perturb_m, double perturb_deg) {
   std::vector<beslam_box3d> boxes;
@@ -207,15 +207,15 @@ int generate(CommandOptions& o, const mask::ScoreOptions& so, const std::string&
   const std::string variant = o.need("variant");
   const mask::MaskOptions mo = variantOptions(variant);
   const fs::path seq(sequence);
-  const datasets::KittiCalib calib = datasets::readObjectCalib((seq / "calib.txt").string());
+  const formats::KittiCalib calib = formats::readObjectCalib((seq / "calib.txt").string());
   if (!calib.P[0]) throw std::runtime_error((seq / "calib.txt").string() + ": no P0");
   int cam_index = 0;
   const std::vector<fs::path> images = sequenceImages(seq, cam_index);
-  const cv::Size size = datasets::readImageSize(images.front().string());
-  const datasets::Camera cam = datasets::cameraFromProjection(*calib.P[cam_index], size.width, size.height, "P");
+  const cv::Size size = formats::readImageSize(images.front().string());
+  const formats::Camera cam = formats::cameraFromProjection(*calib.P[cam_index], size.width, size.height, "P");
   mask::Intrinsics K;
   K.fx = cam.fx, K.fy = cam.fy, K.cx = cam.cx, K.cy = cam.cy, K.width = cam.width, K.height = cam.height;
-  const std::optional<Eigen::Isometry3d> T = datasets::T_cami_velo(calib, cam_index);
+  const std::optional<Eigen::Isometry3d> T = formats::T_cami_velo(calib, cam_index);
   if (mo.use_lidar && !T)
     throw std::runtime_error((seq / "calib.txt").string() + ": no Tr_velo_to_cam for a LiDAR variant");
   const mask::MaskBuilder builder(K, T, mo);
@@ -224,8 +224,8 @@ int generate(CommandOptions& o, const mask::ScoreOptions& so, const std::string&
   for (const auto& e : fs::directory_iterator(seq / "label_02"))
     if (e.path().extension() == ".txt") label_file = e.path().string();
   if (label_file.empty()) throw std::runtime_error((seq / "label_02").string() + ": no label file");
-  std::map<int64_t, std::vector<datasets::TrackingLabel>> labels;
-  for (auto& l : datasets::readTrackingLabels(label_file)) labels[l.frame].push_back(std::move(l));
+  std::map<int64_t, std::vector<formats::TrackingLabel>> labels;
+  for (auto& l : formats::readTrackingLabels(label_file)) labels[l.frame].push_back(std::move(l));
   const auto moving = mask::readObjectMotionIfPresent((seq / "objects_motion.txt").string());
 
   const double perturb_m = o.num("perturb-m", 0), perturb_deg = o.num("perturb-deg", 0);
@@ -235,10 +235,10 @@ int generate(CommandOptions& o, const mask::ScoreOptions& so, const std::string&
   for (const fs::path& image : images) {
     const int64_t frame = std::stoll(image.stem().string());
     if (frame < so.first || (so.last >= 0 && frame > so.last)) continue;
-    const datasets::LoadedImage img = datasets::loadImage(image.string(), false);
+    const formats::LoadedImage img = formats::loadImage(image.string(), false);
     std::vector<float> scan;
     const fs::path scan_path = seq / "velodyne" / (frameName(frame) + ".bin");
-    if (mo.use_lidar && fs::exists(scan_path)) scan = datasets::readVelodyneBin(scan_path.string());
+    if (mo.use_lidar && fs::exists(scan_path)) scan = formats::readVelodyneBin(scan_path.string());
     const std::vector<beslam_box3d> boxes = oracleBoxes(labels[frame], moving, frame, perturb_m, perturb_deg);
     beslam_point_cloud_view view{};
     if (!scan.empty()) view.data = scan.data(), view.count = scan.size() / 4, view.stride_bytes = 16;

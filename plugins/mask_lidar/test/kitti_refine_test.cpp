@@ -18,7 +18,7 @@ TEST(KittiRefine, PerturbedBoxesMoveBackToTheLabels) {
 
   double before_t = 0, after_t = 0, before_r = 0, after_r = 0;
   int n = 0, id = 0, improved = 0;
-  for (const auto& l : datasets::readObjectLabels(dir + "/label_2/000008.txt")) {
+  for (const auto& l : formats::readObjectLabels(dir + "/label_2/000008.txt")) {
     if (l.type != "Car") continue;
     const beslam_box3d truth = fixture::boxFromLabel(l, id++);
     // Eight perturbations: 0.5 m in eight BEV directions, yaw +-10 degrees alternating.

@@ -7,10 +7,10 @@
 #include <map>
 #include <stdexcept>
 
-#include "beslam/datasets/labels.hpp"
 #include "beslam/detector_replay/replay.hpp"
+#include "beslam/formats/labels.hpp"
+#include "beslam/formats/trajectory.hpp"
 #include "beslam/motion/hungarian.hpp"
-#include "beslam/trajectory/trajectory.hpp"
 
 namespace beslam::motion {
 
@@ -50,7 +50,7 @@ enum class Truth { moving, parked, unscored };
 
 struct SequenceData {
   std::string seq;
-  trajectory::Trajectory poses;
+  formats::Trajectory poses;
   detector_replay::DetectionTable table;
   std::vector<std::vector<LabelBox>> frame_labels;
   std::map<int64_t, std::map<int64_t, Eigen::Vector2d>> track_world;  // track -> frame -> BEV
@@ -64,8 +64,8 @@ SequenceDataPtr loadSequence(const EvalOptions& o, const std::string& seq) {
   const fs::path root(o.root);
   SequenceDataPtr data(new SequenceData);
   data->seq = seq;
-  data->poses = trajectory::readKitti((root / o.poses / (seq + ".txt")).string());
-  const trajectory::Trajectory& poses = data->poses;
+  data->poses = formats::readKitti((root / o.poses / (seq + ".txt")).string());
+  const formats::Trajectory& poses = data->poses;
 
   // Detections: every class file present (the tracker sees pedestrians and cyclists too, as in a pipeline).
   DetectionTable& table = data->table;
@@ -82,8 +82,8 @@ SequenceDataPtr loadSequence(const EvalOptions& o, const std::string& seq) {
   if (files == 0) throw std::runtime_error((root / o.detections).string() + ": no detection files for sequence " + seq);
 
   // Labels: cars (Car, Van) per frame, and each track's world BEV position per frame.
-  const std::vector<datasets::TrackingLabel> labels =
-      datasets::readTrackingLabels((root / o.labels / (seq + ".txt")).string());
+  const std::vector<formats::TrackingLabel> labels =
+      formats::readTrackingLabels((root / o.labels / (seq + ".txt")).string());
   const int64_t n_frames = static_cast<int64_t>(poses.size());
   auto& frame_labels = data->frame_labels;
   frame_labels.resize(static_cast<size_t>(n_frames));
@@ -102,7 +102,7 @@ SequenceDataPtr loadSequence(const EvalOptions& o, const std::string& seq) {
 
 EvalCounts evaluateLoaded(const EvalOptions& o, const SequenceData& data) {
   const std::string& seq = data.seq;
-  const trajectory::Trajectory& poses = data.poses;
+  const formats::Trajectory& poses = data.poses;
   const detector_replay::DetectionTable& table = data.table;
   const auto& frame_labels = data.frame_labels;
   const auto& track_world = data.track_world;

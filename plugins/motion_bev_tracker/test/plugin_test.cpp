@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "beslam/common/error.hpp"
+#include "beslam/formats/error.hpp"
 #include "beslam/test/plugin_harness.hpp"
 
 namespace fs = std::filesystem;

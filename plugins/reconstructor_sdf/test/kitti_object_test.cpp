@@ -8,10 +8,10 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "beslam/datasets/kitti_calib.hpp"
-#include "beslam/datasets/labels.hpp"
-#include "beslam/datasets/velodyne.hpp"
 #include "beslam/formats/geometry.hpp"
+#include "beslam/formats/kitti_calib.hpp"
+#include "beslam/formats/labels.hpp"
+#include "beslam/formats/velodyne.hpp"
 #include "beslam/sdk/views.hpp"
 #include "fit/object_fit.hpp"
 #include "objects/object_store.hpp"
@@ -21,7 +21,7 @@ namespace {
 
 const std::string kDir = std::string(BESLAM_SHARED_DATA) + "/kitti/object/training";
 
-beslam_box3d boxOf(const datasets::ObjectLabel& l, int32_t track) {
+beslam_box3d boxOf(const formats::ObjectLabel& l, int32_t track) {
   beslam_box3d b = formats::boxFromKitti(BESLAM_CLASS_CAR, l.h, l.w, l.l, l.p_cam_bottom.x(), l.p_cam_bottom.y(),
                                          l.p_cam_bottom.z(), l.ry);
   b.track_id = track;
@@ -39,13 +39,13 @@ double headingErrorDeg(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
 TEST(KittiObject000008, LidarFitsLandNearTheLabels) {
   if (!std::filesystem::exists(kDir + "/velodyne/000008.bin"))
     GTEST_SKIP() << "no KITTI object data in " << kDir << " (../shared/data absent)";
-  const datasets::KittiCalib calib = datasets::readObjectCalib(kDir + "/calib/000008.txt");
-  const Eigen::Isometry3d T_cam_velo = *datasets::T_cami_velo(calib, 0);  // the labels' frame
-  const std::vector<float> scan = datasets::readVelodyneBin(kDir + "/velodyne/000008.bin");
+  const formats::KittiCalib calib = formats::readObjectCalib(kDir + "/calib/000008.txt");
+  const Eigen::Isometry3d T_cam_velo = *formats::T_cami_velo(calib, 0);  // the labels' frame
+  const std::vector<float> scan = formats::readVelodyneBin(kDir + "/velodyne/000008.bin");
   const auto prior = shape::ShapePrior::load(BESLAM_SHAPE_PRIOR_SOURCE);
   int fitted = 0, within = 0;
   int32_t track = 0;
-  for (const datasets::ObjectLabel& l : datasets::readObjectLabels(kDir + "/label_2/000008.txt")) {
+  for (const formats::ObjectLabel& l : formats::readObjectLabels(kDir + "/label_2/000008.txt")) {
     ++track;
     if (l.type != "Car" || l.truncated > 0.3 || l.occluded > 1) continue;
     const beslam_box3d truth = boxOf(l, track);

@@ -16,12 +16,12 @@
 #include <sstream>
 
 #include "beslam/bench/bench.hpp"
-#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/motion_score/motion_score.hpp"
 #include "beslam/object_score/object_score.hpp"
 #include "beslam/report/report.hpp"
+#include "beslam/sdk/cli_args.hpp"
 #include "beslam/static_map/score.hpp"
 
 extern char** environ;

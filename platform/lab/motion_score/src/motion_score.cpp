@@ -7,11 +7,11 @@
 #include <sstream>
 #include <vector>
 
-#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/common/run_folder.hpp"
 #include "beslam/datasets/labels.hpp"
+#include "beslam/sdk/cli_args.hpp"
 
 namespace beslam::motion_score {
 namespace {

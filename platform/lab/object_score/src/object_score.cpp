@@ -10,13 +10,13 @@
 #include <random>
 #include <sstream>
 
-#include "beslam/common/cli_args.hpp"
 #include "beslam/common/error.hpp"
 #include "beslam/common/file_io.hpp"
 #include "beslam/common/run_folder.hpp"
 #include "beslam/formats/labels.hpp"
 #include "beslam/formats/ply.hpp"
 #include "beslam/formats/trajectory.hpp"
+#include "beslam/sdk/cli_args.hpp"
 
 namespace fs = std::filesystem;
 

@@ -17,15 +17,13 @@
 #include <vector>
 
 #include "beslam/common/frame_ranges.hpp"
+#include "beslam/formats/camera.hpp"
 #include "beslam/trajectory/trajectory.hpp"
 
 namespace beslam::datasets {
 
-// Pinhole camera of rectified (or undistorted) images: u = fx * x / z + cx, v = fy * y / z + cy.
-struct Camera {
-  int width = 0, height = 0;
-  double fx = 0, fy = 0, cx = 0, cy = 0;
-};
+// Pinhole camera of rectified (or undistorted) images (beslam/formats/camera.hpp).
+using formats::Camera;
 
 struct Frame {
   std::int64_t index = 0;  // frame number in the sequence (file number), not the position in the range

@@ -1,26 +1,14 @@
-// Checked image loading. cv::imread alone returns an empty or partly decoded Mat for a truncated file, so
-// the encoded bytes are validated first: PNG by walking the chunk structure (length, type, CRC) up to IEND,
-// JPEG by its SOI/EOI markers; other formats are only decoded. Every failure is one beslam::Error naming
-// the file ("missing", "truncated ...", "corrupt ...", "cannot decode ...").
+// Checked image loading for the host: the SDK's image_io component (beslam/formats/image_io.hpp) under the
+// datasets namespace. Plugins include beslam/formats/image_io.hpp and link beslam::image_io.
 #pragma once
 
-#include <opencv2/core.hpp>
-#include <string>
+#include "beslam/formats/image_io.hpp"
 
 namespace beslam::datasets {
 
-struct LoadedImage {
-  cv::Mat gray;   // CV_8UC1 (colour images are converted, 16-bit images scaled by 1/256)
-  cv::Mat color;  // CV_8UC3 BGR if want_color and the file has colour; empty otherwise
-};
-
-LoadedImage loadImage(const std::string& path, bool want_color);
-
-// Throws beslam::Error naming `path` unless `bytes` is a complete PNG stream (signature, chunks with valid
-// lengths and CRCs, IHDR first, IEND present).
-void checkPng(const std::string& path, const std::string& bytes);
-
-// Width and height from the PNG IHDR (cheap), or by decoding other formats; throws like loadImage.
-cv::Size readImageSize(const std::string& path);
+using formats::checkPng;
+using formats::LoadedImage;
+using formats::loadImage;
+using formats::readImageSize;
 
 }  // namespace beslam::datasets

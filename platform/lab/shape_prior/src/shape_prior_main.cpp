@@ -3,11 +3,11 @@
 //   info FILE
 //   eval FILE [--cars 40] [--seed 1] [--samples 1500] [--fit]
 //   mesh FILE --size l,w,h [--code z1,z2,...] --out FILE.ply
-// train: signed-distance grids of procedural cars drawn from the TRAINING ranges (tools/car_set.hpp),
+// train: signed-distance grids of procedural cars drawn from the TRAINING ranges (car_set.hpp),
 // PCA; same options give a byte-identical file. eval: held-out cars from the sequences' ranges, each
 // reconstructed by least squares in code space (projection of its grid); prints the median and 90th
 // percentile Chamfer distance in metres. --fit also fits each held-out car from simulated LiDAR-like and
-// map-point-like observations and from a depth-map patch alone (tools/car_set.hpp) and prints centre, yaw and Chamfer
+// map-point-like observations and from a depth-map patch alone (car_set.hpp) and prints centre, yaw and Chamfer
 // errors and the fit time. Errors: one line "beslam-shape-prior: error: ...", exit 1 (2 for usage).
 #include <algorithm>
 #include <chrono>
@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
-#include "beslam/common/cli_args.hpp"
 #include "beslam/formats/error.hpp"
-#include "car_set.hpp"
+#include "beslam/sdk/cli_args.hpp"
+#include "beslam/shape_prior/car_set.hpp"
 #include "fit/object_fit.hpp"
 #include "shape/shape_prior.hpp"
 

@@ -1,7 +1,5 @@
 // fitObject with the shipped prior: cars recovered from simulated LiDAR points and from sparse noisy map
 // points after a perturbed start, and bad observations rejected without a crash.
-#include "fit/object_fit.hpp"
-
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
@@ -9,7 +7,8 @@
 #include <cmath>
 #include <vector>
 
-#include "car_set.hpp"
+#include "beslam/shape_prior/car_set.hpp"
+#include "fit/object_fit.hpp"
 #include "fit/render_depth.hpp"
 #include "fit/silhouette.hpp"
 #include "shipped_prior.hpp"

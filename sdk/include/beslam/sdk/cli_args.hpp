@@ -1,7 +1,9 @@
+// Command-line helpers for tool writers: the --flag parsing of beslam's sub-commands (eval-motion,
+// eval-static-map, ...) and of a plugin's own tools (beslam-vocab, mask_bench). They throw
+// std::invalid_argument with the message the command prints as a usage error. runMain: the exit-code
+// convention of the beslam command and the tools. Header-only; beslam::Error comes from the formats.
 #pragma once
-// Small helpers for the --flag parsing of beslam's sub-commands (eval-motion, eval-static-map, ...).
-// They throw std::invalid_argument with the message the command prints as a usage error. runMain: the
-// exit-code convention of the beslam command and the tools (beslam-vocab, beslam-shape-prior, mask_bench).
+
 #include <cstddef>
 #include <exception>
 #include <functional>

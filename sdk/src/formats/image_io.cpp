@@ -1,4 +1,4 @@
-#include "beslam/datasets/image_io.hpp"
+#include "beslam/formats/image_io.hpp"
 
 #include <zlib.h>
 
@@ -10,10 +10,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "beslam/common/error.hpp"
-#include "beslam/common/file_io.hpp"
+#include "beslam/formats/error.hpp"
+#include "beslam/formats/file.hpp"
 
-namespace beslam::datasets {
+namespace beslam::formats {
 namespace {
 
 constexpr std::array<unsigned char, 8> kPngSignature = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
@@ -140,4 +140,4 @@ cv::Size readImageSize(const std::string& path) {
   return loadImage(path, false).gray.size();
 }
 
-}  // namespace beslam::datasets
+}  // namespace beslam::formats

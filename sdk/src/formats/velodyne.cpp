@@ -1,12 +1,12 @@
-#include "beslam/datasets/velodyne.hpp"
+#include "beslam/formats/velodyne.hpp"
 
 #include <cstring>
 #include <filesystem>
 
-#include "beslam/common/error.hpp"
-#include "beslam/common/file_io.hpp"
+#include "beslam/formats/error.hpp"
+#include "beslam/formats/file.hpp"
 
-namespace beslam::datasets {
+namespace beslam::formats {
 
 static_assert(sizeof(float) == 4, "KITTI scans are float32");
 
@@ -27,4 +27,4 @@ void writeVelodyneBin(const std::string& path, const std::vector<float>& xyzr) {
   writeFileAtomic(path, std::string(reinterpret_cast<const char*>(xyzr.data()), xyzr.size() * sizeof(float)));
 }
 
-}  // namespace beslam::datasets
+}  // namespace beslam::formats

@@ -2,8 +2,8 @@
 // cars, and how well the shipped prior reconstructs held-out cars from the sequences' ranges.
 #include <gtest/gtest.h>
 
+#include "beslam/shape_prior/car_set.hpp"
 #include "beslam/sim/car_mesh.hpp"
-#include "car_set.hpp"
 #include "shape/shape_prior.hpp"
 #include "shipped_prior.hpp"
 

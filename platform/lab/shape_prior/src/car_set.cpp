@@ -1,4 +1,4 @@
-#include "car_set.hpp"
+#include "beslam/shape_prior/car_set.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,18 +1,16 @@
-#include "beslam/datasets/kitti_calib.hpp"
+#include "beslam/formats/kitti_calib.hpp"
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <string_view>
 
-#include "beslam/common/error.hpp"
-#include "beslam/common/file_io.hpp"
-#include "parse_util.hpp"
+#include "beslam/formats/error.hpp"
+#include "beslam/formats/file.hpp"
+#include "beslam/formats/text.hpp"
 
-namespace beslam::datasets {
+namespace beslam::formats {
 namespace {
-
-using detail::parseDouble;
 
 bool contains(const std::vector<std::string>& names, const std::string& name) {
   for (const auto& n : names)
@@ -91,10 +89,10 @@ std::map<std::string, CalibEntry> readCalibEntries(const std::string& path, cons
   const std::string text = readFile(path);
   std::map<std::string, CalibEntry> entries;
   std::size_t bare_rows = 0;
-  const auto lines = detail::splitLines(text);
+  const auto lines = splitLines(text);
   for (std::size_t li = 0; li < lines.size(); ++li) {
     const int line_no = static_cast<int>(li + 1);
-    auto tokens = detail::splitWhitespace(lines[li]);
+    auto tokens = splitWhitespace(lines[li]);
     if (tokens.empty() || tokens.front().front() == '#') continue;  // blank or comment
     std::string name;
     std::size_t first_value = 0;
@@ -240,4 +238,4 @@ std::optional<Eigen::Isometry3d> T_cami_velo(const KittiCalib& calib, int camera
   return T_cami_rect0(*P) * T_rect0_cam0 * *calib.T_cam0_velo;
 }
 
-}  // namespace beslam::datasets
+}  // namespace beslam::formats
