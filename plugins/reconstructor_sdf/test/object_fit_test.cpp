@@ -60,6 +60,20 @@ Errors errors(const Scenario& s, const fit::FitResult& r) {
   return e;
 }
 
+// fitObject with the shipped prior from the scenario's start pose, at `size`, from the mean shape.
+fit::FitResult fitFromStart(const Scenario& s, const Eigen::Vector3d& size,
+                            const fit::FitOptions& options = fit::FitOptions()) {
+  return fit::fitObject(test::shippedPrior(), s.T_init, size, Eigen::VectorXd::Zero(test::shippedPrior().dimensions()),
+                        s.obs, options);
+}
+
+// Expects car i's errors below `bound` (centre in metres, yaw in degrees, chamfer in metres).
+void expectErrorsBelow(const Errors& e, const Errors& bound, int i, const Scenario& s) {
+  EXPECT_LT(e.centre, bound.centre) << "car " << i << " " << s.car.shape;
+  EXPECT_LT(e.yaw_deg, bound.yaw_deg) << "car " << i << " " << s.car.shape;
+  EXPECT_LT(e.chamfer, bound.chamfer) << "car " << i << " " << s.car.shape;
+}
+
 }  // namespace
 
 TEST(ObjectFit, RecoversACarFromLidarPoints) {
@@ -67,14 +81,10 @@ TEST(ObjectFit, RecoversACarFromLidarPoints) {
   for (int i = 0; i < 4; ++i) {
     const Scenario s = scenario(i, 200, 0.02, bearings[i], 8.0);
     ASSERT_GE(s.obs.p_world.size(), 150u);
-    const fit::FitResult r =
-        fit::fitObject(test::shippedPrior(), s.T_init, s.car.body.size,
-                       Eigen::VectorXd::Zero(test::shippedPrior().dimensions()), s.obs, fit::FitOptions());
+    const fit::FitResult r = fitFromStart(s, s.car.body.size);
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
-    EXPECT_LT(e.centre, 0.15) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.yaw_deg, 5.0) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.chamfer, 0.10) << "car " << i << " " << s.car.shape;
+    expectErrorsBelow(e, {0.15, 5.0, 0.10}, i, s);
     EXPECT_GT(r.inliers, static_cast<int>(0.8 * s.obs.p_world.size()));
     EXPECT_LT(r.rms_m, 0.06);
   }
@@ -92,13 +102,10 @@ TEST(ObjectFit, RecoversACarFromSparseMapPoints) {
   opt.huber_m = 0.10;
   for (int i = 0; i < 4; ++i) {
     const Scenario s = scenario(i + 4, counts[i], 0.05, bearings[i], 9.0);
-    const fit::FitResult r = fit::fitObject(test::shippedPrior(), s.T_init, s.car.body.size,
-                                            Eigen::VectorXd::Zero(test::shippedPrior().dimensions()), s.obs, opt);
+    const fit::FitResult r = fitFromStart(s, s.car.body.size, opt);
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
-    EXPECT_LT(e.centre, 0.30) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.yaw_deg, 8.0) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.chamfer, 0.15) << "car " << i << " " << s.car.shape;
+    expectErrorsBelow(e, {0.30, 8.0, 0.15}, i, s);
   }
 }
 
@@ -108,8 +115,7 @@ TEST(ObjectFit, FullPoseAndSizeOptionsStillConverge) {
   opt.yaw_only = false;
   opt.fit_size = true;
   const Eigen::Vector3d size0 = s.car.body.size.cwiseProduct(Eigen::Vector3d(1.05, 0.97, 1.04));
-  const fit::FitResult r = fit::fitObject(test::shippedPrior(), s.T_init, size0,
-                                          Eigen::VectorXd::Zero(test::shippedPrior().dimensions()), s.obs, opt);
+  const fit::FitResult r = fitFromStart(s, size0, opt);
   ASSERT_TRUE(r.ok) << r.why;
   const Errors e = errors(s, r);
   EXPECT_LT(e.centre, 0.2);
@@ -237,14 +243,10 @@ TEST(ObjectFit, RecoversACarFromADepthMap) {
         s.obs.rays.push_back(ray);
       }
     ASSERT_GT(s.obs.rays.size(), 80u);
-    const fit::FitResult r =
-        fit::fitObject(test::shippedPrior(), s.T_init, size, Eigen::VectorXd::Zero(test::shippedPrior().dimensions()),
-                       s.obs, fit::FitOptions());
+    const fit::FitResult r = fitFromStart(s, size);
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
-    EXPECT_LT(e.centre, 0.15) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.yaw_deg, 5.0) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.chamfer, 0.10) << "car " << i << " " << s.car.shape;
+    expectErrorsBelow(e, {0.15, 5.0, 0.10}, i, s);
   }
 }
 
@@ -358,15 +360,11 @@ TEST(ObjectFit, RecoversACarFromItsSilhouettesInSeveralViews) {
     for (int view = 0; view < 4; ++view)
       inside += addSilhouetteView(s, md, (i ? 2.0 : -1.2) + view * 40.0 * M_PI / 180, 8.0);
     ASSERT_GT(inside, 300);
-    const fit::FitResult r =
-        fit::fitObject(test::shippedPrior(), s.T_init, size, Eigen::VectorXd::Zero(test::shippedPrior().dimensions()),
-                       s.obs, fit::FitOptions());
+    const fit::FitResult r = fitFromStart(s, size);
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
     std::printf("silhouette car %d: centre %.3f m, yaw %.2f deg, chamfer %.3f m\n", i, e.centre, e.yaw_deg, e.chamfer);
-    EXPECT_LT(e.centre, 0.15) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.yaw_deg, 5.0) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.chamfer, 0.10) << "car " << i << " " << s.car.shape;
+    expectErrorsBelow(e, {0.15, 5.0, 0.10}, i, s);
   }
 }
 
@@ -383,16 +381,12 @@ TEST(ObjectFit, PlacesACarFromOneViewsSilhouetteAndItsBox) {
     const shape::MeshDistance md(s.car.body.mesh);
     ASSERT_GT(addSilhouetteView(s, md, bearings[i], 10.0), 60);
     s.obs.T_world_obj_boxes = s.T_init;
-    const fit::FitResult r =
-        fit::fitObject(test::shippedPrior(), s.T_init, s.car.body.size,
-                       Eigen::VectorXd::Zero(test::shippedPrior().dimensions()), s.obs, fit::FitOptions());
+    const fit::FitResult r = fitFromStart(s, s.car.body.size);
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
     std::printf("one-view car %d: centre %.3f m, yaw %.2f deg, chamfer %.3f m (box 0.5 m, 10 deg)\n", i, e.centre,
                 e.yaw_deg, e.chamfer);
-    EXPECT_LT(e.centre, 0.4) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.yaw_deg, 9.0) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.chamfer, 0.15) << "car " << i << " " << s.car.shape;
+    expectErrorsBelow(e, {0.4, 9.0, 0.15}, i, s);
     centres.push_back(e.centre);
   }
   std::sort(centres.begin(), centres.end());
