@@ -60,6 +60,28 @@ beslam_create_info createInfo(const beslam::registry::HostLog& log, const std::v
   return info;
 }
 
+// A frame with nothing but its struct size set.
+beslam_frame emptyFrame() {
+  beslam_frame frame{};
+  frame.struct_size = sizeof(frame);
+  return frame;
+}
+
+// A host with fixture libraries loaded: its registry, and the log its plugin instances write to.
+struct FixtureHost {
+  Registry registry;
+  beslam::registry::HostLog log;
+
+  explicit FixtureHost(std::initializer_list<const char*> libraries) {
+    for (const char* name : libraries) registry.loadLibrary(fixture(name));
+  }
+  // The plugin `id` created as an I (DetectorInstance, BackendInstance, ...) with `config`.
+  template <class I>
+  I create(const std::string& id, const std::vector<beslam_config_value>& config = {}) {
+    return I(registry.find(id), createInfo(log, config), log);
+  }
+};
+
 beslam_config_value number(const char* key, int32_t type, double v) {
   beslam_config_value c{};
   c.key = key;
@@ -70,10 +92,8 @@ beslam_config_value number(const char* key, int32_t type, double v) {
 
 // The error creating the detector `plugin` of the SDK fixtures with `config` (a failure when it is created).
 std::string createError(const std::string& plugin, const std::vector<beslam_config_value>& config) {
-  Registry registry;
-  registry.loadLibrary(fixture("sdk_fixtures"));
-  beslam::registry::HostLog log;
-  return errorOf([&] { beslam::registry::DetectorInstance d(registry.find(plugin), createInfo(log, config), log); });
+  FixtureHost host({"sdk_fixtures"});
+  return errorOf([&] { auto d = host.create<beslam::registry::DetectorInstance>(plugin, config); });
 }
 
 }  // namespace
@@ -146,9 +166,7 @@ TEST(Registry, MissingConfigValueIsInvalidConfig) {
 }
 
 TEST(Registry, DetectAndClassifyRoundTrip) {
-  Registry registry;
-  registry.loadLibrary(fixture("sdk_fixtures"));
-  beslam::registry::HostLog log;
+  FixtureHost host({"sdk_fixtures"});
   const double size[] = {4.0, 1.8, 1.5};
   beslam_config_value list{};
   list.key = "size";
@@ -162,12 +180,11 @@ TEST(Registry, DetectAndClassifyRoundTrip) {
   const std::vector<beslam_config_value> config = {number("emit_nan", BESLAM_CONFIG_BOOL, 0),
                                                    number("depth", BESLAM_CONFIG_DOUBLE, 12.5),
                                                    number("count", BESLAM_CONFIG_INT, 3), cls, list};
-  beslam::registry::DetectorInstance detector(registry.find("fixture_boxes"), createInfo(log, config), log);
-  beslam::registry::MotionCheckerInstance checker(registry.find("fixture_all_static"), createInfo(log, {}), log);
+  auto detector = host.create<beslam::registry::DetectorInstance>("fixture_boxes", config);
+  auto checker = host.create<beslam::registry::MotionCheckerInstance>("fixture_all_static");
 
   std::vector<uint8_t> pixels(64 * 48, 128);
-  beslam_frame frame{};
-  frame.struct_size = sizeof(frame);
+  beslam_frame frame = emptyFrame();
   frame.gray = {pixels.data(), 64, 48, 64, BESLAM_PIXEL_GRAY8};
   std::vector<beslam_box3d> boxes = detector.detect(frame);
   ASSERT_EQ(boxes.size(), 3u);
@@ -182,20 +199,16 @@ TEST(Registry, DetectAndClassifyRoundTrip) {
   EXPECT_EQ(boxes[1].motion_state, BESLAM_MOTION_UNKNOWN);
 
   // An exception inside a call becomes a status and a message, never a crash.
-  beslam_frame empty{};
-  empty.struct_size = sizeof(empty);
+  beslam_frame empty = emptyFrame();
   const std::string m = errorOf([&] { detector.detect(empty); });
   EXPECT_NE(m.find("detect failed (invalid argument): frame without a grey image"), std::string::npos) << m;
 }
 
 TEST(Registry, LandmarksCrossTheAbiWithMeshesPointsAndRemovals) {
-  Registry registry;
-  registry.loadLibrary(fixture("sdk_fixtures"));
-  beslam::registry::HostLog log;
-  beslam::registry::ReconstructorInstance reconstructor(registry.find("fixture_box_objects"), createInfo(log, {}), log);
+  FixtureHost host({"sdk_fixtures"});
+  auto reconstructor = host.create<beslam::registry::ReconstructorInstance>("fixture_box_objects");
   std::vector<uint8_t> pixels(64 * 48, 128);
-  beslam_frame frame{};
-  frame.struct_size = sizeof(frame);
+  beslam_frame frame = emptyFrame();
   frame.gray = {pixels.data(), 64, 48, 64, BESLAM_PIXEL_GRAY8};
   beslam_box3d box{};
   box.class_id = BESLAM_CLASS_CAR;
@@ -253,12 +266,9 @@ TEST(Registry, LandmarksCrossTheAbiWithMeshesPointsAndRemovals) {
 }
 
 TEST(Registry, AnAbi12ReconstructorStillLoadsAndItsLandmarksRead) {
-  Registry registry;
-  registry.loadLibrary(fixture("reconstructor_1_2"));
-  beslam::registry::HostLog log;
-  beslam::registry::ReconstructorInstance reconstructor(registry.find("reconstructor_1_2"), createInfo(log, {}), log);
-  beslam_frame frame{};
-  frame.struct_size = sizeof(frame);
+  FixtureHost host({"reconstructor_1_2"});
+  auto reconstructor = host.create<beslam::registry::ReconstructorInstance>("reconstructor_1_2");
+  beslam_frame frame = emptyFrame();
   beslam_keyframe kf{};
   kf.struct_size = sizeof(kf);
   const beslam::registry::Landmarks made = reconstructor.reconstruct(kf, frame, {}, beslam_image_view{});
@@ -273,28 +283,22 @@ TEST(Registry, AnAbi12ReconstructorStillLoadsAndItsLandmarksRead) {
 // ABI 1.4 appends an optional prepare() to the backend's table: a 1.3 backend (56-byte table) still
 // loads and the host skips the call; an SDK backend has it.
 TEST(Registry, AnAbi13BackendStillLoadsWithoutPrepare) {
-  Registry registry;
-  registry.loadLibrary(fixture("backend_1_3"));
-  registry.loadLibrary(std::string(PLUGIN_DIR) + "/backend_pose_replay.so");
-  beslam::registry::HostLog log;
-  beslam::registry::BackendInstance old_backend(registry.find("backend_1_3"), createInfo(log, {}), log);
+  FixtureHost host({"backend_1_3"});
+  host.registry.loadLibrary(std::string(PLUGIN_DIR) + "/backend_pose_replay.so");
+  auto old_backend = host.create<beslam::registry::BackendInstance>("backend_1_3");
   EXPECT_FALSE(old_backend.hasPrepare());
-  beslam_frame frame{};
-  frame.struct_size = sizeof(frame);
+  beslam_frame frame = emptyFrame();
   EXPECT_NO_THROW(old_backend.prepare(frame));  // no call
   EXPECT_EQ(old_backend.track(frame, beslam_image_view{}, {}).result.state, BESLAM_TRACKING_NOT_INITIALIZED);
-  EXPECT_EQ(registry.find("backend_pose_replay").functions_size, sizeof(beslam_backend_v1));
+  EXPECT_EQ(host.registry.find("backend_pose_replay").functions_size, sizeof(beslam_backend_v1));
 }
 
 // ABI 1.5 appends position_sigma and range_drift to the box: a 1.4 detector's 144-byte boxes are read at
 // their own stride, and the new fields (and the flag that says they are set) come out zero.
 TEST(Registry, AnAbi14DetectorsBoxesReadAsHavingNoPositionSigma) {
-  Registry registry;
-  registry.loadLibrary(fixture("detector_1_4"));
-  beslam::registry::HostLog log;
-  beslam::registry::DetectorInstance detector(registry.find("detector_1_4"), createInfo(log, {}), log);
-  beslam_frame frame{};
-  frame.struct_size = sizeof(frame);
+  FixtureHost host({"detector_1_4"});
+  auto detector = host.create<beslam::registry::DetectorInstance>("detector_1_4");
+  beslam_frame frame = emptyFrame();
   const std::vector<beslam_box3d> boxes = detector.detect(frame);
   ASSERT_EQ(boxes.size(), 2u);
   for (size_t i = 0; i < boxes.size(); ++i) {
@@ -311,19 +315,14 @@ TEST(Registry, AnAbi14DetectorsBoxesReadAsHavingNoPositionSigma) {
 // checker (16-byte table, no world_moved) still loads and the host skips the call; an SDK checker gets it;
 // a change that is not finite is refused by the backend's name.
 TEST(Registry, AWorldChangeCrossesFromBackendToMotionChecker) {
-  Registry registry;
-  registry.loadLibrary(fixture("backend_world_moved"));
-  registry.loadLibrary(fixture("motion_checker_1_6"));
-  registry.loadLibrary(fixture("sdk_fixtures"));
-  beslam::registry::HostLog log;
-  beslam::registry::BackendInstance backend(registry.find("backend_world_moved"), createInfo(log, {}), log);
-  beslam::registry::MotionCheckerInstance old_checker(registry.find("motion_checker_1_6"), createInfo(log, {}), log);
-  beslam::registry::MotionCheckerInstance checker(registry.find("fixture_all_static"), createInfo(log, {}), log);
-  EXPECT_EQ(registry.find("motion_checker_1_6").functions_size, offsetof(beslam_motion_checker_v1, world_moved));
-  EXPECT_EQ(registry.find("fixture_all_static").functions_size, sizeof(beslam_motion_checker_v1));
+  FixtureHost host({"backend_world_moved", "motion_checker_1_6", "sdk_fixtures"});
+  auto backend = host.create<beslam::registry::BackendInstance>("backend_world_moved");
+  auto old_checker = host.create<beslam::registry::MotionCheckerInstance>("motion_checker_1_6");
+  auto checker = host.create<beslam::registry::MotionCheckerInstance>("fixture_all_static");
+  EXPECT_EQ(host.registry.find("motion_checker_1_6").functions_size, offsetof(beslam_motion_checker_v1, world_moved));
+  EXPECT_EQ(host.registry.find("fixture_all_static").functions_size, sizeof(beslam_motion_checker_v1));
 
-  beslam_frame frame{};
-  frame.struct_size = sizeof(frame);
+  beslam_frame frame = emptyFrame();
   EXPECT_FALSE(backend.track(frame, beslam_image_view{}, {}).worldChange()) << "frame 0: the world stayed";
   frame.index = 1;
   const auto change = backend.track(frame, beslam_image_view{}, {}).worldChange();

@@ -59,6 +59,41 @@ Errors errors(const Scenario& s, const fit::FitResult& r) {
   return e;
 }
 
+// fitObject with the shipped prior from the scenario's start pose, at `size`, from the mean shape.
+fit::FitResult fitFromStart(const Scenario& s, const Eigen::Vector3d& size,
+                            const fit::FitOptions& options = fit::FitOptions()) {
+  return fit::fitObject(test::shippedPrior(), s.T_init, size, Eigen::VectorXd::Zero(test::shippedPrior().dimensions()),
+                        s.obs, options);
+}
+
+// Expects car i's errors below `bound` (centre in metres, yaw in degrees, chamfer in metres).
+void expectErrorsBelow(const Errors& e, const Errors& bound, int i, const Scenario& s) {
+  EXPECT_LT(e.centre, bound.centre) << "car " << i << " " << s.car.shape;
+  EXPECT_LT(e.yaw_deg, bound.yaw_deg) << "car " << i << " " << s.car.shape;
+  EXPECT_LT(e.chamfer, bound.chamfer) << "car " << i << " " << s.car.shape;
+}
+
+// The gradient checks' Jet: partials by the ray's origin (0-2), its direction (3-5) and the code (6 on, up to 8).
+using RayJet = ceres::Jet<double, 14>;
+constexpr double kCheckedCarSize[3] = {4.5, 1.8, 1.5};  // the car the gradient checks query
+
+// A random code of the prior: each value uniform within one standard deviation.
+std::vector<double> randomCode(const shape::ShapePrior& prior, shape::Random& rng) {
+  std::vector<double> z(prior.dimensions());
+  for (int k = 0; k < prior.dimensions(); ++k) z[k] = rng.uniform(-1, 1) * prior.codeStd()(k);
+  return z;
+}
+
+// A ray query's Jet inputs: origin and direction (differentiated), the car's size (constant) and the code.
+struct RayJets {
+  RayJet origin[3], direction[3], size[3], code[8];
+  RayJets(const Eigen::Vector3d& o, const Eigen::Vector3d& u, const std::vector<double>& z) {
+    for (int a = 0; a < 3; ++a)
+      origin[a] = RayJet(o(a), a), direction[a] = RayJet(u(a), 3 + a), size[a] = RayJet(kCheckedCarSize[a]);
+    for (size_t k = 0; k < z.size(); ++k) code[k] = RayJet(z[k], 6 + static_cast<int>(k));
+  }
+};
+
 }  // namespace
 
 TEST(ObjectFit, RecoversACarFromLidarPoints) {
@@ -66,14 +101,10 @@ TEST(ObjectFit, RecoversACarFromLidarPoints) {
   for (int i = 0; i < 4; ++i) {
     const Scenario s = scenario(i, 200, 0.02, bearings[i], 8.0);
     ASSERT_GE(s.obs.p_world.size(), 150u);
-    const fit::FitResult r =
-        fit::fitObject(test::shippedPrior(), s.T_init, s.car.body.size,
-                       Eigen::VectorXd::Zero(test::shippedPrior().dimensions()), s.obs, fit::FitOptions());
+    const fit::FitResult r = fitFromStart(s, s.car.body.size);
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
-    EXPECT_LT(e.centre, 0.15) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.yaw_deg, 5.0) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.chamfer, 0.10) << "car " << i << " " << s.car.shape;
+    expectErrorsBelow(e, {0.15, 5.0, 0.10}, i, s);
     EXPECT_GT(r.inliers, static_cast<int>(0.8 * s.obs.p_world.size()));
     EXPECT_LT(r.rms_m, 0.06);
   }
@@ -91,13 +122,10 @@ TEST(ObjectFit, RecoversACarFromSparseMapPoints) {
   opt.huber_m = 0.10;
   for (int i = 0; i < 4; ++i) {
     const Scenario s = scenario(i + 4, counts[i], 0.05, bearings[i], 9.0);
-    const fit::FitResult r = fit::fitObject(test::shippedPrior(), s.T_init, s.car.body.size,
-                                            Eigen::VectorXd::Zero(test::shippedPrior().dimensions()), s.obs, opt);
+    const fit::FitResult r = fitFromStart(s, s.car.body.size, opt);
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
-    EXPECT_LT(e.centre, 0.30) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.yaw_deg, 8.0) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.chamfer, 0.15) << "car " << i << " " << s.car.shape;
+    expectErrorsBelow(e, {0.30, 8.0, 0.15}, i, s);
   }
 }
 
@@ -107,8 +135,7 @@ TEST(ObjectFit, FullPoseAndSizeOptionsStillConverge) {
   opt.yaw_only = false;
   opt.fit_size = true;
   const Eigen::Vector3d size0 = s.car.body.size.cwiseProduct(Eigen::Vector3d(1.05, 0.97, 1.04));
-  const fit::FitResult r = fit::fitObject(test::shippedPrior(), s.T_init, size0,
-                                          Eigen::VectorXd::Zero(test::shippedPrior().dimensions()), s.obs, opt);
+  const fit::FitResult r = fitFromStart(s, size0, opt);
   ASSERT_TRUE(r.ok) << r.why;
   const Errors e = errors(s, r);
   EXPECT_LT(e.centre, 0.2);
@@ -167,8 +194,6 @@ TEST(RenderDepth, AutodiffGradientMatchesNumeric) {
   const auto& prior = test::shippedPrior();
   const int K = prior.dimensions();
   ASSERT_LE(K, 8);
-  using J = ceres::Jet<double, 14>;  // origin 3, direction 3, code up to 8
-  const double size[3] = {4.5, 1.8, 1.5};
   shape::Random rng(2);
   int hits = 0;
   for (int trial = 0; trial < 30; ++trial) {
@@ -176,18 +201,16 @@ TEST(RenderDepth, AutodiffGradientMatchesNumeric) {
     const Eigen::Vector3d o(8 * std::cos(bearing), 8 * std::sin(bearing), 0.9);
     const Eigen::Vector3d target(rng.uniform(-1.8, 1.8), rng.uniform(-0.6, 0.6), rng.uniform(-0.5, 0.5));
     const Eigen::Vector3d u = (target - o).normalized();
-    std::vector<double> z(K);
-    for (int k = 0; k < K; ++k) z[k] = rng.uniform(-1, 1) * prior.codeStd()(k);
+    const std::vector<double> z = randomCode(prior, rng);
     auto render = [&](const Eigen::Vector3d& oo, const Eigen::Vector3d& uu, const std::vector<double>& zz, double* t) {
       const double ov[3] = {oo.x(), oo.y(), oo.z()}, uv[3] = {uu.x(), uu.y(), uu.z()};
-      return fit::renderDepth(prior, ov, uv, size, zz.data(), t);
+      return fit::renderDepth(prior, ov, uv, kCheckedCarSize, zz.data(), t);
     };
     double t0;
     if (!render(o, u, z, &t0)) continue;
-    J oj[3], uj[3], zj[8], sj[3], tj;
-    for (int a = 0; a < 3; ++a) oj[a] = J(o(a), a), uj[a] = J(u(a), 3 + a), sj[a] = J(size[a]);
-    for (int k = 0; k < K; ++k) zj[k] = J(z[k], 6 + k);
-    ASSERT_TRUE(fit::renderDepth(prior, oj, uj, sj, zj, &tj));
+    const RayJets in(o, u, z);
+    RayJet tj;
+    ASSERT_TRUE(fit::renderDepth(prior, in.origin, in.direction, in.size, in.code, &tj));
     EXPECT_NEAR(tj.a, t0, 1e-6);
     const double h = 1e-5;
     for (int a = 0; a < 3; ++a) {
@@ -236,14 +259,10 @@ TEST(ObjectFit, RecoversACarFromADepthMap) {
         s.obs.rays.push_back(ray);
       }
     ASSERT_GT(s.obs.rays.size(), 80u);
-    const fit::FitResult r =
-        fit::fitObject(test::shippedPrior(), s.T_init, size, Eigen::VectorXd::Zero(test::shippedPrior().dimensions()),
-                       s.obs, fit::FitOptions());
+    const fit::FitResult r = fitFromStart(s, size);
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
-    EXPECT_LT(e.centre, 0.15) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.yaw_deg, 5.0) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.chamfer, 0.10) << "car " << i << " " << s.car.shape;
+    expectErrorsBelow(e, {0.15, 5.0, 0.10}, i, s);
   }
 }
 
@@ -251,8 +270,6 @@ TEST(Silhouette, LeastLevelMatchesADenseSearchAndItsGradientTheNumericOne) {
   const auto& prior = test::shippedPrior();
   const int K = prior.dimensions();
   ASSERT_LE(K, 8);
-  using J = ceres::Jet<double, 14>;  // origin 3, direction 3, code up to 8
-  const double size[3] = {4.5, 1.8, 1.5};
   shape::Random rng(3);
   int near_misses = 0, through = 0;
   for (int trial = 0; trial < 60; ++trial) {
@@ -261,16 +278,16 @@ TEST(Silhouette, LeastLevelMatchesADenseSearchAndItsGradientTheNumericOne) {
     // Aim across the car's outline: some rays pass it, some go through.
     const Eigen::Vector3d target(rng.uniform(-3.0, 3.0), rng.uniform(-1.4, 1.4), rng.uniform(-1.0, 1.0));
     const Eigen::Vector3d u = (target - o).normalized();
-    std::vector<double> z(K);
-    for (int k = 0; k < K; ++k) z[k] = rng.uniform(-1, 1) * prior.codeStd()(k);
+    const std::vector<double> z = randomCode(prior, rng);
     // An independent, precise least level over the searched stretch (within the box's bounding sphere grown
     // by kSearchMargin): a dense search (1 mm steps), then golden sections to 1e-10 m.
-    const double radius = 0.5 * Eigen::Vector3d(size[0], size[1], size[2]).norm() + fit::kSearchMargin;
+    const double radius =
+        0.5 * Eigen::Vector3d(kCheckedCarSize[0], kCheckedCarSize[1], kCheckedCarSize[2]).norm() + fit::kSearchMargin;
     auto least = [&](const Eigen::Vector3d& oo, const Eigen::Vector3d& uu, const std::vector<double>& zz) {
       auto level = [&](double t) {
         const Eigen::Vector3d p = oo + t * uu;
         const double pv[3] = {p.x(), p.y(), p.z()};
-        return prior.levelSized<double>(pv, size, zz.data());
+        return prior.levelSized<double>(pv, kCheckedCarSize, zz.data());
       };
       double best = 1e9, tb = 0;
       for (double t = 0; t < 20; t += 0.001)
@@ -285,7 +302,7 @@ TEST(Silhouette, LeastLevelMatchesADenseSearchAndItsGradientTheNumericOne) {
     const double dense = least(o, u, z);
     double t_found;
     const double ov[3] = {o.x(), o.y(), o.z()}, uv[3] = {u.x(), u.y(), u.z()};
-    const double m = fit::leastLevel(prior, ov, uv, size, z.data(), &t_found);
+    const double m = fit::leastLevel(prior, ov, uv, kCheckedCarSize, z.data(), &t_found);
     // The search's steps may pick the higher of two valleys close in value (silhouette.hpp).
     EXPECT_NEAR(m, dense, 1e-4 + 0.03 * std::abs(dense)) << "trial " << trial;
     if (std::abs(m - dense) > 1e-4) continue;  // another valley: its own derivative
@@ -295,10 +312,8 @@ TEST(Silhouette, LeastLevelMatchesADenseSearchAndItsGradientTheNumericOne) {
     }
     ++near_misses;
     // The Jet's derivative against central differences of the least level (the envelope theorem).
-    J oj[3], uj[3], zj[8], sj[3];
-    for (int a = 0; a < 3; ++a) oj[a] = J(o(a), a), uj[a] = J(u(a), 3 + a), sj[a] = J(size[a]);
-    for (int k = 0; k < K; ++k) zj[k] = J(z[k], 6 + k);
-    const J mj = fit::silhouetteLevel(prior, oj, uj, sj, zj);
+    const RayJets in(o, u, z);
+    const RayJet mj = fit::silhouetteLevel(prior, in.origin, in.direction, in.size, in.code);
     EXPECT_NEAR(mj.a, m, 1e-4);
     const double h = 1e-5;
     const double tol = 3e-2 * std::max(1.0, mj.v.cwiseAbs().maxCoeff());
@@ -357,15 +372,11 @@ TEST(ObjectFit, RecoversACarFromItsSilhouettesInSeveralViews) {
     for (int view = 0; view < 4; ++view)
       inside += addSilhouetteView(s, md, (i ? 2.0 : -1.2) + view * 40.0 * M_PI / 180, 8.0);
     ASSERT_GT(inside, 300);
-    const fit::FitResult r =
-        fit::fitObject(test::shippedPrior(), s.T_init, size, Eigen::VectorXd::Zero(test::shippedPrior().dimensions()),
-                       s.obs, fit::FitOptions());
+    const fit::FitResult r = fitFromStart(s, size);
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
     std::printf("silhouette car %d: centre %.3f m, yaw %.2f deg, chamfer %.3f m\n", i, e.centre, e.yaw_deg, e.chamfer);
-    EXPECT_LT(e.centre, 0.15) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.yaw_deg, 5.0) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.chamfer, 0.10) << "car " << i << " " << s.car.shape;
+    expectErrorsBelow(e, {0.15, 5.0, 0.10}, i, s);
   }
 }
 
@@ -382,16 +393,12 @@ TEST(ObjectFit, PlacesACarFromOneViewsSilhouetteAndItsBox) {
     const shape::MeshDistance md(s.car.body.mesh);
     ASSERT_GT(addSilhouetteView(s, md, bearings[i], 10.0), 60);
     s.obs.T_world_obj_boxes = s.T_init;
-    const fit::FitResult r =
-        fit::fitObject(test::shippedPrior(), s.T_init, s.car.body.size,
-                       Eigen::VectorXd::Zero(test::shippedPrior().dimensions()), s.obs, fit::FitOptions());
+    const fit::FitResult r = fitFromStart(s, s.car.body.size);
     ASSERT_TRUE(r.ok) << r.why;
     const Errors e = errors(s, r);
     std::printf("one-view car %d: centre %.3f m, yaw %.2f deg, chamfer %.3f m (box 0.5 m, 10 deg)\n", i, e.centre,
                 e.yaw_deg, e.chamfer);
-    EXPECT_LT(e.centre, 0.4) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.yaw_deg, 9.0) << "car " << i << " " << s.car.shape;
-    EXPECT_LT(e.chamfer, 0.15) << "car " << i << " " << s.car.shape;
+    expectErrorsBelow(e, {0.4, 9.0, 0.15}, i, s);
     centres.push_back(e.centre);
   }
   std::sort(centres.begin(), centres.end());

@@ -107,6 +107,12 @@ class RunTest : public ScratchDirTest {
     return path.string();
   }
 
+  // Expects the run written to dir_/out to say it completed, with a trajectory of every frame.
+  void expectCompletedRun() const {
+    EXPECT_NE(slurp(dir_ / "out/summary.json").find("\"status\": \"completed\""), std::string::npos);
+    EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
+  }
+
   static constexpr int kFrames = 6;
 };
 
@@ -464,8 +470,7 @@ TEST_F(RunTest, SigkillKeepsTheFinishedFrames) {
 TEST_F(RunTest, ACompletedRunSaysSo) {
   const Result r = beslam("run " + pipeline() + " --out=" + (dir_ / "out").string(), dir_);  // --out=DIR
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(slurp(dir_ / "out/summary.json").find("\"status\": \"completed\""), std::string::npos);
-  EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
+  expectCompletedRun();
   EXPECT_EQ(beslam("run " + pipeline() + " --out=", dir_).code, 2);
 }
 
@@ -479,8 +484,7 @@ TEST_F(RunTest, ASampleFrameThatCannotBeWrittenIsAWarning) {
   EXPECT_EQ(lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("warning: sample frame skipped: " + (dir_ / "out/samples").string()), std::string::npos)
       << r.err;
-  EXPECT_NE(slurp(dir_ / "out/summary.json").find("\"status\": \"completed\""), std::string::npos);
-  EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
+  expectCompletedRun();
 }
 
 // Probe: a full disk while writing a cosmetic sample JPEG aborted the whole run. Here a file-size limit
@@ -494,8 +498,7 @@ TEST_F(RunTest, AFullDiskForTheSampleFramesIsAWarning) {
   EXPECT_EQ(lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("warning: sample frame skipped: " + (dir_ / "out/samples/").string()), std::string::npos)
       << r.err;
-  EXPECT_NE(slurp(dir_ / "out/summary.json").find("\"status\": \"completed\""), std::string::npos);
-  EXPECT_EQ(dataLines(slurp(dir_ / "out/trajectory.tum")), kFrames);
+  expectCompletedRun();
   EXPECT_EQ(lines(slurp(dir_ / "out/trajectory.kitti")), kFrames);
   EXPECT_FALSE(fs::exists(dir_ / "out/samples/000000.jpg"));
 }

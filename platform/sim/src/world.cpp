@@ -316,6 +316,8 @@ double World::roadHalfWidth() const {
   return config.world.lanes_per_direction * config.world.lane_width + (config.world.parking_lanes ? 2.2 : 0.0);
 }
 
+double World::parkingLaneOffset() const { return roadHalfWidth() - 1.1; }
+
 int World::addRoute(int i0, int j0, int i1, int j1, bool clockwise, double lateral) {
   const double R = config.world.corner_radius;
   // Right of the heading is outward when counter-clockwise, inward when clockwise.
@@ -1102,19 +1104,39 @@ struct World::Placement {
     w.objects.push_back(std::move(o));
     tracks.push_back(tr);
   }
-  // Accepts o and counts it in `placed` where its track is free; else undoes what making it added.
+  // Accepts o where its track is free; else undoes what making it added.
   template <class Undo>
-  bool place(Object& o, int& placed, const Undo& undo) {
+  bool place(Object& o, const Undo& undo) {
     const Track tr = footprints(o);
     if (collides(tr, true)) {
       undo();
       return false;
     }
     accept(o, tr);
-    ++placed;
     return true;
   }
+  // Places `count` objects, each with up to `attempts` calls of tryOne(n, attempt), which returns whether
+  // it placed object n (a failed try undoes what it added); returns how many were placed.
+  template <class TryOne>
+  static int placeEach(int count, int attempts, const TryOne& tryOne) {
+    int placed = 0;
+    for (int n = 0; n < count; ++n)
+      for (int attempt = 0; attempt < attempts; ++attempt)
+        if (tryOne(n, attempt)) {
+          ++placed;
+          break;
+        }
+    return placed;
+  }
 };
+
+int World::randomSegment(Rng& rng, double ego_share) const {
+  std::vector<int> egoSegs;
+  for (std::size_t i = 0; i < segments_.size(); ++i)
+    if (segments_[i].ego) egoSegs.push_back(static_cast<int>(i));
+  return (!egoSegs.empty() && rng.chance(ego_share)) ? egoSegs[rng.index(static_cast<int>(egoSegs.size()))]
+                                                     : rng.index(static_cast<int>(segments_.size()));
+}
 
 // A car of a random shape, size and colour with behaviour b (its style appended to car_styles).
 Object World::newCar(Placement& pl, Behaviour b) {
@@ -1182,107 +1204,90 @@ int World::placeStopAndGo(Placement& pl) {
   Rng& rng = pl.rng;
   const auto& oc = config.objects;
   const auto& wc = config.world;
-  const double hw = roadHalfWidth();
   const double T = config.frames / config.rate_hz;
-  const double parkLat = hw - 1.1;  // parking lane centre from the street centreline
-  int placed_sg = 0;
-  for (int n = 0; n < oc.stop_and_go; ++n) {
-    for (int attempt = 0; attempt < 60; ++attempt) {
-      const std::size_t np = paths.size(), ns = car_styles.size();
-      auto rollback = [&] {
-        paths.resize(np, paths.front());
-        car_styles.resize(ns);
-      };
-      Object o = newCar(pl, Behaviour::StopAndGo);
-      bool cw;
-      const int kind = attempt < 30 ? rng.index(2) : 2;
-      const int route = randomRoute(pl, kind, wc.lanes_per_direction - 1, cw);
-      const Path& rp = paths[route];
-      const double v = rng.uniform(oc.driving_speed_kmh_min, oc.driving_speed_kmh_max) / 3.6;
-      const bool pullOut = rng.chance(0.5);
-      const double extra = parkLat - (wc.lanes_per_direction - 0.5) * wc.lane_width;
-      const double sp = rng.uniform(0, rp.length());
-      // The spot must be on a straight stretch.
-      bool straight = true;
-      for (double q = -25; q <= 25; q += 2.5) {
-        Vec2d xy;
-        double h, k;
-        rp.at(sp + q, xy, h, k);
-        straight = straight && std::abs(k) < 1e-3;
-      }
-      if (!straight) {
-        rollback();
-        continue;
-      }
-      double len, twait = 0;
-      if (pullOut) {
-        twait = rng.uniform(0.15, 0.55) * T;
-        len = v * (T - twait) + 40;
-      } else {
-        len = std::max(40.0, v * rng.uniform(0.3, 0.7) * T);
-      }
-      std::vector<Vec2d> ctrl;
-      for (double q = 0; q <= len + 1e-9; q += 2.0) {
-        const double s = pullOut ? sp + q : sp - len + q;
-        Vec2d xy;
-        double h, k;
-        rp.at(s, xy, h, k);
-        const double e = pullOut ? extra * (1 - smoothstep(4, 20, q)) : extra * smoothstep(len - 22, len - 5, q);
-        xy += Vec2d(std::sin(h), -std::cos(h)) * e;
-        ctrl.push_back(xy);
-      }
-      paths.emplace_back(ctrl, false);
-      o.path = static_cast<int>(paths.size()) - 1;
-      o.kind = pullOut ? Object::Kind::PullOut : Object::Kind::ParkIn;
-      o.t_wait = twait;
-      o.profile = pullOut ? Profile(paths[o.path], v, 2.5, 1.5, 0.0, -1) : Profile(paths[o.path], v, 2.5, 1.5, -1, 0.0);
-      // A car that parks must arrive well within the sequence, so both of its phases are seen.
-      if (!pullOut && o.profile.lapTime() > 0.85 * T) {
-        rollback();
-        continue;
-      }
-      if (pl.place(o, placed_sg, rollback)) break;
+  const double parkLat = parkingLaneOffset();
+  return Placement::placeEach(oc.stop_and_go, 60, [&](int, int attempt) {
+    const std::size_t np = paths.size(), ns = car_styles.size();
+    auto rollback = [&] {
+      paths.resize(np, paths.front());
+      car_styles.resize(ns);
+    };
+    Object o = newCar(pl, Behaviour::StopAndGo);
+    bool cw;
+    const int kind = attempt < 30 ? rng.index(2) : 2;
+    const int route = randomRoute(pl, kind, wc.lanes_per_direction - 1, cw);
+    const Path& rp = paths[route];
+    const double v = rng.uniform(oc.driving_speed_kmh_min, oc.driving_speed_kmh_max) / 3.6;
+    const bool pullOut = rng.chance(0.5);
+    const double extra = parkLat - (wc.lanes_per_direction - 0.5) * wc.lane_width;
+    const double sp = rng.uniform(0, rp.length());
+    // The spot must be on a straight stretch.
+    bool straight = true;
+    for (double q = -25; q <= 25; q += 2.5) {
+      Vec2d xy;
+      double h, k;
+      rp.at(sp + q, xy, h, k);
+      straight = straight && std::abs(k) < 1e-3;
     }
-  }
-  return placed_sg;
+    if (!straight) {
+      rollback();
+      return false;
+    }
+    double len, twait = 0;
+    if (pullOut) {
+      twait = rng.uniform(0.15, 0.55) * T;
+      len = v * (T - twait) + 40;
+    } else {
+      len = std::max(40.0, v * rng.uniform(0.3, 0.7) * T);
+    }
+    std::vector<Vec2d> ctrl;
+    for (double q = 0; q <= len + 1e-9; q += 2.0) {
+      const double s = pullOut ? sp + q : sp - len + q;
+      Vec2d xy;
+      double h, k;
+      rp.at(s, xy, h, k);
+      const double e = pullOut ? extra * (1 - smoothstep(4, 20, q)) : extra * smoothstep(len - 22, len - 5, q);
+      xy += Vec2d(std::sin(h), -std::cos(h)) * e;
+      ctrl.push_back(xy);
+    }
+    paths.emplace_back(ctrl, false);
+    o.path = static_cast<int>(paths.size()) - 1;
+    o.kind = pullOut ? Object::Kind::PullOut : Object::Kind::ParkIn;
+    o.t_wait = twait;
+    o.profile = pullOut ? Profile(paths[o.path], v, 2.5, 1.5, 0.0, -1) : Profile(paths[o.path], v, 2.5, 1.5, -1, 0.0);
+    // A car that parks must arrive well within the sequence, so both of its phases are seen.
+    if (!pullOut && o.profile.lapTime() > 0.85 * T) {
+      rollback();
+      return false;
+    }
+    return pl.place(o, rollback);
+  });
 }
 
 // Parked cars in the parking lanes, mostly along the ego's loop; returns how many were placed.
 int World::placeParked(Placement& pl) {
+  if (!config.world.parking_lanes || segments_.empty()) return 0;
   Rng& rng = pl.rng;
   const auto& oc = config.objects;
-  const auto& wc = config.world;
-  const double hw = roadHalfWidth();
-  const double parkLat = hw - 1.1;  // parking lane centre from the street centreline
-  int placed_parked = 0;
-  if (wc.parking_lanes && !segments_.empty()) {
-    std::vector<int> egoSegs;
-    for (std::size_t i = 0; i < segments_.size(); ++i)
-      if (segments_[i].ego) egoSegs.push_back(static_cast<int>(i));
-    for (int n = 0; n < oc.parked; ++n) {
-      for (int attempt = 0; attempt < 80; ++attempt) {
-        Object o = newCar(pl, Behaviour::Parked);
-        const int si = (!egoSegs.empty() && rng.chance(0.75)) ? egoSegs[rng.index(static_cast<int>(egoSegs.size()))]
-                                                              : rng.index(static_cast<int>(segments_.size()));
-        const Segment& seg = segments_[si];
-        const int side = rng.index(2);
-        const double margin = 7.0 + o.info.length / 2;
-        if (seg.length < 2 * margin) {
-          car_styles.pop_back();
-          continue;
-        }
-        const double u = rng.uniform(margin, seg.length - margin);
-        const Vec2d left(-seg.dir.y(), seg.dir.x());
-        const Vec2d xy = seg.start + seg.dir * u + left * (side ? parkLat : -parkLat);
-        o.kind = Object::Kind::Static;
-        o.x = xy.x(), o.y = xy.y();
-        o.yaw = std::atan2(seg.dir.y(), seg.dir.x()) + (side ? M_PI : 0.0) + rng.uniform(-0.03, 0.03);
-        // Keep the kerb side tight; jitter the lateral position a little.
-        if (pl.place(o, placed_parked, [&] { car_styles.pop_back(); })) break;
-      }
+  const double parkLat = parkingLaneOffset();
+  return Placement::placeEach(oc.parked, 80, [&](int, int) {
+    Object o = newCar(pl, Behaviour::Parked);
+    const Segment& seg = segments_[randomSegment(rng, 0.75)];
+    const int side = rng.index(2);
+    const double margin = 7.0 + o.info.length / 2;
+    if (seg.length < 2 * margin) {
+      car_styles.pop_back();
+      return false;
     }
-  }
-  return placed_parked;
+    const double u = rng.uniform(margin, seg.length - margin);
+    const Vec2d left(-seg.dir.y(), seg.dir.x());
+    const Vec2d xy = seg.start + seg.dir * u + left * (side ? parkLat : -parkLat);
+    o.kind = Object::Kind::Static;
+    o.x = xy.x(), o.y = xy.y();
+    o.yaw = std::atan2(seg.dir.y(), seg.dir.x()) + (side ? M_PI : 0.0) + rng.uniform(-0.03, 0.03);
+    // Keep the kerb side tight; jitter the lateral position a little.
+    return pl.place(o, [&] { car_styles.pop_back(); });
+  });
 }
 
 // Driving cars: loops in and against the ego direction (overtaking where there is a second lane), and
@@ -1292,31 +1297,27 @@ int World::placeDriving(Placement& pl) {
   const auto& oc = config.objects;
   const auto& wc = config.world;
   const double egoSpeed = config.ego.speed_kmh / 3.6;
-  int placed_driving = 0;
-  for (int n = 0; n < oc.driving; ++n) {
-    for (int attempt = 0; attempt < 80; ++attempt) {
-      Object o = newCar(pl, Behaviour::Driving);
-      const int kind = n % 3 == 0 ? 0 : (n % 3 == 1 ? 1 : 2);
-      int lane = rng.index(wc.lanes_per_direction);
-      double v = rng.uniform(oc.driving_speed_kmh_min, oc.driving_speed_kmh_max) / 3.6;
-      if (kind == 0 && wc.lanes_per_direction >= 2)
-        lane = wc.lanes_per_direction - 2, v = std::max(v, egoSpeed * rng.uniform(1.3, 1.6));
-      else if (kind == 0)
-        v = egoSpeed;  // same lane as the ego: keeps its distance
-      bool cw;
-      const int route = randomRoute(pl, kind, lane, cw);
-      o.path = route;
-      o.kind = Object::Kind::Loop;
-      o.profile = Profile(paths[route], v, 2.5, 1.5, -1, -1);
-      o.s_offset = rng.uniform(0, paths[route].length());
-      const auto undo = [&] {
-        paths.pop_back();
-        car_styles.pop_back();
-      };
-      if (pl.place(o, placed_driving, undo)) break;
-    }
-  }
-  return placed_driving;
+  return Placement::placeEach(oc.driving, 80, [&](int n, int) {
+    Object o = newCar(pl, Behaviour::Driving);
+    const int kind = n % 3 == 0 ? 0 : (n % 3 == 1 ? 1 : 2);
+    int lane = rng.index(wc.lanes_per_direction);
+    double v = rng.uniform(oc.driving_speed_kmh_min, oc.driving_speed_kmh_max) / 3.6;
+    if (kind == 0 && wc.lanes_per_direction >= 2)
+      lane = wc.lanes_per_direction - 2, v = std::max(v, egoSpeed * rng.uniform(1.3, 1.6));
+    else if (kind == 0)
+      v = egoSpeed;  // same lane as the ego: keeps its distance
+    bool cw;
+    const int route = randomRoute(pl, kind, lane, cw);
+    o.path = route;
+    o.kind = Object::Kind::Loop;
+    o.profile = Profile(paths[route], v, 2.5, 1.5, -1, -1);
+    o.s_offset = rng.uniform(0, paths[route].length());
+    const auto undo = [&] {
+      paths.pop_back();
+      car_styles.pop_back();
+    };
+    return pl.place(o, undo);
+  });
 }
 
 // Pedestrians: walking round blocks on the pavement, or crossing streets at the crosswalks; returns how
@@ -1328,62 +1329,53 @@ int World::placePedestrians(Placement& pl) {
   const double hw = roadHalfWidth();
   const int ex = wc.blocks_x / 2, ey = wc.blocks_y / 2;
   const bool highway = wc.type == "highway";
-  int placed_peds = 0;
-  for (int n = 0; n < oc.pedestrians && !highway; ++n) {
-    for (int attempt = 0; attempt < 80; ++attempt) {
-      Object o;
-      o.info.behaviour = Behaviour::Pedestrian;
-      o.info.type = "Pedestrian";
-      o.info.shape = "pedestrian";
-      o.info.height = rng.uniform(1.55, 1.92);
-      o.info.length = 0.8, o.info.width = 0.6;
-      PedStyle ps;
-      ps.shirt = Vec3f(static_cast<float>(rng.uniform(0.05, 0.9)), static_cast<float>(rng.uniform(0.05, 0.9)),
-                       static_cast<float>(rng.uniform(0.05, 0.9)));
-      ps.trousers = Vec3f(0.12f, 0.13f, 0.2f) * static_cast<float>(rng.uniform(0.6, 2.5));
-      const float sk = static_cast<float>(rng.uniform(0.35, 0.85));
-      ps.skin = Vec3f(sk * 0.75f, sk * 0.85f, sk);
-      o.style = static_cast<int>(ped_styles.size());
-      o.walk_speed = rng.uniform(1.05, 1.6);
-      bool added_path = false;
-      if (n % 2 == 0 || segments_.empty()) {
-        int bi = ex, bj = ey;
-        if (rng.chance(0.4)) bi = rng.index(wc.blocks_x), bj = rng.index(wc.blocks_y);
-        const double inset = rng.uniform(1.2, wc.pavement_width - 0.6);
-        auto pts = roundedRect(X_[bi] + hw + inset, Y_[bj] + hw + inset, X_[bi + 1] - hw - inset,
-                               Y_[bj + 1] - hw - inset, 2.0, rng.chance(0.5), 2.0);
-        paths.emplace_back(pts, true);
-        added_path = true;
-        o.path = static_cast<int>(paths.size()) - 1;
-        o.kind = Object::Kind::PedLoop;
-        o.s_offset = rng.uniform(0, paths.back().length());
-      } else {
-        std::vector<int> egoSegs;
-        for (std::size_t i = 0; i < segments_.size(); ++i)
-          if (segments_[i].ego) egoSegs.push_back(static_cast<int>(i));
-        const int si = (!egoSegs.empty() && rng.chance(0.7)) ? egoSegs[rng.index(static_cast<int>(egoSegs.size()))]
-                                                             : rng.index(static_cast<int>(segments_.size()));
-        const Segment& seg = segments_[si];
-        const double u = rng.chance(0.5) ? rng.uniform(2.0, 4.0) : seg.length - rng.uniform(2.0, 4.0);
-        const Vec2d left(-seg.dir.y(), seg.dir.x());
-        const Vec2d c = seg.start + seg.dir * u;
-        const double reach = hw + rng.uniform(0.8, 1.8);
-        const bool flip = rng.chance(0.5);
-        o.a = c + left * (flip ? reach : -reach);
-        o.b = c - left * (flip ? reach : -reach);
-        o.kind = Object::Kind::PedCross;
-        o.wait_a = rng.uniform(2, 10), o.wait_b = rng.uniform(2, 10);
-        o.phase = rng.uniform(0, 60);
-      }
-      if (!pl.place(o, placed_peds, [&] {
-            if (added_path) paths.pop_back();
-          }))
-        continue;
-      ped_styles.push_back(ps);
-      break;
+  return Placement::placeEach(highway ? 0 : oc.pedestrians, 80, [&](int n, int) {
+    Object o;
+    o.info.behaviour = Behaviour::Pedestrian;
+    o.info.type = "Pedestrian";
+    o.info.shape = "pedestrian";
+    o.info.height = rng.uniform(1.55, 1.92);
+    o.info.length = 0.8, o.info.width = 0.6;
+    PedStyle ps;
+    ps.shirt = Vec3f(static_cast<float>(rng.uniform(0.05, 0.9)), static_cast<float>(rng.uniform(0.05, 0.9)),
+                     static_cast<float>(rng.uniform(0.05, 0.9)));
+    ps.trousers = Vec3f(0.12f, 0.13f, 0.2f) * static_cast<float>(rng.uniform(0.6, 2.5));
+    const float sk = static_cast<float>(rng.uniform(0.35, 0.85));
+    ps.skin = Vec3f(sk * 0.75f, sk * 0.85f, sk);
+    o.style = static_cast<int>(ped_styles.size());
+    o.walk_speed = rng.uniform(1.05, 1.6);
+    bool added_path = false;
+    if (n % 2 == 0 || segments_.empty()) {
+      int bi = ex, bj = ey;
+      if (rng.chance(0.4)) bi = rng.index(wc.blocks_x), bj = rng.index(wc.blocks_y);
+      const double inset = rng.uniform(1.2, wc.pavement_width - 0.6);
+      auto pts = roundedRect(X_[bi] + hw + inset, Y_[bj] + hw + inset, X_[bi + 1] - hw - inset, Y_[bj + 1] - hw - inset,
+                             2.0, rng.chance(0.5), 2.0);
+      paths.emplace_back(pts, true);
+      added_path = true;
+      o.path = static_cast<int>(paths.size()) - 1;
+      o.kind = Object::Kind::PedLoop;
+      o.s_offset = rng.uniform(0, paths.back().length());
+    } else {
+      const Segment& seg = segments_[randomSegment(rng, 0.7)];
+      const double u = rng.chance(0.5) ? rng.uniform(2.0, 4.0) : seg.length - rng.uniform(2.0, 4.0);
+      const Vec2d left(-seg.dir.y(), seg.dir.x());
+      const Vec2d c = seg.start + seg.dir * u;
+      const double reach = hw + rng.uniform(0.8, 1.8);
+      const bool flip = rng.chance(0.5);
+      o.a = c + left * (flip ? reach : -reach);
+      o.b = c - left * (flip ? reach : -reach);
+      o.kind = Object::Kind::PedCross;
+      o.wait_a = rng.uniform(2, 10), o.wait_b = rng.uniform(2, 10);
+      o.phase = rng.uniform(0, 60);
     }
-  }
-  return placed_peds;
+    if (!pl.place(o, [&] {
+          if (added_path) paths.pop_back();
+        }))
+      return false;
+    ped_styles.push_back(ps);
+    return true;
+  });
 }
 
 void World::placeObjects(Rng& rng) {

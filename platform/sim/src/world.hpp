@@ -272,9 +272,13 @@ class World {
   int placeParked(Placement& pl);
   int placeDriving(Placement& pl);
   int placePedestrians(Placement& pl);
+  // A random street segment: with probability ego_share (where there are any) one bordering the ego's block.
+  int randomSegment(Rng& rng, double ego_share) const;
   // Closed route round street lines i0..i1 x j0..j1, `lateral` metres right of the centreline.
   int addRoute(int i0, int j0, int i1, int j1, bool clockwise, double lateral);
   double roadHalfWidth() const;
+  // The parking lanes' centre from the street centreline, metres.
+  double parkingLaneOffset() const;
   std::vector<double> X_, Y_;  // street centrelines
   struct Segment {             // a street segment between two intersections
     int street = 0;            // index into streets

@@ -18,10 +18,9 @@
 #include <optional>
 #include <vector>
 
-namespace beslam::orb {
+#include "map/map_fwd.hpp"
 
-class KeyFrame;
-class MapPoint;
+namespace beslam::orb {
 
 struct GroundPlaneOptions {
   bool enabled = false;                      // off: the ORB-SLAM2 rules alone

@@ -30,14 +30,10 @@
 #include "beslam_orb/orb_slam.hpp"
 #include "features/scale_pyramid.hpp"
 #include "loop/sim3.hpp"
+#include "map/map_fwd.hpp"
 #include "optimize/bundle_adjustment.hpp"
 
 namespace beslam::orb {
-
-class KeyFrame;
-class KeyFrameDatabase;
-class Map;
-class MapPoint;
 
 struct LoopOptions {
   int min_keyframes_since_loop = 10;  // no detection within this many keyframes of the last loop

@@ -8,12 +8,10 @@
 #include <vector>
 
 #include "features/feature_set.hpp"
+#include "map/map_fwd.hpp"
 #include "place/vocabulary.hpp"
 
 namespace beslam::orb {
-
-class KeyFrame;
-class MapPoint;
 
 struct Frame {
   int64_t index = -1;

@@ -8,11 +8,10 @@
 #include <map>
 
 #include "map/id_less.hpp"
+#include "map/map_fwd.hpp"
 
 namespace beslam::orb {
 
-class KeyFrame;
-class Map;
 struct ScalePyramid;
 
 using Descriptor = std::array<uint8_t, 32>;

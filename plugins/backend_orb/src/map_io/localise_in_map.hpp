@@ -12,12 +12,9 @@
 
 #include "beslam_orb/orb_slam.hpp"
 #include "features/scale_pyramid.hpp"
+#include "map/map_fwd.hpp"
 
 namespace beslam::orb {
-
-struct Frame;
-class KeyFrame;
-class Map;
 
 struct MapLocaliserOptions {
   float radius = 60.f;          // px at level 0: wide search around the candidate's projection

@@ -12,14 +12,10 @@
 
 #include "beslam_orb/orb_slam.hpp"
 #include "features/scale_pyramid.hpp"
+#include "map/map_fwd.hpp"
 #include "optimize/bundle_adjustment.hpp"
 
 namespace beslam::orb {
-
-class KeyFrame;
-class Map;
-class MapGate;
-class MapPoint;
 
 struct LocalMapperOptions {
   int triangulation_neighbours = 20;

@@ -13,12 +13,9 @@
 #include "beslam_orb/orb_slam.hpp"
 #include "features/feature_set.hpp"
 #include "features/scale_pyramid.hpp"
+#include "map/map_fwd.hpp"
 
 namespace beslam::orb {
-
-struct Frame;
-class KeyFrame;
-class MapPoint;
 
 namespace matching {
 

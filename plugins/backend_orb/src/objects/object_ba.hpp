@@ -12,12 +12,8 @@
 #include <vector>
 
 #include "map/id_less.hpp"
+#include "map/map_fwd.hpp"
 #include "objects/object_store.hpp"
-
-namespace beslam::orb {
-class KeyFrame;
-class MapPoint;
-}  // namespace beslam::orb
 
 namespace beslam::orb::objects {
 

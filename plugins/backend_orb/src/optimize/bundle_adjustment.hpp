@@ -8,12 +8,8 @@
 #include <functional>
 
 #include "ground/ground_plane.hpp"
+#include "map/map_fwd.hpp"
 #include "objects/object_ba.hpp"
-
-namespace beslam::orb {
-class KeyFrame;
-class Map;
-}  // namespace beslam::orb
 
 namespace beslam::orb::optimize {
 

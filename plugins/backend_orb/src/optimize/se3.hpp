@@ -55,12 +55,7 @@ class SE3LeftManifold : public ceres::Manifold {
     x_plus[6] = t2.z();
     return true;
   }
-  bool PlusJacobian(const double*, double* jacobian) const override {
-    Eigen::Map<Eigen::Matrix<double, 7, 6, Eigen::RowMajor>> J(jacobian);
-    J.setZero();
-    J.topRows<6>().setIdentity();
-    return true;
-  }
+  bool PlusJacobian(const double*, double* jacobian) const override { return tangentIdentity<7, 6>(jacobian); }
   bool Minus(const double* y, const double* x, double* y_minus_x) const override {
     const Eigen::Quaterniond qy(y[3], y[0], y[1], y[2]), qx(x[3], x[0], x[1], x[2]);
     const Eigen::Quaterniond dq = (qy * qx.conjugate()).normalized();
@@ -73,10 +68,15 @@ class SE3LeftManifold : public ceres::Manifold {
     }
     return true;
   }
-  bool MinusJacobian(const double*, double* jacobian) const override {
-    Eigen::Map<Eigen::Matrix<double, 6, 7, Eigen::RowMajor>> J(jacobian);
+  bool MinusJacobian(const double*, double* jacobian) const override { return tangentIdentity<6, 7>(jacobian); }
+
+ private:
+  // Plus's [I6; 0] and Minus's [I6 0]: the identity between the tangent and the first six parameters.
+  template <int Rows, int Cols>
+  static bool tangentIdentity(double* jacobian) {
+    Eigen::Map<Eigen::Matrix<double, Rows, Cols, Eigen::RowMajor>> J(jacobian);
     J.setZero();
-    J.leftCols<6>().setIdentity();
+    J.template topLeftCorner<6, 6>().setIdentity();
     return true;
   }
 };

@@ -19,13 +19,9 @@
 #include "features/scale_pyramid.hpp"
 #include "init/two_view.hpp"
 #include "map/frame.hpp"
+#include "map/map_fwd.hpp"
 
 namespace beslam::orb {
-
-class KeyFrame;
-class KeyFrameDatabase;
-class Map;
-class MapPoint;
 
 // One tracked frame, as stored for the trajectory.
 struct FrameRecord {
