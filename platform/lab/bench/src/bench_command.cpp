@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -56,15 +57,12 @@ std::vector<int64_t> seedList(const std::string& text) {
   std::vector<int64_t> seeds;
   std::stringstream in(text);
   for (std::string item; std::getline(in, item, ',');) {
-    std::size_t used = 0;
     int64_t v = 0;
     try {
-      v = std::stoll(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
+      v = cli::integerInRange("--seeds", item, std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
+    } catch (const std::invalid_argument& e) {
+      throw Usage(e.what());
     }
-    if (item.empty() || used != item.size())
-      throw Usage("--seeds: '" + item + "' is not an integer (expected a list such as 42,1,2)");
     if (std::find(seeds.begin(), seeds.end(), v) != seeds.end()) throw Usage("--seeds: " + item + " is listed twice");
     seeds.push_back(v);
   }

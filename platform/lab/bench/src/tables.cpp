@@ -208,39 +208,42 @@ struct ScoreTable {
   std::vector<Column> columns;
 };
 
+// A figure read as it is, and one as the share part / whole (NaN when whole is 0).
+Column field(std::string key, std::string header, int digits, const char* name) {
+  return {std::move(key), std::move(header), digits, [name](const json& j) { return num(j, {name}); }};
+}
+Column ratio(std::string key, std::string header, const char* part, const char* whole) {
+  return {std::move(key), std::move(header), 3, [part, whole](const json& j) { return share(j, part, whole); }};
+}
+
 const std::vector<ScoreTable>& scoreTables() {
   static const std::vector<ScoreTable> tables = {
       {"motion",
        "motion",
        "Motion states (scoring step `motion`: `beslam eval-motion`; shares of scored car detections)",
-       {{"f1_dynamic", "F1 (dynamic)", 3, [](const json& j) { return num(j, {"f1_dynamic"}); }},
-        {"moving_called_static", "moving called static", 3,
-         [](const json& j) { return share(j, "moving_static", "moving"); }},
-        {"standing_called_dynamic", "standing called dynamic", 3,
-         [](const json& j) { return share(j, "standing_dynamic", "standing"); }},
-        {"standing_near_called_static", "standing nearby called static", 3,
-         [](const json& j) { return share(j, "standing_near_static", "standing_near"); }}}},
+       {field("f1_dynamic", "F1 (dynamic)", 3, "f1_dynamic"),
+        ratio("moving_called_static", "moving called static", "moving_static", "moving"),
+        ratio("standing_called_dynamic", "standing called dynamic", "standing_dynamic", "standing"),
+        ratio("standing_near_called_static", "standing nearby called static", "standing_near_static",
+              "standing_near")}},
       {"objects",
        "reconstruction",
        "Reconstructed objects (scoring step `objects`: `beslam eval-objects`)",
-       {{"reconstructed", "reconstructed", 0, [](const json& j) { return num(j, {"reconstructed"}); }},
-        {"parked_in_view_correct_share", "parked in view, correct", 3,
-         [](const json& j) { return share(j, "parked_in_view_correct", "parked_in_view"); }},
-        {"false_share", "false", 3, [](const json& j) { return share(j, "false", "reconstructed"); }},
-        {"centre_error_m", "centre error m", 3, [](const json& j) { return num(j, {"median_centre_error_m"}); }},
-        {"yaw_error_deg", "yaw error deg", 1, [](const json& j) { return num(j, {"median_yaw_error_deg"}); }},
+       {field("reconstructed", "reconstructed", 0, "reconstructed"),
+        ratio("parked_in_view_correct_share", "parked in view, correct", "parked_in_view_correct", "parked_in_view"),
+        ratio("false_share", "false", "false", "reconstructed"),
+        field("centre_error_m", "centre error m", 3, "median_centre_error_m"),
+        field("yaw_error_deg", "yaw error deg", 1, "median_yaw_error_deg"),
         {"heading_within_10_deg_share", "heading within 10 deg", 3, headingWithin10},
-        {"chamfer_m", "Chamfer m", 3, [](const json& j) { return num(j, {"median_chamfer_m"}); }},
-        {"shape_chamfer_m", "shape-only Chamfer m", 3,
-         [](const json& j) { return num(j, {"median_shape_chamfer_m"}); }}}},
+        field("chamfer_m", "Chamfer m", 3, "median_chamfer_m"),
+        field("shape_chamfer_m", "shape-only Chamfer m", 3, "median_shape_chamfer_m")}},
       {"static_map",
        "static_map",
        "Static map (scoring step `static_map`: `beslam eval-static-map`; voxels)",
-       {{"occupied", "occupied", 0, [](const json& j) { return num(j, {"occupied"}); }},
-        {"in_moving_paths", "in moving cars' paths", 0, [](const json& j) { return num(j, {"in_moving_paths"}); }},
-        {"in_parked_cars", "in parked cars", 0, [](const json& j) { return num(j, {"in_parked_cars"}); }},
-        {"parked_cars_mapped_share", "parked cars mapped", 3,
-         [](const json& j) { return share(j, "parked_cars_near_mapped", "parked_cars_near"); }}}}};
+       {field("occupied", "occupied", 0, "occupied"),
+        field("in_moving_paths", "in moving cars' paths", 0, "in_moving_paths"),
+        field("in_parked_cars", "in parked cars", 0, "in_parked_cars"),
+        ratio("parked_cars_mapped_share", "parked cars mapped", "parked_cars_near_mapped", "parked_cars_near")}}};
   return tables;
 }
 
