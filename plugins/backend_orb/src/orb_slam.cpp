@@ -369,10 +369,10 @@ struct OrbSlam::Impl {
     TrackerTurn& operator=(const TrackerTurn&) = delete;
   };
 
-  TrackResult track(const cv::Mat& image, const cv::Mat& labels, double timestamp, int64_t index,
-                    const std::vector<ObjectBox>& boxes, const Eigen::Matrix3Xf* lidar_cam) {
-    const auto t_start = Clock::now();
-    auto t0 = Clock::now();
+  // The frame's features within this frame's budget, with the ranges the boxes and the scan give them and
+  // the parked cars' boxes a keyframe keeps.
+  std::shared_ptr<FeatureSet> extractFeatures(const cv::Mat& image, const cv::Mat& labels, int64_t index,
+                                              const std::vector<ObjectBox>& boxes, const Eigen::Matrix3Xf* lidar_cam) {
     const int budget =
         tracker.initialising() ? options.extractor.features * options.init_features_factor : options.extractor.features;
     const std::shared_ptr<const PreparedImage> prepared_image = takePrepared(index, image.size());
@@ -384,29 +384,24 @@ struct OrbSlam::Impl {
         (options.metric_scale && options.object_scale && options.object_scale_hold == ObjectScaleHold::Anchors))
       for (const ObjectBox& b : boxes)
         if (b.parked && b.object_id >= 0) features->object_boxes.push_back(b);
-    const double extract_ms = msSince(t0);
-    t0 = Clock::now();
-    // Inline and threaded: the mapping of the last keyframe is finished before this frame is tracked.
-    // Concurrent: the tracker takes its turn at the map; a rescale, scale correction or loop correction
-    // waits for an idle mapper (they move the whole map).
-    TrackerTurn turn(options.concurrent_mapping ? &gate : nullptr);
-    if (!options.concurrent_mapping) {
-      waitIdle();
-    } else if ((mapper.hasPendingScaleEvent() || pending_object_scale || loop_pending || !object_ops.empty()) &&
-               !mappingIdle()) {
-      waitIdleHoldingGate();
-    }
-    applyObjectOps();
-    const double wait_ms = msSince(t0);
-    const int object_factors =
-        mapper.lastBundleAdjustment().object_box_factors + mapper.lastBundleAdjustment().object_surface_factors;
-    // Mapping is idle here in both modes: a metric scale the mapper found is applied to everything at
-    // once, before this frame is tracked (the same frame in the threaded and the inline mode).
-    // What moves the metric world below (a change of scale, a loop correction) is told to the host as one
-    // change about the last tracked camera.
+    return features;
+  }
+
+  // How the metric world moved since the last frame: one change about the last tracked camera.
+  struct WorldChange {
+    std::optional<Eigen::Isometry3d> S_new_old;  // p_new = S p_old (scale world_scale); set when it moved
+    double scale = 1;
+    double loop_correction_m = -1;  // a loop closed: how far it moved the last camera
+  };
+
+  // With mapping idle: what mapping found since the last frame is applied to the map and the tracker
+  // before this frame is tracked (the same frame in the threaded and the inline mode): a metric scale
+  // (from the road, the parked cars' boxes or the scan), a scale correction, a loop correction, and the
+  // keyframe local BA moved under the last frame.
+  WorldChange applyMapEvents(int64_t index) {
+    WorldChange change;
     const bool was_metric = mapper.metric();
     const std::optional<Eigen::Isometry3d> T_world_last_before = tracker.lastWorldCam();
-    double world_scale_change = 1;
     bool world_moved = false;
     if (const auto s = mapper.takePendingScale()) becomeMetric(*s, index);
     if (mapper.lidarScaled() && !stats.lidar_scaled) {
@@ -426,7 +421,7 @@ struct OrbSlam::Impl {
         const Eigen::Vector3d centre = tracker.lastCentre();
         map.rescaleFrom(0, s, centre);
         tracker.rescaleFrom(map.keyFrameFrom(0), centre, s);
-        world_scale_change *= s;
+        change.scale *= s;
         world_moved = true;
       }
       mapper.objectScaled();
@@ -444,21 +439,20 @@ struct OrbSlam::Impl {
       tracker.rescaleFrom(first, centre, c->factor);
       parked_scale.clear();  // its stored poses are in the old unit
       ++stats.scale_corrections;
-      world_scale_change *= c->factor;
+      change.scale *= c->factor;
       world_moved = true;
       if (std::getenv("BESLAM_ORB_DEBUG"))
         std::fprintf(stderr, "frame %ld: scale x%.4f from keyframe %ld (frame %ld) on\n", static_cast<long>(index),
                      c->factor, c->first_kf_id, static_cast<long>(first->frame_index));
     }
     releaseCulled();
-    double loop_correction_m = -1;
     if (loop_pending) {  // mapping closed a loop after the last frame: the tracked frames follow the map
       loop_pending = false;
       tracker.followCorrection(loop_closer->posesBefore());  // rigid: a metric map's loop keeps its scale
       parked_scale.clear();                                  // its stored poses are from before the correction
       world_moved = true;
       const LoopClosureEvent& e = loop_closer->stats().closures.back();
-      loop_correction_m = e.correction_m;
+      change.loop_correction_m = e.correction_m;
       stats.loop_frames.emplace_back(e.frame_index, e.loop_frame_index);
       if (std::getenv("BESLAM_ORB_DEBUG"))
         std::fprintf(
@@ -476,87 +470,65 @@ struct OrbSlam::Impl {
         T_world_last_after = T_in_map;
         world_moved = true;
       }
-    std::optional<Eigen::Isometry3d> S_new_old;
     if (world_moved && was_metric && mapper.metric() && T_world_last_before && T_world_last_after) {
       // p_new = s R p_old + t, with the last camera carried along: R = R_after R_before^T and its centre
       // c_after = s R c_before + t.
       Eigen::Isometry3d S = Eigen::Isometry3d::Identity();
       S.linear() = T_world_last_after->linear() * T_world_last_before->linear().transpose();
       S.translation() =
-          T_world_last_after->translation() - world_scale_change * (S.linear() * T_world_last_before->translation());
-      S_new_old = S;
+          T_world_last_after->translation() - change.scale * (S.linear() * T_world_last_before->translation());
+      change.S_new_old = S;
     }
-    double background_mapping_ms = 0;
-    if (options.threaded_mapping) {
-      std::lock_guard<std::mutex> lock(mutex);
-      background_mapping_ms = last_mapping_ms;
-      last_mapping_ms = 0;
-    }
+    return change;
+  }
 
-    int features_static = 0, features_lidar = 0;
-    for (size_t i = 0; i < features->size(); ++i) {
-      features_static += features->onStaticObject(i) ? 1 : 0;
-      features_lidar += features->lidarRange(i) > 0 ? 1 : 0;
+  // The frame's features as the host reports them, counted before tracking.
+  struct FeatureCounts {
+    int all = 0, on_static_objects = 0, with_lidar_range = 0;
+  };
+  static FeatureCounts countFeatures(const FeatureSet& features) {
+    FeatureCounts c;
+    c.all = static_cast<int>(features.size());
+    for (size_t i = 0; i < features.size(); ++i) {
+      c.on_static_objects += features.onStaticObject(i) ? 1 : 0;
+      c.with_lidar_range += features.lidarRange(i) > 0 ? 1 : 0;
     }
-    const int feature_count = static_cast<int>(features->size());
-    tracker.useLidarPoints(options.lidar_points && mapper.lidarScaled());
-    std::vector<Eigen::Vector3d> cars_cam;
-    if (mapper.metric())
-      for (const ObjectBox& b : boxes) cars_cam.push_back(b.T_cam_box.translation());
-    tracker.setCarsInView(std::move(cars_cam));
-    const int reloc_rejections_before = tracker.relocalisationObjectRejections();
-    TrackResult result = tracker.track(features, timestamp, index);
-    result.relocalisation_object_rejections = tracker.relocalisationObjectRejections() - reloc_rejections_before;
-    result.world_is_metric = mapper.metric();
-    result.S_new_old = S_new_old;
-    result.world_change_scale = world_scale_change;
-    result.loop_closed = loop_correction_m >= 0;
-    result.loop_correction_m = std::max(0.0, loop_correction_m);
-    if (loop_closer) {
-      result.loop_object_rejections = loop_closer->stats().object_rejections - reported_object_rejections;
-      reported_object_rejections = loop_closer->stats().object_rejections;
-    }
-    result.features = feature_count;
-    result.features_static = features_static;
-    result.features_lidar = features_lidar;
-    result.lidar_points = mapper.rangedPoints() - reported_lidar_points;  // since the last frame
-    reported_lidar_points = mapper.rangedPoints();
-    result.tracked_static = tracker.trackedOnStaticObjects();
-    result.object_landmarks = static_cast<int>(map.objects().size());
-    result.object_factors = object_factors;
-    {
-      const std::vector<bool> matched = tracker.matchedKeypoints(index);
-      result.keypoints.reserve(features->size());
-      for (size_t i = 0; i < features->size(); ++i) {
-        const cv::KeyPoint& k = features->keypoints[i];
-        result.keypoints.push_back(
-            {k.pt.x, k.pt.y, features->labels[i], i < matched.size() && matched[i], static_cast<uint8_t>(k.octave)});
-      }
-    }
-    // The two-view map's unit settles over its first keyframes (KITTI 00: 0.76 of the later one at frames
-    // 0-5): poses from then would bias the parked-car fits, so they start once local BA has run a few times.
-    if (options.metric_scale && options.object_scale && !object_scale_done && result.state == TrackingState::Ok &&
-        static_cast<int>(map.numKeyFrames()) > options.ground_reference_keyframes) {
-      std::vector<std::pair<int32_t, Eigen::Vector3d>> centres;
-      for (const ObjectBox& b : boxes)
-        if (b.object_id >= 0) centres.emplace_back(b.object_id, b.T_cam_box.translation());
-      parked_scale.addFrame(result.T_world_cam, centres);
-      if (std::getenv("BESLAM_ORB_DEBUG") && index % 10 == 0) parked_scale.debugPrint(index);
-      if (const auto e = parked_scale.estimate()) {
-        pending_object_scale = e->scale;
-        stats.object_scale_tracks = e->tracks;
-        object_scale_done = true;
-      }
-    }
-    ++stats.frames;
-    if (result.state == TrackingState::Ok) ++stats.frames_tracked;
-    result.stage_ms.insert(result.stage_ms.begin(), {"extract", extract_ms});
-    if (options.threaded_mapping) {
-      result.stage_ms.emplace_back("wait_mapping", wait_ms);
-      result.stage_ms.emplace_back("mapping_background", background_mapping_ms);
-    }
-    result.stage_ms.emplace_back("tracking_total", msSince(t_start));
+    return c;
+  }
 
+  // Each keypoint with its label and whether tracking matched it.
+  void listKeypoints(const FeatureSet& features, int64_t index, TrackResult& result) const {
+    const std::vector<bool> matched = tracker.matchedKeypoints(index);
+    result.keypoints.reserve(features.size());
+    for (size_t i = 0; i < features.size(); ++i) {
+      const cv::KeyPoint& k = features.keypoints[i];
+      result.keypoints.push_back(
+          {k.pt.x, k.pt.y, features.labels[i], i < matched.size() && matched[i], static_cast<uint8_t>(k.octave)});
+    }
+  }
+
+  // The parked cars' scale fit takes this tracked frame's box centres. The two-view map's unit settles over
+  // its first keyframes (KITTI 00: 0.76 of the later one at frames 0-5): poses from then would bias the
+  // fits, so they start once local BA has run a few times.
+  void feedParkedScale(const TrackResult& result, const std::vector<ObjectBox>& boxes, int64_t index) {
+    if (!options.metric_scale || !options.object_scale || object_scale_done || result.state != TrackingState::Ok ||
+        static_cast<int>(map.numKeyFrames()) <= options.ground_reference_keyframes)
+      return;
+    std::vector<std::pair<int32_t, Eigen::Vector3d>> centres;
+    for (const ObjectBox& b : boxes)
+      if (b.object_id >= 0) centres.emplace_back(b.object_id, b.T_cam_box.translation());
+    parked_scale.addFrame(result.T_world_cam, centres);
+    if (std::getenv("BESLAM_ORB_DEBUG") && index % 10 == 0) parked_scale.debugPrint(index);
+    if (const auto e = parked_scale.estimate()) {
+      pending_object_scale = e->scale;
+      stats.object_scale_tracks = e->tracks;
+      object_scale_done = true;
+    }
+  }
+
+  // The keyframes this frame made go to mapping: queued for the mapping thread, or mapped here (inline
+  // mode, with the mapping stages' times added to the frame's).
+  void handOverKeyframes(TrackResult& result) {
     if (result.is_keyframe)  // mapping is idle: the map is as tracking left it
       for (const auto& [kf, initial] : pending)
         if (kf->id == result.keyframe_id) result.keyframe_points = observedPoints(*kf);
@@ -568,18 +540,86 @@ struct OrbSlam::Impl {
         for (auto& j : jobs) queue.push_back(j);
       }
       cv.notify_all();
-    } else {
-      std::vector<std::pair<std::string, double>> mapping_stages;
-      t0 = Clock::now();
-      for (auto& [kf, initial] : jobs) {
-        process(kf, initial);
-        mapping_stages.insert(mapping_stages.end(), process_timings.begin(), process_timings.end());
-      }
-      if (!jobs.empty()) {
-        result.stage_ms.insert(result.stage_ms.end(), mapping_stages.begin(), mapping_stages.end());
-        result.stage_ms.emplace_back("mapping", msSince(t0));
-      }
+      return;
     }
+    std::vector<std::pair<std::string, double>> mapping_stages;
+    const auto t0 = Clock::now();
+    for (auto& [kf, initial] : jobs) {
+      process(kf, initial);
+      mapping_stages.insert(mapping_stages.end(), process_timings.begin(), process_timings.end());
+    }
+    if (!jobs.empty()) {
+      result.stage_ms.insert(result.stage_ms.end(), mapping_stages.begin(), mapping_stages.end());
+      result.stage_ms.emplace_back("mapping", msSince(t0));
+    }
+  }
+
+  TrackResult track(const cv::Mat& image, const cv::Mat& labels, double timestamp, int64_t index,
+                    const std::vector<ObjectBox>& boxes, const Eigen::Matrix3Xf* lidar_cam) {
+    const auto t_start = Clock::now();
+    auto t0 = Clock::now();
+    const std::shared_ptr<FeatureSet> features = extractFeatures(image, labels, index, boxes, lidar_cam);
+    const double extract_ms = msSince(t0);
+    t0 = Clock::now();
+    // Inline and threaded: the mapping of the last keyframe is finished before this frame is tracked.
+    // Concurrent: the tracker takes its turn at the map; a rescale, scale correction or loop correction
+    // waits for an idle mapper (they move the whole map).
+    TrackerTurn turn(options.concurrent_mapping ? &gate : nullptr);
+    if (!options.concurrent_mapping) {
+      waitIdle();
+    } else if ((mapper.hasPendingScaleEvent() || pending_object_scale || loop_pending || !object_ops.empty()) &&
+               !mappingIdle()) {
+      waitIdleHoldingGate();
+    }
+    applyObjectOps();
+    const double wait_ms = msSince(t0);
+    const int object_factors =
+        mapper.lastBundleAdjustment().object_box_factors + mapper.lastBundleAdjustment().object_surface_factors;
+    const WorldChange change = applyMapEvents(index);
+    double background_mapping_ms = 0;
+    if (options.threaded_mapping) {
+      std::lock_guard<std::mutex> lock(mutex);
+      background_mapping_ms = last_mapping_ms;
+      last_mapping_ms = 0;
+    }
+
+    const FeatureCounts counts = countFeatures(*features);
+    tracker.useLidarPoints(options.lidar_points && mapper.lidarScaled());
+    std::vector<Eigen::Vector3d> cars_cam;
+    if (mapper.metric())
+      for (const ObjectBox& b : boxes) cars_cam.push_back(b.T_cam_box.translation());
+    tracker.setCarsInView(std::move(cars_cam));
+    const int reloc_rejections_before = tracker.relocalisationObjectRejections();
+    TrackResult result = tracker.track(features, timestamp, index);
+    result.relocalisation_object_rejections = tracker.relocalisationObjectRejections() - reloc_rejections_before;
+    result.world_is_metric = mapper.metric();
+    result.S_new_old = change.S_new_old;
+    result.world_change_scale = change.scale;
+    result.loop_closed = change.loop_correction_m >= 0;
+    result.loop_correction_m = std::max(0.0, change.loop_correction_m);
+    if (loop_closer) {
+      result.loop_object_rejections = loop_closer->stats().object_rejections - reported_object_rejections;
+      reported_object_rejections = loop_closer->stats().object_rejections;
+    }
+    result.lidar_points = mapper.rangedPoints() - reported_lidar_points;  // since the last frame
+    reported_lidar_points = mapper.rangedPoints();
+    result.tracked_static = tracker.trackedOnStaticObjects();
+    result.object_landmarks = static_cast<int>(map.objects().size());
+    result.object_factors = object_factors;
+    result.features = counts.all;
+    result.features_static = counts.on_static_objects;
+    result.features_lidar = counts.with_lidar_range;
+    listKeypoints(*features, index, result);
+    feedParkedScale(result, boxes, index);
+    ++stats.frames;
+    if (result.state == TrackingState::Ok) ++stats.frames_tracked;
+    result.stage_ms.insert(result.stage_ms.begin(), {"extract", extract_ms});
+    if (options.threaded_mapping) {
+      result.stage_ms.emplace_back("wait_mapping", wait_ms);
+      result.stage_ms.emplace_back("mapping_background", background_mapping_ms);
+    }
+    result.stage_ms.emplace_back("tracking_total", msSince(t_start));
+    handOverKeyframes(result);
     result.stage_ms.emplace_back("total", msSince(t_start));
     return result;
   }
