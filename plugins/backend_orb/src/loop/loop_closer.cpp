@@ -299,34 +299,14 @@ bool LoopCloser::process(KeyFrame* kf, bool metric) {
   return false;
 }
 
-bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, bool metric,
-                       const std::vector<std::pair<int, MapPoint*>>& matches) {
-  // Poses before the correction (the pose graph's measurements) and the corrected start values.
-  std::map<long, Sim3> S_before;
-  for (KeyFrame* k : map_.keyframes()) {
-    S_before[k->id] = Sim3::fromIsometry(k->T_cw);
-    poses_before_[k->id] = k->T_cw;
-  }
-  kf->updateConnections();
-  std::vector<KeyFrame*> connected = kf->covisibles();
-  connected.push_back(kf);
-  const Sim3 S_cw_corrected = S_cur_loop * S_before.at(loop_kf->id);
-  std::map<long, Sim3> S_start = S_before;
-  std::map<long, KeyFrame*> corrected_by;  // map point id -> the keyframe whose correction moved it
-  for (KeyFrame* k : connected) {
-    if (k->bad) continue;
-    S_start[k->id] = (S_before.at(k->id) * S_before.at(kf->id).inverse()) * S_cw_corrected;
-  }
-  for (KeyFrame* k : connected) {
-    if (k->bad) continue;
-    const Sim3 to_corrected = S_start.at(k->id).inverse() * S_before.at(k->id);
-    for (MapPoint* mp : k->validPoints())
-      if (corrected_by.emplace(mp->id, k).second) mp->position = to_corrected * mp->position;
-    k->T_cw = S_start.at(k->id).toIsometry();
-  }
+namespace {
 
-  // Fuse: the loop's map points replace the new keyframe's duplicates, then the loop neighbourhood is
-  // projected into every corrected keyframe.
+// Fuse: the loop's map points replace the new keyframe's duplicates, then the loop neighbourhood is
+// projected into every corrected keyframe (`connected`: the new keyframe and its covisibles). Returns the
+// covisibility links the fusion made between a corrected keyframe and one outside them (the loop's links).
+std::vector<std::pair<KeyFrame*, KeyFrame*>> fuseLoop(KeyFrame* kf, KeyFrame* loop_kf,
+                                                      const std::vector<KeyFrame*>& connected,
+                                                      const std::vector<std::pair<int, MapPoint*>>& matches) {
   std::map<long, std::set<long>> links_before;
   for (KeyFrame* k : connected)
     for (KeyFrame* c : k->covisibles()) links_before[k->id].insert(c->id);
@@ -357,6 +337,38 @@ bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, 
       if (!was_linked && !is_connected) loop_links.emplace_back(k, c);
     }
   }
+  return loop_links;
+}
+
+}  // namespace
+
+bool LoopCloser::close(KeyFrame* kf, KeyFrame* loop_kf, const Sim3& S_cur_loop, bool metric,
+                       const std::vector<std::pair<int, MapPoint*>>& matches) {
+  // Poses before the correction (the pose graph's measurements) and the corrected start values.
+  std::map<long, Sim3> S_before;
+  for (KeyFrame* k : map_.keyframes()) {
+    S_before[k->id] = Sim3::fromIsometry(k->T_cw);
+    poses_before_[k->id] = k->T_cw;
+  }
+  kf->updateConnections();
+  std::vector<KeyFrame*> connected = kf->covisibles();
+  connected.push_back(kf);
+  const Sim3 S_cw_corrected = S_cur_loop * S_before.at(loop_kf->id);
+  std::map<long, Sim3> S_start = S_before;
+  std::map<long, KeyFrame*> corrected_by;  // map point id -> the keyframe whose correction moved it
+  for (KeyFrame* k : connected) {
+    if (k->bad) continue;
+    S_start[k->id] = (S_before.at(k->id) * S_before.at(kf->id).inverse()) * S_cw_corrected;
+  }
+  for (KeyFrame* k : connected) {
+    if (k->bad) continue;
+    const Sim3 to_corrected = S_start.at(k->id).inverse() * S_before.at(k->id);
+    for (MapPoint* mp : k->validPoints())
+      if (corrected_by.emplace(mp->id, k).second) mp->position = to_corrected * mp->position;
+    k->T_cw = S_start.at(k->id).toIsometry();
+  }
+
+  const std::vector<std::pair<KeyFrame*, KeyFrame*>> loop_links = fuseLoop(kf, loop_kf, connected, matches);
   kf->loop_edges.insert(loop_kf);
   loop_kf->loop_edges.insert(kf);
 
