@@ -4,11 +4,14 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 
 #include "beslam/formats/error.hpp"
 #include "beslam/formats/file.hpp"
@@ -38,6 +41,152 @@ void checkJpeg(const std::string& path, const std::string& bytes) {
   if (end < 4 || static_cast<unsigned char>(bytes[end - 2]) != 0xFF ||
       static_cast<unsigned char>(bytes[end - 1]) != 0xD9)
     throwAt(path, "truncated JPEG image (no end-of-image marker, " + std::to_string(bytes.size()) + " bytes)");
+}
+
+// The largest image the loader decodes: 2^26 pixels (8192 x 8192). A header claiming more is refused before
+// OpenCV allocates for it (a 60-byte JPEG can claim 65,000 x 12,000 pixels: 2.4 GB).
+constexpr std::uint64_t kMaxImagePixels = std::uint64_t(1) << 26;
+
+std::uint32_t readLittleEndian32(const unsigned char* p) {
+  return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8) | (std::uint32_t(p[2]) << 16) | (std::uint32_t(p[3]) << 24);
+}
+std::uint32_t readLittleEndian24(const unsigned char* p) {
+  return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8) | (std::uint32_t(p[2]) << 16);
+}
+std::uint32_t readLittleEndian16(const unsigned char* p) { return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8); }
+std::uint32_t readBigEndian16(const unsigned char* p) { return (std::uint32_t(p[0]) << 8) | std::uint32_t(p[1]); }
+
+struct DeclaredSize {
+  std::uint64_t width = 0, height = 0;
+};
+
+// JPEG: the first frame header (SOF0-SOF15 but DHT, JPG and DAC) before the scan.
+std::optional<DeclaredSize> jpegSize(const unsigned char* d, std::size_t size) {
+  std::size_t pos = 2;
+  while (pos + 4 <= size) {
+    if (d[pos] != 0xFF) return std::nullopt;
+    const unsigned char marker = d[pos + 1];
+    if (marker == 0xFF) {  // fill byte
+      ++pos;
+      continue;
+    }
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) {  // no length
+      pos += 2;
+      continue;
+    }
+    if (marker == 0xDA || marker == 0xD9) return std::nullopt;  // scan or end before any frame header
+    const std::size_t length = readBigEndian16(d + pos + 2);
+    const bool frame = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (frame) {
+      if (length < 7 || pos + 9 > size) return std::nullopt;
+      return DeclaredSize{readBigEndian16(d + pos + 7), readBigEndian16(d + pos + 5)};
+    }
+    pos += 2 + length;
+  }
+  return std::nullopt;
+}
+
+// PGM / PPM / PBM: "P1".."P6", then width and height as text, with "#" comments.
+std::optional<DeclaredSize> pnmSize(const unsigned char* d, std::size_t size) {
+  std::size_t pos = 2;
+  std::uint64_t values[2] = {0, 0};
+  for (std::uint64_t& value : values) {
+    while (pos < size && (std::isspace(d[pos]) || d[pos] == '#')) {
+      if (d[pos] == '#')
+        while (pos < size && d[pos] != '\n') ++pos;
+      else
+        ++pos;
+    }
+    if (pos >= size || !std::isdigit(d[pos])) return std::nullopt;
+    for (; pos < size && std::isdigit(d[pos]) && value <= kMaxImagePixels; ++pos) value = value * 10 + (d[pos] - '0');
+  }
+  return DeclaredSize{values[0], values[1]};
+}
+
+// BMP: the info header's width and height (negative height: rows top-down); the 12-byte core header has 16-bit ones.
+std::optional<DeclaredSize> bmpSize(const unsigned char* d, std::size_t size) {
+  if (size < 26) return std::nullopt;
+  if (readLittleEndian32(d + 14) == 12) return DeclaredSize{readLittleEndian16(d + 18), readLittleEndian16(d + 20)};
+  const auto width = static_cast<std::int32_t>(readLittleEndian32(d + 18));
+  const auto height = static_cast<std::int32_t>(readLittleEndian32(d + 22));
+  return DeclaredSize{static_cast<std::uint64_t>(std::abs(std::int64_t(width))),
+                      static_cast<std::uint64_t>(std::abs(std::int64_t(height)))};
+}
+
+// WebP: the simple lossy ("VP8 "), lossless ("VP8L") or extended ("VP8X") header after "RIFF....WEBP".
+std::optional<DeclaredSize> webpSize(const unsigned char* d, std::size_t size) {
+  if (size < 30) return std::nullopt;
+  if (std::equal(d + 12, d + 16, "VP8 "))
+    return DeclaredSize{readLittleEndian16(d + 26) & 0x3FFFu, readLittleEndian16(d + 28) & 0x3FFFu};
+  if (std::equal(d + 12, d + 16, "VP8L")) {
+    const std::uint32_t bits = readLittleEndian32(d + 21);
+    return DeclaredSize{(bits & 0x3FFFu) + 1, ((bits >> 14) & 0x3FFFu) + 1};
+  }
+  if (std::equal(d + 12, d + 16, "VP8X"))
+    return DeclaredSize{readLittleEndian24(d + 24) + 1u, readLittleEndian24(d + 27) + 1u};
+  return std::nullopt;
+}
+
+// TIFF: ImageWidth (256) and ImageLength (257) in the first image file directory, either byte order.
+std::optional<DeclaredSize> tiffSize(const unsigned char* d, std::size_t size) {
+  if (size < 8) return std::nullopt;
+  const bool little = d[0] == 'I';
+  const auto u16 = [&](std::size_t at) -> std::uint32_t {
+    return little ? std::uint32_t(d[at]) | (std::uint32_t(d[at + 1]) << 8) : readBigEndian16(d + at);
+  };
+  const auto u32 = [&](std::size_t at) { return little ? readLittleEndian32(d + at) : readBigEndian32(d + at); };
+  const std::size_t directory = u32(4);
+  if (directory > size || size - directory < 2) return std::nullopt;
+  const std::size_t entries = u16(directory);
+  DeclaredSize declared;
+  for (std::size_t i = 0; i < entries; ++i) {
+    const std::size_t entry = directory + 2 + 12 * i;
+    if (entry + 12 > size) return std::nullopt;
+    const std::uint32_t tag = u16(entry), type = u16(entry + 2);
+    if (tag != 256 && tag != 257) continue;
+    const std::uint64_t value = type == 3 ? u16(entry + 8) : type == 4 ? u32(entry + 8) : 0;  // SHORT or LONG
+    (tag == 256 ? declared.width : declared.height) = value;
+  }
+  return declared;
+}
+
+// The width and height an image file declares in its header, for the formats the datasets take (PNG, JPEG,
+// PGM/PPM, BMP, TIFF, WebP); refuses a size that is missing, zero or above kMaxImagePixels, and any other
+// format (OpenCV would decode a few more, with no size known before it allocates).
+void checkDeclaredSize(const std::string& path, const std::string& bytes) {
+  const auto* d = reinterpret_cast<const unsigned char*>(bytes.data());
+  const std::size_t size = bytes.size();
+  const auto starts = [&](const char* magic, std::size_t n) { return size >= n && std::equal(d, d + n, magic); };
+  std::optional<DeclaredSize> declared;
+  const char* format = nullptr;
+  if (hasPngSignature(bytes)) {
+    format = "PNG";
+    if (size >= 24) declared = DeclaredSize{readBigEndian32(d + 16), readBigEndian32(d + 20)};
+  } else if (hasJpegStart(bytes)) {
+    format = "JPEG";
+    declared = jpegSize(d, size);
+  } else if (size >= 2 && d[0] == 'P' && d[1] >= '1' && d[1] <= '6') {
+    format = "PGM/PPM";
+    declared = pnmSize(d, size);
+  } else if (starts("BM", 2)) {
+    format = "BMP";
+    declared = bmpSize(d, size);
+  } else if (starts("II*\0", 4) || starts("MM\0*", 4)) {
+    format = "TIFF";
+    declared = tiffSize(d, size);
+  } else if (starts("RIFF", 4) && size >= 12 && std::equal(d + 8, d + 12, "WEBP")) {
+    format = "WebP";
+    declared = webpSize(d, size);
+  } else {
+    throwAt(path, "unknown image format (accepted: PNG, JPEG, PGM/PPM, BMP, TIFF, WebP)");
+  }
+  if (!declared || declared->width == 0 || declared->height == 0)
+    throwAt(path, std::string("corrupt ") + format + " image (no image size in its header)");
+  if (declared->width > kMaxImagePixels || declared->height > kMaxImagePixels ||
+      declared->width * declared->height > kMaxImagePixels)
+    throwAt(path, std::string(format) + " image of " + std::to_string(declared->width) + "x" +
+                      std::to_string(declared->height) + " pixels, more than the " + std::to_string(kMaxImagePixels) +
+                      " the loader decodes");
 }
 
 void requireFile(const std::string& path) {
@@ -87,6 +236,7 @@ LoadedImage loadImage(const std::string& path, bool want_color) {
     checkPng(path, bytes);
   else if (hasJpegStart(bytes))
     checkJpeg(path, bytes);
+  checkDeclaredSize(path, bytes);
 
   cv::Mat decoded;
   try {

@@ -1,7 +1,9 @@
 // Checked image loading. cv::imread alone returns an empty or partly decoded Mat for a truncated file, so
 // the encoded bytes are validated first: PNG by walking the chunk structure (length, type, CRC) up to IEND,
-// JPEG by its SOI/EOI markers; other formats are only decoded. Every failure is one beslam::Error naming
-// the file ("missing", "truncated ...", "corrupt ...", "cannot decode ...").
+// JPEG by its SOI/EOI markers; then the size every accepted format (PNG, JPEG, PGM/PPM, BMP, TIFF, WebP)
+// declares in its header must be at most 2^26 pixels, so that no header makes OpenCV allocate gigabytes;
+// other formats are refused. Every failure is one beslam::Error naming the file ("missing", "truncated ...",
+// "corrupt ...", "unknown image format ...", "... more than the 67108864 the loader decodes", "cannot decode ...").
 // The SDK component beslam::image_io (OpenCV imgcodecs and zlib), not beslam::formats: link that to use it.
 #pragma once
 
