@@ -13,7 +13,7 @@
 #include "map/map_point.hpp"
 #include "matching/matcher.hpp"
 #include "optimize/pose_optimizer.hpp"
-#include "tracking/pnp_pose.hpp"
+#include "optimize/pnp_pose.hpp"
 
 namespace beslam::orb {
 namespace {

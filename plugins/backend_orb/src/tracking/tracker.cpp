@@ -20,7 +20,7 @@
 #include "optimize/pose_optimizer.hpp"
 #include "place/keyframe_database.hpp"
 #include "stage_clock.hpp"
-#include "tracking/pnp_pose.hpp"
+#include "optimize/pnp_pose.hpp"
 
 namespace beslam::orb {
 namespace {

@@ -1,4 +1,4 @@
-#include "tracking/pnp_pose.hpp"
+#include "optimize/pnp_pose.hpp"
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
