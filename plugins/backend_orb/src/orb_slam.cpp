@@ -1,27 +1,26 @@
-// OrbSlam facade: feature extraction, tracking and local mapping (inline or on a worker thread).
+// OrbSlam facade: wires feature extraction, tracking, local mapping (mapping/mapping_thread.hpp: inline or on
+// a worker thread), loop closing and map files (map_io/map_files.hpp), and applies what mapping found (a
+// metric scale, scale and loop corrections) to the map and the tracker between frames. Options::validate is
+// in options.cpp.
 #include "beslam_orb/orb_slam.hpp"
 
-#include <atomic>
-#include <chrono>
-#include <cmath>
-#include <condition_variable>
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
-#include <deque>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <set>
 #include <stdexcept>
-#include <thread>
 
 #include "features/orb_extractor.hpp"
 #include "loop/loop_closer.hpp"
 #include "map/keyframe.hpp"
 #include "map/map.hpp"
 #include "map/map_point.hpp"
-#include "map_io/map_file.hpp"
+#include "map_io/map_files.hpp"
 #include "mapping/local_mapper.hpp"
-#include "mapping/map_gate.hpp"
+#include "mapping/mapping_thread.hpp"
 #include "optimize/bundle_adjustment.hpp"
 #include "place/keyframe_database.hpp"
 #include "place/vocabulary.hpp"
@@ -34,110 +33,13 @@
 namespace beslam::orb {
 namespace {
 
-optimize::BaSolver baSolver(BundleAdjustmentSolver solver) {
-  return solver == BundleAdjustmentSolver::Schur ? optimize::BaSolver::SchurLm : optimize::BaSolver::Ceres;
-}
-
-LocalMapperOptions mapperOptions(const Options& o) {
-  LocalMapperOptions m;
-  m.triangulation_neighbours = o.triangulation_neighbours;
-  m.triangulation_ratio = static_cast<float>(o.triangulation_ratio);
-  m.max_cos_parallax = o.triangulation_max_cos_parallax;
-  m.triangulation_check_orientation = o.triangulation_check_orientation;
-  m.triangulation_bow = o.triangulation_bow && !o.vocabulary.empty();
-  m.keyframe_culling = o.keyframe_culling;
-  m.ba.robust_iterations = o.local_ba_iterations_robust;
-  m.ba.refine_iterations = o.local_ba_iterations_refine;
-  m.ba.max_local_keyframes = o.local_ba_max_keyframes;
-  m.ba.solver = baSolver(o.local_ba_solver);
-  m.ba.trusted_weight = o.static_object_weight;
-  m.ba.objects.enabled = o.object_landmarks != ObjectLandmarkMode::Off;
-  m.ba.objects.pose_weight = o.object_pose_weight;
-  m.ba.objects.surface_weight = o.object_surface_weight;
-  m.ba.objects.box_sigma = o.object_box_sigma;
-  m.ba.objects.box_sigma_per_m = o.object_box_sigma_per_m;
-  m.ba.objects.yaw_sigma = o.object_yaw_sigma_deg * M_PI / 180.0;
-  m.ba.objects.surface_sigma = o.object_surface_sigma;
-  m.ba.objects.surface_gate = o.object_surface_gate;
-  m.ground.enabled = o.ground_prior || o.metric_scale;
-  // A metric map knows the camera height itself, which a car's load and suspension change by a few percent:
-  // a plane 10 % off it is not the road under the camera (a kerb, a wall's foot, a bare road's stray points).
-  if (o.metric_scale) m.ground.max_height_deviation = 0.1;
-  m.metric_camera_height = o.metric_scale ? o.camera_height : 0;
-  m.metric_max_spread = o.metric_max_spread;
-  m.metric_correction_min = o.metric_correction_min;
-  m.object_range_sigma = o.metric_scale && o.object_scale ? o.object_range_sigma : 0;
-  m.object_range_sigma_per_m = o.object_range_sigma_per_m;
-  m.lidar_range_sigma = o.metric_scale && o.lidar_scale ? o.lidar_range_sigma : 0;
-  m.lidar_range_sigma_per_m = o.lidar_range_sigma_per_m;
-  m.lidar_reference_keyframes = o.lidar_reference_keyframes;
-  m.lidar_min_points = o.lidar_min_points;
-  m.lidar_points = o.lidar_points;
-  m.lidar_points_per_keyframe = o.lidar_points_per_keyframe;
-  m.ba.object_anchors = o.object_scale_hold == ObjectScaleHold::Anchors;
-  m.ba.object_range_priors = o.object_scale_hold == ObjectScaleHold::Ranges;
-  m.ground.sigma_ratio = o.ground_prior_sigma;
-  m.ground.reference_keyframes = o.ground_reference_keyframes;
-  m.ground.min_inliers = o.ground_min_inliers;
-  m.ground.pool_keyframes = o.ground_pool_keyframes;
-  return m;
+// Local mapping's options: bag-of-words triangulation only with a vocabulary.
+MappingOptions withVocabulary(MappingOptions mapping, bool has_vocabulary) {
+  mapping.triangulation_bow = mapping.triangulation_bow && has_vocabulary;
+  return mapping;
 }
 
 }  // namespace
-
-bool Options::validate(std::string* error) const {
-  auto fail = [&](const std::string& m) {
-    if (error) *error = m;
-    return false;
-  };
-  const ExtractorOptions& e = extractor;
-  if (e.features < 100) return fail("features must be >= 100");
-  if (init_features_factor < 1) return fail("init_features_factor must be >= 1");
-  if (!(e.scale_factor > 1.0 && e.scale_factor < 2.0)) return fail("scale_factor must be in (1, 2)");
-  if (e.levels < 1 || e.levels > 16) return fail("levels must be in [1, 16]");
-  if (e.fast_initial < 1 || e.fast_fallback < 1 || e.static_object_fast < 1)
-    return fail("FAST thresholds must be >= 1");
-  if (e.fast_fallback > e.fast_initial) return fail("fast_fallback must be <= fast_initial");
-  if (e.static_object_budget_share < 0 || e.static_object_budget_share > 1)
-    return fail("static_object_budget_share must be in [0, 1]");
-  if (static_object_weight <= 0) return fail("static_object_weight must be > 0");
-  if (fps <= 0) return fail("fps must be > 0");
-  if (min_tracked_inliers < 10) return fail("min_tracked_inliers must be >= 10");
-  if (keyframe_min_gap < 1) return fail("keyframe_min_gap must be >= 1");
-  if (keyframe_ref_ratio <= 0 || keyframe_ref_ratio > 1) return fail("keyframe_ref_ratio must be in (0, 1]");
-  if (!(keyframe_floor_ratio >= 0)) return fail("keyframe_floor_ratio must be >= 0");
-  if (triangulation_ratio <= 0 || triangulation_ratio > 1) return fail("triangulation_ratio must be in (0, 1]");
-  if (triangulation_max_cos_parallax <= 0 || triangulation_max_cos_parallax >= 1)
-    return fail("triangulation_max_cos_parallax must be in (0, 1)");
-  if (triangulation_neighbours < 1) return fail("triangulation_neighbours must be >= 1");
-  if (!(ground_prior_sigma > 0) || !std::isfinite(ground_prior_sigma)) return fail("ground_prior_sigma must be > 0");
-  if (ground_reference_keyframes < 1) return fail("ground_reference_keyframes must be >= 1");
-  if (ground_min_inliers < 3) return fail("ground_min_inliers must be >= 3");
-  if (metric_scale && !(camera_height > 0 && camera_height < 100))
-    return fail("metric_scale needs the camera's height over the road (dataset camera_height), in (0, 100) m");
-  if (!(metric_max_spread > 0)) return fail("metric_max_spread must be > 0");
-  if (!(object_range_sigma > 0) || !(object_range_sigma_per_m >= 0))
-    return fail("object_range_sigma must be > 0 and object_range_sigma_per_m >= 0");
-  if (!(lidar_range_sigma > 0) || !(lidar_range_sigma_per_m >= 0))
-    return fail("lidar_range_sigma must be > 0 and lidar_range_sigma_per_m >= 0");
-  if (lidar_reference_keyframes < 1 || lidar_min_points < 3)
-    return fail("lidar_reference_keyframes must be >= 1 and lidar_min_points >= 3");
-  if (lidar_points_per_keyframe < 1) return fail("lidar_points_per_keyframe must be >= 1");
-  if (!(object_pose_weight >= 0) || !(object_surface_weight >= 0))
-    return fail("object_pose_weight and object_surface_weight must be >= 0");
-  if (!(object_box_sigma > 0) || !(object_box_sigma_per_m >= 0) || !(object_yaw_sigma_deg > 0) ||
-      !(object_surface_sigma > 0) || !(object_surface_gate > 0))
-    return fail(
-        "object_box_sigma, object_yaw_sigma_deg, object_surface_sigma and object_surface_gate must be > 0, "
-        "object_box_sigma_per_m >= 0");
-  if (local_ba_iterations_robust < 0 || local_ba_iterations_refine < 0) return fail("BA iterations must be >= 0");
-  if (local_ba_max_keyframes < 0) return fail("local_ba_max_keyframes must be >= 0");
-  if (ground_pool_keyframes < 0) return fail("ground_pool_keyframes must be >= 0");
-  if (loop_own_stretch_keyframes < 0) return fail("loop_own_stretch_keyframes must be >= 0");
-  if (init_min_parallax_deg <= 0) return fail("init_min_parallax_deg must be > 0");
-  if (ransac_iterations < 1) return fail("ransac_iterations must be >= 1");
-  return true;
-}
 
 struct OrbSlam::Impl {
   Camera camera;
@@ -148,7 +50,7 @@ struct OrbSlam::Impl {
   Map map;
   LocalMapper mapper;
   Tracker tracker;
-  std::unique_ptr<LoopCloser> loop_closer;  // with a vocabulary and Options::loop_closure
+  std::unique_ptr<LoopCloser> loop_closer;  // with a vocabulary and Options::loop.enabled
   bool loop_pending = false;                // closed on the mapping side, not yet followed by the tracker
   std::vector<std::pair<std::string, double>> process_timings;  // the last process() call's stage times
   int reported_object_rejections = 0;
@@ -181,17 +83,8 @@ struct OrbSlam::Impl {
     return p;
   }
 
-  // Mapping thread. With concurrent mapping the map is shared through `gate` (mapping/map_gate.hpp), and
-  // `stop_ba` asks the mapper to cut its local BA short (tracking wanted a keyframe while it was busy).
-  MapGate gate;
-  std::atomic<bool> stop_ba{false};
-  std::thread worker;
-  std::mutex mutex;
-  std::condition_variable cv;
-  std::deque<std::pair<KeyFrame*, bool>> queue;     // keyframes waiting for local mapping
-  std::vector<std::pair<KeyFrame*, bool>> pending;  // made during the current track() call
-  bool busy = false, stop = false;
-  double last_mapping_ms = 0;
+  std::vector<MappingThread::Job> pending;  // keyframes made during the current track() call
+  MapFiles map_files;
   // Object landmarks added and objects dropped by the caller while mapping may run (threaded modes): kept in
   // call order and applied once mapping is idle, before the next frame is tracked. Inline mapping applies
   // them at once; the order against mapping is the same (a keyframe's mapping, then the caller's objects,
@@ -201,76 +94,56 @@ struct OrbSlam::Impl {
     int32_t drop = -1;
   };
   std::vector<ObjectOp> object_ops;
+  // Where mapping runs (Options::threading). Last: its worker stops before the rest goes.
+  MappingThread mapping;
 
   Impl(const Camera& c, const Options& o)
       : camera(c),
         options(o),
         extractor(o.extractor),
         vocabulary(o.vocabulary.empty() ? place::Vocabulary() : place::Vocabulary::load(o.vocabulary)),
-        mapper(map, c, extractor.pyramid(), mapperOptions(o)),
+        mapper(map, c, extractor.pyramid(), withVocabulary(o.mapping, !vocabulary.empty()), o.scale, o.object_landmarks,
+               o.static_object_weight),
         tracker(
-            c, o, extractor.pyramid(), map, [this](KeyFrame* kf, bool initial) { pending.emplace_back(kf, initial); },
+            c, TrackerOptions(o), extractor.pyramid(), map,
+            [this](KeyFrame* kf, bool initial) { pending.emplace_back(kf, initial); },
             [this] {
-              if (options.concurrent_mapping) waitIdleHoldingGate();  // the mapper finishes before the map goes
+              // the mapper finishes before the map goes
+              if (options.threading.concurrent_mapping) mapping.waitIdleHoldingGate();
               mapper.reset();
               if (loop_closer) loop_closer->reset();
             },
-            vocabulary.empty() ? nullptr : &vocabulary, &database) {
-    if (options.localisation_only) object_scale_done = true;  // the map's unit is the loaded map's
-    if (options.loop_closure && !vocabulary.empty()) {
+            vocabulary.empty() ? nullptr : &vocabulary, &database),
+        map_files(c, o.extractor),
+        mapping(o.threading, [this](KeyFrame* kf, bool initial) { process(kf, initial); }) {
+    if (options.map_reuse.localisation_only) object_scale_done = true;  // the map's unit is the loaded map's
+    if (options.loop.enabled && !vocabulary.empty()) {
       LoopOptions lo;
-      lo.object_check = options.loop_object_check;
-      lo.global_ba_iterations = options.loop_global_ba_iterations;
-      lo.global_ba_solver = baSolver(options.loop_global_ba_solver);
+      lo.object_check = options.loop.object_check;
+      lo.global_ba_iterations = options.loop.global_ba_iterations;
+      lo.global_ba_solver = optimize::baSolver(options.loop.global_ba_solver);
       lo.metric_terms = [this] { return mapper.metricTerms(); };
-      lo.global_ba_objects = options.loop_global_ba_objects;
+      lo.global_ba_objects = options.loop.global_ba_objects;
       lo.seed = options.seed;
       loop_closer = std::make_unique<LoopCloser>(map, database, extractor.pyramid(), lo);
     }
-    if (options.concurrent_mapping) {
-      options.threaded_mapping = true;
-      mapper.setConcurrency(&gate, &stop_ba);
-      tracker.setKeyFrameAcceptance([this] {
-        if (mappingIdle()) return true;
-        stop_ba = true;  // ORB-SLAM2: the mapper cuts its local BA short to take the next keyframe sooner
-        return false;
-      });
+    if (options.threading.concurrent_mapping) {
+      options.threading.threaded_mapping = true;
+      mapper.setConcurrency(&mapping.gate(), &mapping.stopBa());
+      tracker.setKeyFrameAcceptance([this] { return mapping.acceptKeyFrame(); });
     }
-    if (options.threaded_mapping) worker = std::thread([this] { run(); });
-  }
-
-  // What a map file made by this instance records about it; the vocabulary identity stays empty until
-  // there is a place-recognition vocabulary.
-  MapFileInfo mapFileInfo() const {
-    MapFileInfo info;
-    info.camera = camera;
-    info.levels = options.extractor.levels;
-    info.scale_factor = options.extractor.scale_factor;
-    info.metric = mapper.metric();
-    return info;
   }
 
   void loadMap(const std::string& path) {
-    waitIdle();
+    mapping.waitIdle();
     if (stats.frames > 0 || map.numKeyFrames() > 0)
       throw std::logic_error("OrbSlam::loadMap: only before the first frame (map file '" + path + "')");
-    std::vector<ObjectLandmark> loaded;
-    const MapFileInfo info = loadMapFile(path, mapFileInfo(), extractor.pyramid(), map, loaded);
-    for (const ObjectLandmark& l : loaded) map.objects().add(l, map.lastKeyFrameId());
+    const MapFileInfo info = map_files.load(path, extractor.pyramid(), map);
     if (info.metric) {  // in metres already: the mapper keeps it so, the parked cars do not rescale it
       mapper.rescale(1.0, std::max(0L, map.lastKeyFrameId()));
       object_scale_done = true;
     }
     tracker.mapLoaded();
-  }
-
-  ~Impl() {
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      stop = true;
-    }
-    cv.notify_all();
-    if (worker.joinable()) worker.join();
   }
 
   // Local mapping, then loop closing, of one keyframe; their stage times go to process_timings.
@@ -283,41 +156,6 @@ struct OrbSlam::Impl {
     if (loop_closer->process(kf, mapper.metric())) loop_pending = true;
     const auto& loop_timings = loop_closer->lastTimings();
     process_timings.insert(process_timings.end(), loop_timings.begin(), loop_timings.end());
-  }
-
-  void run() {
-    for (;;) {
-      std::pair<KeyFrame*, bool> job;
-      {
-        std::unique_lock<std::mutex> lock(mutex);
-        cv.wait(lock, [this] { return stop || !queue.empty(); });
-        if (queue.empty()) return;
-        job = queue.front();
-        queue.pop_front();
-        busy = true;
-      }
-      const auto t0 = Clock::now();
-      if (options.concurrent_mapping) {
-        gate.enterMapper();
-        stop_ba = false;
-        process(job.first, job.second);
-        gate.leaveMapper();  // before busy is cleared: an idle mapper holds no gate
-      } else {
-        process(job.first, job.second);
-      }
-      {
-        std::lock_guard<std::mutex> lock(mutex);
-        last_mapping_ms += msSince(t0);
-        busy = false;
-      }
-      cv.notify_all();
-    }
-  }
-
-  void waitIdle() {
-    if (!options.threaded_mapping) return;
-    std::unique_lock<std::mutex> lock(mutex);
-    cv.wait(lock, [this] { return queue.empty() && !busy; });
   }
 
   void applyObjectOps() {
@@ -333,27 +171,13 @@ struct OrbSlam::Impl {
 
   void queueObjectOp(ObjectOp op) {
     object_ops.push_back(std::move(op));
-    if (!options.threaded_mapping) applyObjectOps();
+    if (!mapping.threaded()) applyObjectOps();
   }
 
   // Mapping idle and the caller's object changes applied: what every accessor of the map needs.
   void syncIdle() {
-    waitIdle();
+    mapping.waitIdle();
     applyObjectOps();
-  }
-
-  bool mappingIdle() {
-    if (!options.threaded_mapping) return true;
-    std::lock_guard<std::mutex> lock(mutex);
-    return queue.empty() && !busy;
-  }
-
-  // Concurrent mapping, the tracker holding the gate: waits for an idle mapper (which needs the gate to
-  // finish), then takes the gate back.
-  void waitIdleHoldingGate() {
-    gate.leaveTracker();
-    waitIdle();
-    gate.enterTracker();
   }
 
   // Concurrent mapping: the tracker's turn at the map, left on every way out of track().
@@ -374,14 +198,15 @@ struct OrbSlam::Impl {
   std::shared_ptr<FeatureSet> extractFeatures(const cv::Mat& image, const cv::Mat& labels, int64_t index,
                                               const std::vector<ObjectBox>& boxes, const Eigen::Matrix3Xf* lidar_cam) {
     const int budget =
-        tracker.initialising() ? options.extractor.features * options.init_features_factor : options.extractor.features;
+        tracker.initialising() ? options.extractor.features * options.init.features_factor : options.extractor.features;
     const std::shared_ptr<const PreparedImage> prepared_image = takePrepared(index, image.size());
     auto features = extractor.extract(image, labels, budget, prepared_image.get());
-    if (options.object_scale && options.metric_scale && !boxes.empty()) setObjectRanges(*features, boxes);
-    if (options.lidar_scale && options.metric_scale && lidar_cam) setLidarRanges(*features, *lidar_cam, camera);
+    const ScaleOptions& scale = options.scale;
+    if (scale.object_scale && scale.metric_scale && !boxes.empty()) setObjectRanges(*features, boxes);
+    if (scale.lidar_scale && scale.metric_scale && lidar_cam) setLidarRanges(*features, *lidar_cam, camera);
     // Kept with a keyframe for the parked cars' anchors and the object landmarks' camera-object factors.
-    if (options.object_landmarks != ObjectLandmarkMode::Off ||
-        (options.metric_scale && options.object_scale && options.object_scale_hold == ObjectScaleHold::Anchors))
+    if (options.object_landmarks.mode != ObjectLandmarkMode::Off ||
+        (scale.metric_scale && scale.object_scale && scale.object_scale_hold == ObjectScaleHold::Anchors))
       for (const ObjectBox& b : boxes)
         if (b.parked && b.object_id >= 0) features->object_boxes.push_back(b);
     return features;
@@ -511,8 +336,9 @@ struct OrbSlam::Impl {
   // its first keyframes (KITTI 00: 0.76 of the later one at frames 0-5): poses from then would bias the
   // fits, so they start once local BA has run a few times.
   void feedParkedScale(const TrackResult& result, const std::vector<ObjectBox>& boxes, int64_t index) {
-    if (!options.metric_scale || !options.object_scale || object_scale_done || result.state != TrackingState::Ok ||
-        static_cast<int>(map.numKeyFrames()) <= options.ground_reference_keyframes)
+    if (!options.scale.metric_scale || !options.scale.object_scale || object_scale_done ||
+        result.state != TrackingState::Ok ||
+        static_cast<int>(map.numKeyFrames()) <= options.scale.ground_reference_keyframes)
       return;
     std::vector<std::pair<int32_t, Eigen::Vector3d>> centres;
     for (const ObjectBox& b : boxes)
@@ -534,12 +360,8 @@ struct OrbSlam::Impl {
         if (kf->id == result.keyframe_id) result.keyframe_points = observedPoints(*kf);
     auto jobs = std::move(pending);
     pending.clear();
-    if (options.threaded_mapping) {
-      {
-        std::lock_guard<std::mutex> lock(mutex);
-        for (auto& j : jobs) queue.push_back(j);
-      }
-      cv.notify_all();
+    if (mapping.threaded()) {
+      mapping.queue(jobs);
       return;
     }
     std::vector<std::pair<std::string, double>> mapping_stages;
@@ -564,27 +386,22 @@ struct OrbSlam::Impl {
     // Inline and threaded: the mapping of the last keyframe is finished before this frame is tracked.
     // Concurrent: the tracker takes its turn at the map; a rescale, scale correction or loop correction
     // waits for an idle mapper (they move the whole map).
-    TrackerTurn turn(options.concurrent_mapping ? &gate : nullptr);
-    if (!options.concurrent_mapping) {
-      waitIdle();
+    TrackerTurn turn(mapping.concurrent() ? &mapping.gate() : nullptr);
+    if (!mapping.concurrent()) {
+      mapping.waitIdle();
     } else if ((mapper.hasPendingScaleEvent() || pending_object_scale || loop_pending || !object_ops.empty()) &&
-               !mappingIdle()) {
-      waitIdleHoldingGate();
+               !mapping.idle()) {
+      mapping.waitIdleHoldingGate();
     }
     applyObjectOps();
     const double wait_ms = msSince(t0);
     const int object_factors =
         mapper.lastBundleAdjustment().object_box_factors + mapper.lastBundleAdjustment().object_surface_factors;
     const WorldChange change = applyMapEvents(index);
-    double background_mapping_ms = 0;
-    if (options.threaded_mapping) {
-      std::lock_guard<std::mutex> lock(mutex);
-      background_mapping_ms = last_mapping_ms;
-      last_mapping_ms = 0;
-    }
+    const double background_mapping_ms = mapping.threaded() ? mapping.takeBackgroundMs() : 0;
 
     const FeatureCounts counts = countFeatures(*features);
-    tracker.useLidarPoints(options.lidar_points && mapper.lidarScaled());
+    tracker.useLidarPoints(options.scale.lidar_points && mapper.lidarScaled());
     std::vector<Eigen::Vector3d> cars_cam;
     if (mapper.metric())
       for (const ObjectBox& b : boxes) cars_cam.push_back(b.T_cam_box.translation());
@@ -614,7 +431,7 @@ struct OrbSlam::Impl {
     ++stats.frames;
     if (result.state == TrackingState::Ok) ++stats.frames_tracked;
     result.stage_ms.insert(result.stage_ms.begin(), {"extract", extract_ms});
-    if (options.threaded_mapping) {
+    if (mapping.threaded()) {
       result.stage_ms.emplace_back("wait_mapping", wait_ms);
       result.stage_ms.emplace_back("mapping_background", background_mapping_ms);
     }
@@ -653,7 +470,7 @@ struct OrbSlam::Impl {
   // Frees the keyframes and map points culled since the last call, once the tracker and the mapper have let
   // go of them. Only with mapping idle (inline and threaded: after waitIdle(); concurrent: skipped until then).
   void releaseCulled() {
-    if (!map.hasCulled() || !mappingIdle()) return;  // concurrent mapping: later, when the mapper is idle
+    if (!map.hasCulled() || !mapping.idle()) return;  // concurrent mapping: later, when the mapper is idle
     tracker.forgetCulled();
     mapper.forgetCulled();
     for (KeyFrame* kf : map.culledNotReleased()) database.erase(kf);
@@ -717,7 +534,7 @@ OrbSlam::OrbSlam(const Camera& camera, const Options& options) {
   if (camera.width <= 0 || camera.height <= 0 || camera.fx <= 0 || camera.fy <= 0)
     throw std::invalid_argument("beslam::orb::Camera: width, height, fx and fy must be > 0");
   impl_ = std::make_unique<Impl>(camera, options);
-  if (!options.load_map.empty()) impl_->loadMap(options.load_map);
+  if (!options.map_reuse.load_map.empty()) impl_->loadMap(options.map_reuse.load_map);
 }
 
 OrbSlam::~OrbSlam() = default;
@@ -734,18 +551,18 @@ TrackResult OrbSlam::track(const cv::Mat& gray, const cv::Mat& label_mask, doubl
 void OrbSlam::finish() {
   impl_->syncIdle();
   KeyFrame* last = impl_->tracker.lastKeyFrame();
-  if (!impl_->options.localisation_only && last && !last->bad && impl_->map.numKeyFrames() > 2) {
-    optimize::BundleAdjustmentOptions ba = mapperOptions(impl_->options).ba;
+  if (!impl_->options.map_reuse.localisation_only && last && !last->bad && impl_->map.numKeyFrames() > 2) {
+    optimize::BundleAdjustmentOptions ba = impl_->mapper.bundleAdjustmentOptions();
     ba.objects.enabled = ba.objects.enabled && impl_->mapper.metric();  // as in local mapping
     optimize::localBundleAdjustment(last, impl_->map, ba);
   }
   impl_->releaseCulled();
-  if (!impl_->options.save_map.empty()) saveMap(impl_->options.save_map);
+  if (!impl_->options.map_reuse.save_map.empty()) saveMap(impl_->options.map_reuse.save_map);
 }
 
 void OrbSlam::saveMap(const std::string& path) const {
   impl_->syncIdle();
-  saveMapFile(path, impl_->map, impl_->mapFileInfo(), impl_->map.objects().landmarks());
+  impl_->map_files.save(path, impl_->map, impl_->mapper.metric());
 }
 
 void OrbSlam::loadMap(const std::string& path) { impl_->loadMap(path); }
@@ -790,8 +607,8 @@ std::vector<CloudPoint> OrbSlam::mapPoints() const {
 }
 
 void OrbSlam::addObjectLandmarks(const std::vector<ObjectLandmark>& landmarks) {
-  if (impl_->options.localisation_only) return;  // the loaded map's landmarks stay as they are
-  impl_->queueObjectOp({landmarks, -1});         // local BA reads and moves them: once mapping is idle
+  if (impl_->options.map_reuse.localisation_only) return;  // the loaded map's landmarks stay as they are
+  impl_->queueObjectOp({landmarks, -1});                   // local BA reads and moves them: once mapping is idle
 }
 
 std::vector<ObjectLandmark> OrbSlam::objectLandmarks() const {
@@ -800,8 +617,8 @@ std::vector<ObjectLandmark> OrbSlam::objectLandmarks() const {
 }
 
 void OrbSlam::dropObject(int32_t object_id) {
-  if (impl_->options.localisation_only) return;  // the map does not change
-  impl_->queueObjectOp({{}, object_id});         // once mapping is idle
+  if (impl_->options.map_reuse.localisation_only) return;  // the map does not change
+  impl_->queueObjectOp({{}, object_id});                   // once mapping is idle
 }
 
 Statistics OrbSlam::statistics() const {

@@ -38,19 +38,19 @@ std::string resolveVocabulary(const std::string& setting, const beslam::sdk::Con
 beslam::orb::Options readOptions(const beslam::sdk::Config& config, const beslam::sdk::Context& context) {
   beslam::orb::Options o = kSettings.read(config);
   o.vocabulary = resolveVocabulary(o.vocabulary, context);
-  o.camera_height = context.cameraHeight().value_or(0);  // the rig's, from the dataset: not a setting
+  o.scale.camera_height = context.cameraHeight().value_or(0);  // the rig's, from the dataset: not a setting
   std::string error;
   if (!o.validate(&error)) throw beslam::sdk::ConfigError(error);
-  if (o.localisation_only && o.load_map.empty())
+  if (o.map_reuse.localisation_only && o.map_reuse.load_map.empty())
     throw beslam::sdk::ConfigError("localisation_only needs a map to localise in (load_map)");
   // A map that cannot be saved should fail the run now, not after it.
-  if (!o.save_map.empty()) {
-    const std::filesystem::path folder = std::filesystem::absolute(o.save_map).parent_path();
+  if (!o.map_reuse.save_map.empty()) {
+    const std::filesystem::path folder = std::filesystem::absolute(o.map_reuse.save_map).parent_path();
     std::error_code ec;
     if (!std::filesystem::is_directory(folder, ec))
       throw beslam::sdk::ConfigError("save_map: folder '" + folder.string() + "' does not exist");
-    if (std::filesystem::is_directory(o.save_map, ec))
-      throw beslam::sdk::ConfigError("save_map: '" + o.save_map + "' is a folder");
+    if (std::filesystem::is_directory(o.map_reuse.save_map, ec))
+      throw beslam::sdk::ConfigError("save_map: '" + o.map_reuse.save_map + "' is a folder");
   }
   return o;
 }
@@ -77,11 +77,11 @@ class OrbBackend : public beslam::sdk::Backend {
  public:
   OrbBackend(const beslam::sdk::Context& context, const beslam::sdk::Config& config)
       : slam_(readCamera(context), readOptions(config, context)), T_cam_lidar_(context.T_cam_lidar()) {
-    if (!slam_.options().load_map.empty()) {
+    if (!slam_.options().map_reuse.load_map.empty()) {
       const beslam::orb::Statistics s = slam_.statistics();
-      context.info("map '" + slam_.options().load_map + "' loaded: " + std::to_string(s.keyframes) + " keyframes, " +
-                   std::to_string(s.map_points) + " map points" +
-                   (slam_.options().localisation_only ? " (localisation only)" : ""));
+      context.info("map '" + slam_.options().map_reuse.load_map + "' loaded: " + std::to_string(s.keyframes) +
+                   " keyframes, " + std::to_string(s.map_points) + " map points" +
+                   (slam_.options().map_reuse.localisation_only ? " (localisation only)" : ""));
     }
   }
 
@@ -121,9 +121,9 @@ class OrbBackend : public beslam::sdk::Backend {
         car_boxes.push_back({b.track_id >= 0 ? b.track_id : -1,
                              b.track_id >= 0 && b.motion_state == BESLAM_MOTION_STATIC, beslam::sdk::boxPose(b),
                              Eigen::Vector3d(b.size[0], b.size[2], b.size[1])});
-    // The frame's LiDAR scan in the camera frame: a metric scale source (Options::lidar_scale).
+    // The frame's LiDAR scan in the camera frame: a metric scale source (ScaleOptions::lidar_scale).
     std::optional<Eigen::Matrix3Xf> lidar_cam;
-    if (frame.hasLidar() && T_cam_lidar_ && slam_.options().metric_scale && slam_.options().lidar_scale) {
+    if (frame.hasLidar() && T_cam_lidar_ && slam_.options().scale.metric_scale && slam_.options().scale.lidar_scale) {
       const Eigen::Isometry3f T = T_cam_lidar_->cast<float>();
       lidar_cam = (T.linear() * frame.lidarPoints().topRows<3>()).colwise() + T.translation();
     }

@@ -61,7 +61,7 @@ TEST(Kitti06, TracksTheExcerptWithinTheApeBound) { checkExcerpt("06", 51, Option
 // turn is held (0.44 m at seed 42; 0.93 m without the prior), under the 0.80 m target.
 TEST(Kitti00, GroundPriorKeepsTheApeUnderTheTarget) {
   Options options;
-  options.ground_prior = true;
+  options.scale.ground_prior = true;
   checkExcerpt("00", 200, options, 0.80);
 }
 
@@ -83,9 +83,9 @@ TEST(Kitti00, MetricScaleFromTheCameraHeight) {
   const cv::Mat first = cv::imread(kitti::imagePath(seq, 0), cv::IMREAD_GRAYSCALE);
   auto run = [&](bool threaded, Statistics* stats) {
     Options options;
-    options.metric_scale = true;
-    options.camera_height = 1.65;
-    options.threaded_mapping = threaded;
+    options.scale.metric_scale = true;
+    options.scale.camera_height = 1.65;
+    options.threading.threaded_mapping = threaded;
     OrbSlam slam(kitti::readCamera(seq + "/calib.txt", first.cols, first.rows), options);
     bool metric_reported = false;
     for (size_t n = 0;; ++n) {

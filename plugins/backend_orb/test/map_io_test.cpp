@@ -92,7 +92,7 @@ class MapFileTest : public ::testing::Test {
   static std::string loadError(const std::string& file, const Camera& camera = test::CorridorWorld().camera()) {
     try {
       Options o = smallOptions();
-      o.load_map = file;
+      o.map_reuse.load_map = file;
       OrbSlam slam(camera, o);
     } catch (const std::runtime_error& e) {
       return e.what();
@@ -118,8 +118,8 @@ TEST_F(MapFileTest, SavedAndLoadedMapIsTheSameMap) {
 
 TEST_F(MapFileTest, LoadedMapTracksTheSameFramesToTheSamePosesWithoutChangingIt) {
   Options o = smallOptions();
-  o.load_map = path("map.bin");
-  o.localisation_only = true;
+  o.map_reuse.load_map = path("map.bin");
+  o.map_reuse.localisation_only = true;
   OrbSlam slam(test::CorridorWorld().camera(), o);
   int tracked = 0;
   for (int i = 0; i < kFrames; ++i) {
@@ -151,9 +151,9 @@ TEST_F(MapFileTest, LoadedMapTracksTheSameFramesToTheSamePosesWithoutChangingIt)
 
 TEST_F(MapFileTest, SaveMapOptionSavesInFinish) {
   Options o = smallOptions();
-  o.load_map = path("map.bin");
-  o.localisation_only = true;
-  o.save_map = path("finish.bin");
+  o.map_reuse.load_map = path("map.bin");
+  o.map_reuse.localisation_only = true;
+  o.map_reuse.save_map = path("finish.bin");
   OrbSlam slam(test::CorridorWorld().camera(), o);
   slam.track(corridorImages()[3], cv::Mat(), 0.3, 3);
   slam.finish();
@@ -290,13 +290,13 @@ TEST(MapMemory, TrackerLetsGoOfACulledKeyFrame) {
   Options o = smallOptions();
   const OrbExtractor extractor(o.extractor);
   Map map;
-  LocalMapper mapper(map, cam, extractor.pyramid(), LocalMapperOptions{});
+  LocalMapper mapper(map, cam, extractor.pyramid(), o.mapping, o.scale, o.object_landmarks, o.static_object_weight);
   std::vector<std::pair<KeyFrame*, bool>> jobs;
   Tracker tracker(
-      cam, o, extractor.pyramid(), map, [&](KeyFrame* kf, bool initial) { jobs.emplace_back(kf, initial); },
-      [&] { mapper.reset(); });
+      cam, TrackerOptions(o), extractor.pyramid(), map,
+      [&](KeyFrame* kf, bool initial) { jobs.emplace_back(kf, initial); }, [&] { mapper.reset(); });
   auto track = [&](int i) {
-    const int budget = tracker.initialising() ? o.extractor.features * o.init_features_factor : o.extractor.features;
+    const int budget = tracker.initialising() ? o.extractor.features * o.init.features_factor : o.extractor.features;
     const TrackResult r = tracker.track(extractor.extract(corridorImages()[i], cv::Mat(), budget), 0.1 * i, i);
     for (auto& [kf, initial] : jobs) mapper.processKeyFrame(kf, !initial);
     jobs.clear();

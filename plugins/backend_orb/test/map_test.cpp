@@ -58,7 +58,8 @@ TEST(Map, RedundantKeyFramesAreCulledAndTheTreeStaysConnected) {
   SimMap m(5);
   std::vector<Eigen::Isometry3d> poses;
   for (KeyFrame* kf : m.kfs) poses.push_back(kf->T_cw);
-  LocalMapper mapper(m.map, kCam, m.pyr, LocalMapperOptions{});
+  const Options o{};  // the mapper with the run's defaults (Options' mapping, scale and object modules)
+  LocalMapper mapper(m.map, kCam, m.pyr, o.mapping, o.scale, o.object_landmarks, o.static_object_weight);
   // Every point is seen by all five: keyframes 1 and 2 are redundant; after them the points have
   // three observations left, so keyframe 3 is not; the origin and the current keyframe never go.
   EXPECT_EQ(mapper.cullKeyFrames(m.kfs[4]), 2);
@@ -133,7 +134,8 @@ TEST(Map, CulledObjectsAreFreed) {
     SimMap m(5);
     EXPECT_EQ(KeyFrame::instances() - kfs_before, 5);
     EXPECT_EQ(MapPoint::instances() - points_before, 150);
-    LocalMapper mapper(m.map, kCam, m.pyr, LocalMapperOptions{});
+    const Options o{};
+    LocalMapper mapper(m.map, kCam, m.pyr, o.mapping, o.scale, o.object_landmarks, o.static_object_weight);
     ASSERT_EQ(mapper.cullKeyFrames(m.kfs[4]), 2);
     // Two of the points lose all but two observations too.
     m.kfs[0]->erasePoint(size_t{0});  // as bundle adjustment drops an outlier: both sides

@@ -470,8 +470,8 @@ ObjectLandmark carLandmark(int64_t id) {
 TEST(ObjectLandmarks, DropObjectRemovesTheLandmarkInEveryMappingMode) {
   for (int mode = 0; mode < 3; ++mode) {
     Options o;
-    o.threaded_mapping = mode == 1;
-    o.concurrent_mapping = mode == 2;
+    o.threading.threaded_mapping = mode == 1;
+    o.threading.concurrent_mapping = mode == 2;
     OrbSlam slam(kCam, o);
     slam.addObjectLandmarks({carLandmark(7), carLandmark(8)});
     ASSERT_EQ(slam.objectLandmarks().size(), 2u) << mode;
@@ -560,7 +560,7 @@ TEST(ObjectLandmarks, OffAndNonMetricRunsAreByteIdenticalToNoObjects) {
   auto run = [&](ObjectLandmarkMode mode, bool landmarks) {
     Options o;
     o.extractor.features = 1000;
-    o.object_landmarks = mode;
+    o.object_landmarks.mode = mode;
     OrbSlam slam(world.camera(), o);
     ObjectBox box;  // a parked car's box every frame (not on the image)
     box.object_id = 7;
@@ -627,11 +627,11 @@ TEST(ObjectLandmarks, EnterLocalBaOfAMetricCorridorRun) {
   };
   auto run = [&](ObjectLandmarkMode mode, bool threaded) {
     Options o;
-    o.threaded_mapping = threaded;
+    o.threading.threaded_mapping = threaded;
     o.extractor.features = 1000;
-    o.metric_scale = true;
-    o.camera_height = 1.5;
-    o.object_landmarks = mode;
+    o.scale.metric_scale = true;
+    o.scale.camera_height = 1.5;
+    o.object_landmarks.mode = mode;
     OrbSlam slam(cam, o);
     Run out;
     for (int i = 0; i < kFrames; ++i) {

@@ -349,7 +349,8 @@ TEST(Relocalisation, ALoadedMapsKeyFramesAreFoundByBagOfWords) {
   const Vocabulary vocabulary = Vocabulary::load(tempPath("loaded.bvoc"));
   KeyFrameDatabase database;
   Tracker tracker(
-      world.camera(), options, extractor.pyramid(), map, [](KeyFrame*, bool) {}, [] {}, &vocabulary, &database);
+      world.camera(), TrackerOptions(options), extractor.pyramid(), map, [](KeyFrame*, bool) {}, [] {}, &vocabulary,
+      &database);
   BowVector bow;
   vocabulary.transform(describe(corridorImages()[16]), bow);
   EXPECT_TRUE(database.relocalisationCandidates(bow).empty()) << "nothing indexed before the map is handed over";

@@ -97,9 +97,9 @@ Options smallOptions() {
 // Metric scale from the corridor's floor (and from the scans, where the frames carry them).
 Options metricOptions() {
   Options o = smallOptions();
-  o.metric_scale = true;
-  o.camera_height = 1.5;  // the corridor's floor
-  o.object_scale = false;
+  o.scale.metric_scale = true;
+  o.scale.camera_height = 1.5;  // the corridor's floor
+  o.scale.object_scale = false;
   return o;
 }
 
@@ -234,7 +234,7 @@ TEST(SlamSynthetic, WithAScanKeyframesMakeMapPointsWhereTheRangesPutThem) {
   ASSERT_GT(d.size(), 500u);
   EXPECT_LT(d[d.size() / 2], 0.04);
   EXPECT_LT(d[d.size() * 9 / 10], 0.10);
-  o.lidar_points = false;
+  o.scale.lidar_points = false;
   const RunResult without = runCorridor(o, kFrames, 0, /*lidar=*/true);
   EXPECT_EQ(without.stats.lidar_points, 0);
   EXPECT_LT(without.points.size(), with.points.size());
@@ -254,7 +254,7 @@ TEST(SlamSynthetic, SameSeedSameTrajectory) {
 
 TEST(SlamSynthetic, ThreadedMappingGivesTheSameTrajectory) {
   Options threaded = smallOptions();
-  threaded.threaded_mapping = true;
+  threaded.threading.threaded_mapping = true;
   const RunResult a = runCorridor(smallOptions(), 20), b = runCorridor(threaded, 20);
   ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
   for (size_t i = 0; i < a.trajectory.size(); ++i)
@@ -274,7 +274,7 @@ TEST(SlamSynthetic, FramesPreparedAheadGiveTheSameTrajectory) {
 // trajectory, so it is held to the accuracy of the inline run, not to its bits, whatever the threads do.
 TEST(SlamSynthetic, ConcurrentMappingTracksTheCorridorAccurately) {
   Options concurrent = smallOptions();
-  concurrent.concurrent_mapping = true;
+  concurrent.threading.concurrent_mapping = true;
   for (int run_index = 0; run_index < 3; ++run_index) {
     const RunResult run = runCorridor(concurrent);
     EXPECT_EQ(run.stats.resets, 0);
@@ -322,15 +322,15 @@ TEST(Options, ValidationNamesTheConstraint) {
   EXPECT_THROW(OrbSlam(Camera{640, 480, 500, 500, 320, 240}, o), std::invalid_argument);
   EXPECT_THROW(OrbSlam(Camera{0, 480, 500, 500, 320, 240}, Options{}), std::invalid_argument);
   Options lidar;
-  lidar.lidar_range_sigma = 0;
+  lidar.scale.lidar_range_sigma = 0;
   EXPECT_FALSE(lidar.validate(&error));
   EXPECT_NE(error.find("lidar_range_sigma"), std::string::npos);
   lidar = Options{};
-  lidar.lidar_reference_keyframes = 0;
+  lidar.scale.lidar_reference_keyframes = 0;
   EXPECT_FALSE(lidar.validate(&error));
   EXPECT_NE(error.find("lidar_reference_keyframes"), std::string::npos);
   lidar = Options{};
-  lidar.lidar_points_per_keyframe = 0;
+  lidar.scale.lidar_points_per_keyframe = 0;
   EXPECT_FALSE(lidar.validate(&error));
   EXPECT_NE(error.find("lidar_points_per_keyframe"), std::string::npos);
 }

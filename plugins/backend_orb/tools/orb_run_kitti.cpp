@@ -63,9 +63,9 @@ int main(int argc, char** argv) {
   bool quiet = false;
   for (int i = 4; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--threaded"))
-      options.threaded_mapping = true;
+      options.threading.threaded_mapping = true;
     else if (!std::strcmp(argv[i], "--concurrent"))
-      options.concurrent_mapping = true;
+      options.threading.concurrent_mapping = true;
     else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc)
       max_frames = std::stoul(argv[++i]);
     else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc)
@@ -75,35 +75,35 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--cv-threads") && i + 1 < argc)
       cv::setNumThreads(std::stoi(argv[++i]));
     else if (!std::strcmp(argv[i], "--kf-gap") && i + 1 < argc)
-      options.keyframe_min_gap = std::stoi(argv[++i]);
+      options.tracking.keyframe_min_gap = std::stoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--tri-ratio") && i + 1 < argc)
-      options.triangulation_ratio = std::stod(argv[++i]);
+      options.mapping.triangulation_ratio = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--ba-max-kfs") && i + 1 < argc)
-      options.local_ba_max_keyframes = std::stoi(argv[++i]);
+      options.mapping.local_ba_max_keyframes = std::stoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--features") && i + 1 < argc)
       options.extractor.features = std::stoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--no-kf-culling"))
-      options.keyframe_culling = false;
+      options.mapping.keyframe_culling = false;
     else if (!std::strcmp(argv[i], "--init-parallax") && i + 1 < argc)
-      options.init_min_parallax_deg = std::stod(argv[++i]);
+      options.init.min_parallax_deg = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--init-levels") && i + 1 < argc)
-      options.init_match_max_level = std::stoi(argv[++i]);
+      options.init.match_max_level = std::stoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--tri-orientation"))
-      options.triangulation_check_orientation = true;
+      options.mapping.triangulation_check_orientation = true;
     else if (!std::strcmp(argv[i], "--tri-cos") && i + 1 < argc)
-      options.triangulation_max_cos_parallax = std::stod(argv[++i]);
+      options.mapping.triangulation_max_cos_parallax = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--fast") && i + 2 < argc) {
       options.extractor.fast_initial = std::stoi(argv[++i]);
       options.extractor.fast_fallback = std::stoi(argv[++i]);
     } else if (!std::strcmp(argv[i], "--kf-ratio") && i + 1 < argc) {
-      options.keyframe_ref_ratio = std::stod(argv[++i]);
+      options.tracking.keyframe_ref_ratio = std::stod(argv[++i]);
     } else if (!std::strcmp(argv[i], "--ground") && i + 2 < argc) {
-      options.ground_prior = true;
-      options.ground_prior_sigma = std::stod(argv[++i]);
-      options.ground_min_inliers = std::stoi(argv[++i]);
+      options.scale.ground_prior = true;
+      options.scale.ground_prior_sigma = std::stod(argv[++i]);
+      options.scale.ground_min_inliers = std::stoi(argv[++i]);
     } else if (!std::strcmp(argv[i], "--ba-iters") && i + 2 < argc) {
-      options.local_ba_iterations_robust = std::stoi(argv[++i]);
-      options.local_ba_iterations_refine = std::stoi(argv[++i]);
+      options.mapping.local_ba_iterations_robust = std::stoi(argv[++i]);
+      options.mapping.local_ba_iterations_refine = std::stoi(argv[++i]);
     } else {
       std::cerr << "unknown option " << argv[i] << "\n";
       return 2;

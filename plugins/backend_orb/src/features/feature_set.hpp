@@ -8,7 +8,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/types.hpp"
 
 namespace beslam::orb {
 

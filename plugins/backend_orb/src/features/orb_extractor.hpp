@@ -15,7 +15,7 @@
 #include <opencv2/features2d.hpp>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"  // ExtractorOptions
+#include "beslam_orb/options.hpp"
 #include "features/feature_set.hpp"
 #include "features/scale_pyramid.hpp"
 

@@ -1,5 +1,6 @@
 #include "init/two_view.hpp"
 
+#include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>

@@ -16,10 +16,10 @@
 #include "objects/object_layout.hpp"
 #include "objects/object_store.hpp"
 #include "optimize/bundle_adjustment.hpp"
+#include "optimize/pnp_pose.hpp"
 #include "optimize/pose_optimizer.hpp"
 #include "place/keyframe_database.hpp"
 #include "stage_clock.hpp"
-#include "tracking/pnp_pose.hpp"
 
 namespace beslam::orb {
 namespace {

@@ -27,7 +27,7 @@
 #include <utility>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
 #include "features/scale_pyramid.hpp"
 #include "loop/sim3.hpp"
 #include "map/map_fwd.hpp"

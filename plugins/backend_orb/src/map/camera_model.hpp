@@ -3,7 +3,7 @@
 
 #include <Eigen/Core>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
 
 namespace beslam::orb {
 

@@ -9,7 +9,7 @@
 #include <set>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
 #include "features/feature_set.hpp"
 #include "features/scale_pyramid.hpp"
 #include "map/id_less.hpp"

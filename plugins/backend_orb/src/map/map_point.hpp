@@ -37,7 +37,7 @@ class MapPoint {
   bool bad = false;
   MapPoint* replaced_by = nullptr;
   bool trusted = false;  // created on a static object
-  // Made from one keyframe's LiDAR range (LocalMapper::createRangedPoints, Options::lidar_points), not
+  // Made from one keyframe's LiDAR range (LocalMapper::createRangedPoints, ScaleOptions::lidar_points), not
   // triangulated: its one observation already fixes it, as a stereo or RGB-D observation does in ORB-SLAM2.
   bool from_range = false;
   int32_t object_id = -1;  // that object's track id (mask label - 1000), -1 if none

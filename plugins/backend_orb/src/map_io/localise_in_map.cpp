@@ -1,5 +1,6 @@
 #include "map_io/localise_in_map.hpp"
 
+#include <Eigen/Core>  // before OpenCV's Eigen utilities
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -12,8 +13,8 @@
 #include "map/map.hpp"
 #include "map/map_point.hpp"
 #include "matching/matcher.hpp"
+#include "optimize/pnp_pose.hpp"
 #include "optimize/pose_optimizer.hpp"
-#include "tracking/pnp_pose.hpp"
 
 namespace beslam::orb {
 namespace {

@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
 #include "features/scale_pyramid.hpp"
 #include "map/map_fwd.hpp"
 

@@ -16,7 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
+#include "beslam_orb/types.hpp"
 #include "features/scale_pyramid.hpp"
 
 namespace beslam::orb {

@@ -25,33 +25,82 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return S;
 }
 
+// Fusion: with the best covisible keyframes and, of each, its best ones (ORB-SLAM2's 20 and 5).
+constexpr int kFuseNeighbours = 20, kFuseSecondOrder = 5;
+// Once settled, a local scale correction larger than this share is not trusted (ScaleOptions::metric_correction_min).
+constexpr double kMetricCorrectionMax = 0.05;
+
+// Local BA as the options ask for it, before the metric terms (metricTerms).
+optimize::BundleAdjustmentOptions localBundleAdjustmentOptions(const MappingOptions& m, const ScaleOptions& scale,
+                                                               const ObjectLandmarkOptions& o,
+                                                               double static_object_weight) {
+  optimize::BundleAdjustmentOptions ba;
+  ba.robust_iterations = m.local_ba_iterations_robust;
+  ba.refine_iterations = m.local_ba_iterations_refine;
+  ba.max_local_keyframes = m.local_ba_max_keyframes;
+  ba.solver = optimize::baSolver(m.local_ba_solver);
+  ba.trusted_weight = static_object_weight;
+  ba.objects.enabled = o.mode != ObjectLandmarkMode::Off;
+  ba.objects.pose_weight = o.pose_weight;
+  ba.objects.surface_weight = o.surface_weight;
+  ba.objects.box_sigma = o.box_sigma;
+  ba.objects.box_sigma_per_m = o.box_sigma_per_m;
+  ba.objects.yaw_sigma = o.yaw_sigma_deg * M_PI / 180.0;
+  ba.objects.surface_sigma = o.surface_sigma;
+  ba.objects.surface_gate = o.surface_gate;
+  ba.object_anchors = scale.object_scale_hold == ObjectScaleHold::Anchors;
+  ba.object_range_priors = scale.object_scale_hold == ObjectScaleHold::Ranges;
+  return ba;
+}
+
+// The ground fits' options: the ground prior's, also on with metric scale.
+GroundPlaneOptions groundPlaneOptions(const ScaleOptions& scale) {
+  GroundPlaneOptions g;
+  g.enabled = scale.ground_prior || scale.metric_scale;
+  // A metric map knows the camera height itself, which a car's load and suspension change by a few percent:
+  // a plane 10 % off it is not the road under the camera (a kerb, a wall's foot, a bare road's stray points).
+  if (scale.metric_scale) g.max_height_deviation = 0.1;
+  g.sigma_ratio = scale.ground_prior_sigma;
+  g.reference_keyframes = scale.ground_reference_keyframes;
+  g.min_inliers = scale.ground_min_inliers;
+  g.pool_keyframes = scale.ground_pool_keyframes;
+  return g;
+}
+
 }  // namespace
 
-LocalMapper::LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyramid, const LocalMapperOptions& options)
+LocalMapper::LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyramid, const MappingOptions& mapping,
+                         const ScaleOptions& scale, const ObjectLandmarkOptions& objects, double static_object_weight)
     : map_(map),
       camera_(camera),
       pyramid_(pyramid),
-      options_(options),
+      mapping_(mapping),
+      scale_(scale),
+      ba_(localBundleAdjustmentOptions(mapping, scale, objects, static_object_weight)),
+      ground_(groundPlaneOptions(scale)),
+      metric_camera_height_(scale.metric_scale ? scale.camera_height : 0),
+      object_range_sigma_(scale.metric_scale && scale.object_scale ? scale.object_range_sigma : 0),
+      lidar_range_sigma_(scale.metric_scale && scale.lidar_scale ? scale.lidar_range_sigma : 0),
       ground_reference_(makeGroundReference()),
-      object_reference_(options.ground.reference_keyframes, options.metric_max_spread),
-      lidar_reference_(options.lidar_reference_keyframes, options.metric_max_spread) {}
+      object_reference_(ground_.reference_keyframes, scale.metric_max_spread),
+      lidar_reference_(scale.lidar_reference_keyframes, scale.metric_max_spread) {}
 
 void LocalMapper::yieldPoint() {
   if (gate_) gate_->yieldToTracker();
 }
 
 optimize::BundleAdjustmentOptions LocalMapper::metricTerms() const {
-  optimize::BundleAdjustmentOptions ba = options_.ba;
+  optimize::BundleAdjustmentOptions ba = ba_;
   if (metric_) {  // the boxes are metric: so is the map now
-    ba.object_range_sigma = options_.object_range_sigma;
-    ba.object_range_sigma_per_m = options_.object_range_sigma_per_m;
+    ba.object_range_sigma = object_range_sigma_;
+    ba.object_range_sigma_per_m = scale_.object_range_sigma_per_m;
   }
   if (metric_ && lidar_scaled_) {  // and the scan's ranges, once they agree with the map's unit
-    ba.lidar_range_sigma = options_.lidar_range_sigma;
-    ba.lidar_range_sigma_per_m = options_.lidar_range_sigma_per_m;
+    ba.lidar_range_sigma = lidar_range_sigma_;
+    ba.lidar_range_sigma_per_m = scale_.lidar_range_sigma_per_m;
   }
   // Object landmarks are metric (boxes, shapes): they enter only a metric map.
-  ba.objects.enabled = options_.ba.objects.enabled && metric_;
+  ba.objects.enabled = ba_.objects.enabled && metric_;
   return ba;
 }
 
@@ -69,7 +118,7 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   last_new_points_ = createNewPoints(kf);
   timings_.emplace_back("map_triangulate", msSince(t0));
   int ranged_points = 0;
-  if (options_.lidar_points && lidar_scaled_) {
+  if (scale_.lidar_points && lidar_scaled_) {
     t0 = Clock::now();
     ranged_points = createRangedPoints(kf);
     ranged_points_ += ranged_points;
@@ -82,38 +131,37 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
   yieldPoint();
   t0 = Clock::now();
   if (map_.numKeyFrames() > 2) {
-    optimize::GroundPrior ground{options_.ground, &ground_reference_};
+    optimize::GroundPrior ground{ground_, &ground_reference_};
     optimize::BundleAdjustmentOptions ba = metricTerms();
     // Once the parked cars' boxes gave the scale, their range priors hold it; the ground prior would pull it
     // towards the road fits, whose biases (bare roads, kerbs) fight the direct measurement.
-    const bool ground_prior = options_.ground.enabled && !object_scaled_ && !lidar_scaled_;
+    const bool ground_prior = ground_.enabled && !object_scaled_ && !lidar_scaled_;
     if (gate_) ba.between_passes = [this] { yieldPoint(); };
     if (stop_ba_) ba.stop_early = stop_ba_;
     last_ba_ = optimize::localBundleAdjustment(kf, map_, ba, ground_prior ? &ground : nullptr);
-    if (options_.lidar_range_sigma > 0 && options_.metric_camera_height > 0 && !lidar_scaled_ && !pending_scale_)
+    if (lidar_range_sigma_ > 0 && metric_camera_height_ > 0 && !lidar_scaled_ && !pending_scale_)
       measureScaleByLidar(kf);
-    if (options_.object_range_sigma > 0 && options_.metric_camera_height > 0 && !metric_ && !pending_scale_) {
+    if (object_range_sigma_ > 0 && metric_camera_height_ > 0 && !metric_ && !pending_scale_) {
       if (const auto s = objectScale(*kf)) object_reference_.add(*s);
       if (object_reference_.ready()) pending_scale_ = currentObjectScale(kf).value_or(object_reference_.height());
     }
-    if (options_.ground.enabled && !ground_reference_.ready()) {
-      if (const auto plane =
-              fitGroundPlane(*kf, options_.ground, Eigen::Vector3d::UnitY(), options_.ground.max_tilt_deg))
+    if (ground_.enabled && !ground_reference_.ready()) {
+      if (const auto plane = fitGroundPlane(*kf, ground_, Eigen::Vector3d::UnitY(), ground_.max_tilt_deg))
         ground_reference_.add(*plane);
-      if (metric_) ground_reference_.setHeight(options_.metric_camera_height);  // metric by the objects first
-      if (ground_reference_.ready() && options_.metric_camera_height > 0 && !metric_ && !pending_scale_)
-        pending_scale_ = options_.metric_camera_height / currentGroundHeight(kf);
+      if (metric_) ground_reference_.setHeight(metric_camera_height_);  // metric by the objects first
+      if (ground_reference_.ready() && metric_camera_height_ > 0 && !metric_ && !pending_scale_)
+        pending_scale_ = metric_camera_height_ / currentGroundHeight(kf);
     }
-    if (metric_ && !object_scaled_ && !lidar_scaled_ && options_.metric_correction_min > 0) keepScale(kf);
+    if (metric_ && !object_scaled_ && !lidar_scaled_ && scale_.metric_correction_min > 0) keepScale(kf);
   }
   timings_.emplace_back("map_local_ba", msSince(t0));
   yieldPoint();
   t0 = Clock::now();
   int culled = 0;
-  if (options_.keyframe_culling) culled = cullKeyFrames(kf);
+  if (mapping_.keyframe_culling) culled = cullKeyFrames(kf);
   timings_.emplace_back("map_kf_culling", msSince(t0));
   if (std::getenv("BESLAM_ORB_DEBUG")) {  // one line per keyframe for developers
-    if (const auto plane = fitGroundPlane(*kf, options_.ground, Eigen::Vector3d::UnitY(), options_.ground.max_tilt_deg))
+    if (const auto plane = fitGroundPlane(*kf, ground_, Eigen::Vector3d::UnitY(), ground_.max_tilt_deg))
       std::fprintf(stderr, "  kf %ld frame %ld: ground fit h %.4f (%zu inliers)\n", kf->id,
                    static_cast<long>(kf->frame_index), plane->height, plane->inliers.size());
     int obs_hist[6] = {0, 0, 0, 0, 0, 0};
@@ -131,12 +179,11 @@ void LocalMapper::processKeyFrame(KeyFrame* kf, bool run_ba) {
 }
 
 void LocalMapper::keepScale(KeyFrame* kf) {
-  const double H = options_.metric_camera_height;
-  const auto plane =
-      fitGroundPlane(*kf, options_.ground, ground_reference_.normal(), options_.ground.max_tilt_from_reference_deg);
-  if (!plane || std::abs(plane->height / H - 1.0) > options_.ground.max_height_deviation) return;
+  const double H = metric_camera_height_;
+  const auto plane = fitGroundPlane(*kf, ground_, ground_reference_.normal(), ground_.max_tilt_from_reference_deg);
+  if (!plane || std::abs(plane->height / H - 1.0) > ground_.max_height_deviation) return;
   scale_fits_.emplace_back(kf->id, plane->height);
-  const size_t K = static_cast<size_t>(options_.ground.reference_keyframes);
+  const size_t K = static_cast<size_t>(ground_.reference_keyframes);
   if (scale_fits_.size() > K) scale_fits_.erase(scale_fits_.begin());
   if (scale_fits_.size() < K) return;
   std::vector<double> ratios;
@@ -144,12 +191,12 @@ void LocalMapper::keepScale(KeyFrame* kf) {
   const double r = median(ratios);
   // Standard error of the median of K fits, from their median absolute deviation (normal: 1.4826 MAD).
   const double se = 1.4826 * medianAbsoluteDeviation(ratios, r) * 1.2533 / std::sqrt(static_cast<double>(K));
-  if (std::abs(r - 1.0) <= std::max(options_.metric_correction_min, 2.0 * se)) return;
+  if (std::abs(r - 1.0) <= std::max(scale_.metric_correction_min, 2.0 * se)) return;
   // While the metric map is young its whole extent shares the first estimate's error: the whole map is
   // corrected. Later, drift is local and slow: the map from the oldest of the fits on is corrected, and only
   // by a few percent (a larger step over a few keyframes is the fits' own bias: a junction, a bare road).
   const bool settling = kf->id - metric_since_kf_ < 3 * static_cast<long>(K);
-  if (!settling && std::abs(r - 1.0) > options_.metric_correction_max) {
+  if (!settling && std::abs(r - 1.0) > kMetricCorrectionMax) {
     scale_fits_.clear();
     return;
   }
@@ -187,16 +234,16 @@ std::optional<double> LocalMapper::currentObjectScale(KeyFrame* kf) const {
   // As for the ground: the map as it is now, over the keyframe and its best covisible keyframes.
   std::vector<double> scales;
   if (const auto s = objectScale(*kf)) scales.push_back(*s);
-  for (KeyFrame* k : kf->bestCovisibles(options_.ground.reference_keyframes * 2))
+  for (KeyFrame* k : kf->bestCovisibles(ground_.reference_keyframes * 2))
     if (!k->bad)
       if (const auto s = objectScale(*k)) scales.push_back(*s);
-  if (static_cast<int>(scales.size()) < options_.ground.reference_keyframes) return std::nullopt;
+  if (static_cast<int>(scales.size()) < ground_.reference_keyframes) return std::nullopt;
   return median(std::move(scales));
 }
 
 std::optional<double> LocalMapper::lidarScale(const KeyFrame& kf) const {
   return rangeScale(
-      kf, [](const FeatureSet& f, size_t i) { return f.lidarRange(i); }, options_.lidar_min_points);
+      kf, [](const FeatureSet& f, size_t i) { return f.lidarRange(i); }, scale_.lidar_min_points);
 }
 
 void LocalMapper::measureScaleByLidar(KeyFrame* kf) {
@@ -210,7 +257,7 @@ void LocalMapper::measureScaleByLidar(KeyFrame* kf) {
   // As for the road and the boxes: the factor of the map as it is now, over the keyframe and its best
   // covisible keyframes (the reference's own samples were taken before later local BAs moved the map).
   std::vector<double> scales{*s_kf};
-  for (KeyFrame* k : kf->bestCovisibles(options_.lidar_reference_keyframes * 2))
+  for (KeyFrame* k : kf->bestCovisibles(scale_.lidar_reference_keyframes * 2))
     if (!k->bad)
       if (const auto s = lidarScale(*k)) scales.push_back(*s);
   const double s = median(std::move(scales));
@@ -226,8 +273,7 @@ void LocalMapper::measureScaleByLidar(KeyFrame* kf) {
 std::vector<std::pair<KeyFrame*, double>> LocalMapper::keyFrameGroundHeights() const {
   std::vector<std::pair<KeyFrame*, double>> out;
   for (KeyFrame* k : map_.keyframes())
-    if (const auto plane = fitGroundPlane(*k, options_.ground, ground_reference_.normal(),
-                                          options_.ground.max_tilt_from_reference_deg))
+    if (const auto plane = fitGroundPlane(*k, ground_, ground_reference_.normal(), ground_.max_tilt_from_reference_deg))
       out.emplace_back(k, plane->height);
   return out;
 }
@@ -236,16 +282,14 @@ double LocalMapper::currentGroundHeight(KeyFrame* kf) const {
   // The fits behind the reference were made when each keyframe was new; local BA has moved the map since.
   // The scale that matters is the map's as it is now: refit the newest keyframes' planes.
   std::vector<double> heights;
-  for (KeyFrame* k : kf->bestCovisibles(options_.ground.reference_keyframes * 2)) {
+  for (KeyFrame* k : kf->bestCovisibles(ground_.reference_keyframes * 2)) {
     if (k->bad) continue;
-    if (const auto plane = fitGroundPlane(*k, options_.ground, ground_reference_.normal(),
-                                          options_.ground.max_tilt_from_reference_deg))
+    if (const auto plane = fitGroundPlane(*k, ground_, ground_reference_.normal(), ground_.max_tilt_from_reference_deg))
       heights.push_back(plane->height);
   }
-  if (const auto plane =
-          fitGroundPlane(*kf, options_.ground, ground_reference_.normal(), options_.ground.max_tilt_from_reference_deg))
+  if (const auto plane = fitGroundPlane(*kf, ground_, ground_reference_.normal(), ground_.max_tilt_from_reference_deg))
     heights.push_back(plane->height);
-  if (static_cast<int>(heights.size()) < options_.ground.reference_keyframes) return ground_reference_.height();
+  if (static_cast<int>(heights.size()) < ground_.reference_keyframes) return ground_reference_.height();
   return median(std::move(heights));
 }
 
@@ -293,7 +337,7 @@ void LocalMapper::cullRecentPoints(KeyFrame* kf) {
 }
 
 int LocalMapper::createNewPoints(KeyFrame* kf) {
-  const auto neighbours = kf->bestCovisibles(options_.triangulation_neighbours);
+  const auto neighbours = kf->bestCovisibles(mapping_.triangulation_neighbours);
   const Eigen::Matrix3d K = intrinsics(camera_), Kinv = K.inverse();
   const Eigen::Isometry3d T1 = kf->T_cw;
   const Eigen::Vector3d O1 = kf->centre();
@@ -311,8 +355,8 @@ int LocalMapper::createNewPoints(KeyFrame* kf) {
     const Eigen::Isometry3d T2 = kf2->T_cw;
     const Eigen::Isometry3d T21 = T2 * T1.inverse();
     const Eigen::Matrix3d F21 = Kinv.transpose() * skew(T21.translation()) * T21.linear() * Kinv;
-    matching::searchForTriangulation(kf, kf2, F21, matches, options_.triangulation_ratio,
-                                     options_.triangulation_check_orientation, options_.triangulation_bow);
+    matching::searchForTriangulation(kf, kf2, F21, matches, static_cast<float>(mapping_.triangulation_ratio),
+                                     mapping_.triangulation_check_orientation, mapping_.triangulation_bow);
     Eigen::Matrix<double, 3, 4> P1, P2;
     P1 << T1.linear(), T1.translation();
     P2 << T2.linear(), T2.translation();
@@ -325,7 +369,7 @@ int LocalMapper::createNewPoints(KeyFrame* kf) {
       const Eigen::Vector3d xn2 = unproject(camera_, kp2.pt.x, kp2.pt.y);
       const Eigen::Vector3d ray1 = R1wc * xn1, ray2 = R2wc * xn2;
       const double cos_rays = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
-      if (cos_rays <= 0 || cos_rays >= options_.max_cos_parallax) continue;
+      if (cos_rays <= 0 || cos_rays >= mapping_.triangulation_max_cos_parallax) continue;
       const Eigen::Vector3d X = TwoViewInitializer::triangulate(xn1.head<2>(), xn2.head<2>(), P1, P2);
       if (!X.allFinite()) continue;
       const Eigen::Vector3d x1c = T1 * X, x2c = T2 * X;
@@ -366,7 +410,7 @@ int LocalMapper::createRangedPoints(KeyFrame* kf) {
   std::vector<std::pair<float, size_t>> by_range;
   for (size_t i = 0; i < kf->points.size(); ++i)
     if (f.lidarRange(i) > 0 && !kf->points[i]) by_range.emplace_back(f.lidarRange(i), i);
-  const size_t n = std::min(by_range.size(), static_cast<size_t>(options_.lidar_points_per_keyframe));
+  const size_t n = std::min(by_range.size(), static_cast<size_t>(scale_.lidar_points_per_keyframe));
   std::partial_sort(by_range.begin(), by_range.begin() + static_cast<std::ptrdiff_t>(n), by_range.end());
   int created = 0;
   for (size_t k = 0; k < n; ++k) {
@@ -389,14 +433,14 @@ int LocalMapper::createRangedPoints(KeyFrame* kf) {
 
 void LocalMapper::fuseWithNeighbours(KeyFrame* kf) {
   std::vector<KeyFrame*> targets;
-  for (KeyFrame* n : kf->bestCovisibles(options_.fuse_neighbours)) {
+  for (KeyFrame* n : kf->bestCovisibles(kFuseNeighbours)) {
     if (n->bad || n == kf || n->fuse_target_for_kf == kf->id) continue;
     n->fuse_target_for_kf = kf->id;
     targets.push_back(n);
   }
   const size_t first_order = targets.size();
   for (size_t i = 0; i < first_order; ++i)
-    for (KeyFrame* n2 : targets[i]->bestCovisibles(options_.fuse_second_order)) {
+    for (KeyFrame* n2 : targets[i]->bestCovisibles(kFuseSecondOrder)) {
       if (n2->bad || n2 == kf || n2->fuse_target_for_kf == kf->id) continue;
       n2->fuse_target_for_kf = kf->id;
       targets.push_back(n2);

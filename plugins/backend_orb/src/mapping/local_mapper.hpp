@@ -1,6 +1,10 @@
 // Local mapping, run once per new keyframe: register its observations, cull recent points that are
 // rarely found, triangulate new points with the best covisible keyframes (epipolar search), fuse
 // duplicates with first- and second-order neighbours, local bundle adjustment, keyframe culling.
+// It reads Options::mapping, and for the map's scale Options::scale (the ground prior, metric scale from
+// the camera height, the parked cars' boxes and the LiDAR ranges: it asks for rescales, the facade applies
+// them), Options::object_landmarks and Options::static_object_weight for local BA's terms. Keyframe poses
+// are T_cw (world to camera); the world is in metres once metric() says so.
 #pragma once
 
 #include <atomic>
@@ -10,51 +14,12 @@
 #include <utility>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
 #include "features/scale_pyramid.hpp"
 #include "map/map_fwd.hpp"
 #include "optimize/bundle_adjustment.hpp"
 
 namespace beslam::orb {
-
-struct LocalMapperOptions {
-  int triangulation_neighbours = 20;
-  float triangulation_ratio = 1.0f;
-  double max_cos_parallax = 0.9998;
-  bool triangulation_check_orientation = false;
-  bool triangulation_bow = false;  // epipolar candidates only under the same BoW direct-index node
-  int fuse_neighbours = 20, fuse_second_order = 5;
-  bool keyframe_culling = true;
-  optimize::BundleAdjustmentOptions ba;
-  GroundPlaneOptions ground;  // ground-height prior in local BA (off by default)
-  // Metric scale (on when > 0, with the ground prior): the rig's camera height over the road in metres.
-  // Once the ground reference is confident, the mapper asks for the map to be rescaled so that the
-  // reference height becomes this; the ground prior then holds it (metres from then on).
-  double metric_camera_height = 0;
-  double metric_max_spread = 0.1;  // the reference's fits must agree this well (relative MAD)
-  // Scale keeping once metric: when the last reference_keyframes ground fits say, beyond their own noise and
-  // by more than this share, that the camera height is not metric_camera_height, the map from the oldest of
-  // those keyframes on is scaled back (a local Sim(3) scale correction). 0: off.
-  double metric_correction_min = 0.02;
-  double metric_correction_max = 0.05;  // after settling: larger local corrections are not trusted
-  // Static objects' metric boxes (FeatureSet::object_range): a scale source like the ground fits, and once
-  // metric they hold the scale in local BA (ba.object_anchors or ba.object_range_priors) with this std-dev
-  // (m, plus per metre). 0: not used.
-  double object_range_sigma = 0;
-  double object_range_sigma_per_m = 0.02;
-  // LiDAR ranges of keypoints (FeatureSet::lidar_range): once lidar_reference_keyframes keyframes, each with
-  // lidar_min_points of them on its map points, agree on the map's unit, the map is rescaled (or, already
-  // metric by the road or the boxes, corrected); from then on they hold the scale in local BA with this
-  // std-dev (m, plus per metre), and the road fits neither hold nor correct it. 0: not used.
-  double lidar_range_sigma = 0;
-  double lidar_range_sigma_per_m = 0.005;
-  int lidar_reference_keyframes = 2;
-  int lidar_min_points = 20;
-  // Once the ranges hold the scale: after triangulation, the nearest lidar_points_per_keyframe keypoints of a
-  // new keyframe that have a LiDAR range and no map point each become one, at that range along their ray.
-  bool lidar_points = false;
-  int lidar_points_per_keyframe = 100;
-};
 
 // A scale correction the mapper asks for: the map from keyframe first_kf_id on times factor.
 struct ScaleCorrection {
@@ -64,7 +29,9 @@ struct ScaleCorrection {
 
 class LocalMapper {
  public:
-  LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyramid, const LocalMapperOptions& options);
+  // objects and static_object_weight: local BA's object-landmark factors and trusted points' weight.
+  LocalMapper(Map& map, const Camera& camera, const ScalePyramid& pyramid, const MappingOptions& mapping,
+              const ScaleOptions& scale, const ObjectLandmarkOptions& objects, double static_object_weight);
 
   // The whole pipeline for one keyframe. `run_ba` = false skips BA and culling (used for the initial map).
   void processKeyFrame(KeyFrame* kf, bool run_ba = true);
@@ -84,9 +51,9 @@ class LocalMapper {
     pending_scale_.reset();
     scale_fits_.clear();
     pending_correction_.reset();
-    object_reference_ = GroundReference(options_.ground.reference_keyframes, options_.metric_max_spread);
+    object_reference_ = GroundReference(ground_.reference_keyframes, scale_.metric_max_spread);
     object_scaled_ = false;
-    lidar_reference_ = GroundReference(options_.lidar_reference_keyframes, options_.metric_max_spread);
+    lidar_reference_ = GroundReference(scale_.lidar_reference_keyframes, scale_.metric_max_spread);
     lidar_scaled_ = false;
   }
   // Culled map points are about to be freed (Map::releaseCulled): drop them from the recent points.
@@ -102,12 +69,13 @@ class LocalMapper {
     ground_reference_.rescale(s);
     // Metric now: the reference is the rig's camera height itself, not the (rescaled) median of the early
     // fits, which the scale was taken from the map as it is now, not then.
-    ground_reference_.setHeight(options_.metric_camera_height);
+    ground_reference_.setHeight(metric_camera_height_);
     metric_ = true;
     metric_since_kf_ = current_kf_id;
     scale_fits_.clear();
   }
-  // A local scale correction, once, when the metric map's recent ground fits ask for one (see options).
+  // A local scale correction, once, when the metric map's recent ground fits ask for one
+  // (ScaleOptions::metric_correction_min).
   std::optional<ScaleCorrection> takePendingCorrection() {
     auto c = pending_correction_;
     pending_correction_.reset();
@@ -125,7 +93,9 @@ class LocalMapper {
   // Local BA's options with the metric terms it has now: the parked cars' anchors and the object landmarks
   // once the map is metric, the LiDAR ranges once the scan holds its scale (the loop's global BA takes them).
   optimize::BundleAdjustmentOptions metricTerms() const;
-  // The LiDAR ranges gave the scale and hold it (see options).
+  // Local BA's options without the metric terms (the mapping, object-landmark and trusted-point settings).
+  const optimize::BundleAdjustmentOptions& bundleAdjustmentOptions() const { return ba_; }
+  // The LiDAR ranges gave the scale and hold it (ScaleOptions::lidar_scale).
   bool lidarScaled() const { return lidar_scaled_; }
   // Each live keyframe's camera height over its own ground fit, in the map's unit as it is now (keyframes
   // without a fit left out), oldest first.
@@ -151,7 +121,17 @@ class LocalMapper {
   Map& map_;
   Camera camera_;
   const ScalePyramid& pyramid_;
-  LocalMapperOptions options_;
+  MappingOptions mapping_;
+  ScaleOptions scale_;
+  // What the options make of local BA and the ground fits, and the scale sources in use (0: off):
+  optimize::BundleAdjustmentOptions ba_;  // without the metric terms (metricTerms)
+  GroundPlaneOptions ground_;             // ground-height prior in local BA (on with ground_prior or metric_scale)
+  // Metric scale (on when > 0, with the ground prior): the rig's camera height over the road in metres.
+  // Once the ground reference is confident, the mapper asks for the map to be rescaled so that the
+  // reference height becomes this; the ground prior then holds it (metres from then on).
+  double metric_camera_height_ = 0;
+  double object_range_sigma_ = 0;  // the parked cars' boxes as a scale source and hold (metric_scale, object_scale)
+  double lidar_range_sigma_ = 0;   // the LiDAR ranges as a scale source and hold (metric_scale, lidar_scale)
   std::list<MapPoint*> recent_;
   std::vector<std::pair<std::string, double>> timings_;
   MapGate* gate_ = nullptr;
@@ -165,8 +145,7 @@ class LocalMapper {
   void measureScaleByLidar(KeyFrame* kf);
   void keepScale(KeyFrame* kf);
   GroundReference makeGroundReference() const {
-    return GroundReference(options_.ground.reference_keyframes,
-                           options_.metric_camera_height > 0 ? options_.metric_max_spread : 1e9);
+    return GroundReference(ground_.reference_keyframes, metric_camera_height_ > 0 ? scale_.metric_max_spread : 1e9);
   }
   GroundReference ground_reference_;
   optimize::BundleAdjustmentReport last_ba_;

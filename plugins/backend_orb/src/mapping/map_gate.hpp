@@ -1,5 +1,6 @@
 // MapGate: exclusive access to the map for two threads, the tracker (the caller's thread) and the local
-// mapper (its own thread), in the concurrent mapping mode (Options::concurrent_mapping).
+// mapper (its own thread), in the concurrent mapping mode (ThreadingOptions::concurrent_mapping;
+// mapping/mapping_thread.hpp).
 //
 // Contract. Whoever changes or reads the map (keyframes, map points, the keyframe database, the mapper's
 // and the tracker's state) holds the gate; feature extraction, which touches no map, runs outside it.

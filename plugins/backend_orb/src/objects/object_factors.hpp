@@ -24,7 +24,8 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
+#include "beslam_orb/types.hpp"
 
 namespace beslam::orb::objects {
 

@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
 
 namespace beslam::orb {
 class KeyFrame;

@@ -9,7 +9,7 @@
 #include <optional>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/types.hpp"
 #include "objects/surface_index.hpp"
 
 namespace beslam::orb::objects {

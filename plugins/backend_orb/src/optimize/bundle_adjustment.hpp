@@ -7,6 +7,7 @@
 #include <atomic>
 #include <functional>
 
+#include "beslam_orb/options.hpp"
 #include "ground/ground_plane.hpp"
 #include "map/map_fwd.hpp"
 #include "objects/object_ba.hpp"
@@ -16,6 +17,10 @@ namespace beslam::orb::optimize {
 // Local BA's solver: SchurLevenbergMarquardt (schur_lm.hpp: the same problem, both cores, about half the
 // time; not for object landmarks or more than 60 moving keyframes, which go to Ceres) or Ceres.
 enum class BaSolver { SchurLm, Ceres };
+// The solver an option names (MappingOptions::local_ba_solver, LoopClosureOptions::global_ba_solver).
+inline BaSolver baSolver(BundleAdjustmentSolver solver) {
+  return solver == BundleAdjustmentSolver::Schur ? BaSolver::SchurLm : BaSolver::Ceres;
+}
 
 struct BundleAdjustmentOptions {
   BaSolver solver = BaSolver::SchurLm;

@@ -9,7 +9,7 @@
 #include <Eigen/Geometry>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
 
 namespace beslam::orb::optimize {
 

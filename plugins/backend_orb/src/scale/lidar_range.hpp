@@ -10,7 +10,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
 
 namespace beslam::orb {
 

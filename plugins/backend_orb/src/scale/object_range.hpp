@@ -6,7 +6,7 @@
 #include <Eigen/Geometry>
 #include <optional>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/types.hpp"
 
 namespace beslam::orb {
 

@@ -17,10 +17,10 @@
 #include "matching/matcher.hpp"
 #include "objects/object_layout.hpp"
 #include "optimize/bundle_adjustment.hpp"
+#include "optimize/pnp_pose.hpp"
 #include "optimize/pose_optimizer.hpp"
 #include "place/keyframe_database.hpp"
 #include "stage_clock.hpp"
-#include "tracking/pnp_pose.hpp"
 
 namespace beslam::orb {
 namespace {
@@ -35,8 +35,9 @@ MapPoint* goodPoint(std::vector<MapPoint*>& points, size_t i) {
 
 }  // namespace
 
-Tracker::Tracker(const Camera& camera, const Options& options, const ScalePyramid& pyramid, Map& map, KeyFrameSink sink,
-                 std::function<void()> on_reset, const place::Vocabulary* vocabulary, KeyFrameDatabase* database)
+Tracker::Tracker(const Camera& camera, const TrackerOptions& options, const ScalePyramid& pyramid, Map& map,
+                 KeyFrameSink sink, std::function<void()> on_reset, const place::Vocabulary* vocabulary,
+                 KeyFrameDatabase* database)
     : camera_(camera),
       options_(options),
       pyramid_(pyramid),
@@ -114,7 +115,7 @@ TrackResult Tracker::track(std::shared_ptr<const FeatureSet> features, double ti
       ok = trackWithMotionModel();
       if (!ok) ok = trackReferenceKeyFrame();
     }
-  } else if (options_.relocalisation) {
+  } else if (options_.tracking.relocalisation) {
     ok = relocalise();
     result.relocalised = ok;  // counted once local-map tracking confirms it
   }
@@ -155,7 +156,7 @@ TrackResult Tracker::track(std::shared_ptr<const FeatureSet> features, double ti
     velocity_.reset();
     current_.has_pose = false;
     if (!options_.localisation_only && !map_loaded_ &&
-        static_cast<int>(map_.numKeyFrames()) <= options_.lost_reset_max_keyframes) {
+        static_cast<int>(map_.numKeyFrames()) <= options_.tracking.lost_reset_max_keyframes) {
       reset();
       result.state = state_;
       return result;
@@ -196,14 +197,14 @@ void Tracker::initialise(TrackResult& result) {
   }
   std::vector<int> matches12;
   const int n = matching::searchForInitialization(*init_frame_.features, *current_.features, prev_matched_, matches12,
-                                                  100, 0.9f, options_.init_match_max_level);
+                                                  100, 0.9f, options_.init.match_max_level);
   if (n < 100) {
     init_active_ = false;
     return;
   }
   TwoViewOptions tv;
-  tv.iterations = options_.ransac_iterations;
-  tv.min_parallax_deg = options_.init_min_parallax_deg;
+  tv.iterations = options_.init.ransac_iterations;
+  tv.min_parallax_deg = options_.init.min_parallax_deg;
   tv.seed = options_.seed + static_cast<uint64_t>(current_.index);
   TwoViewInitializer initializer(camera_, tv);
   TwoViewResult r;
@@ -304,7 +305,7 @@ void Tracker::backfillInitialFrames(KeyFrame* kf_ini, KeyFrame* kf_cur) {
     optimizeFramePose();
     int inliers = 0;
     for (size_t i = 0; i < current_.size(); ++i) inliers += current_.points[i] && !current_.outlier[i];
-    if (inliers >= options_.min_tracked_inliers)
+    if (inliers >= options_.tracking.min_tracked_inliers)
       records_.push_back({f.index, f.timestamp, kf_ini, current_.T_cw * kf_ini->T_cw.inverse(), current_.T_cw});
   }
   for (MapPoint* mp : points) mp->track_in_view = false;
@@ -464,7 +465,7 @@ bool Tracker::trackReferenceKeyFrame() {
   KeyFrame* ref = validReference();
   if (!ref || !last_.has_pose) return false;
   // ORB-SLAM2: the reference keyframe's points matched by bag of words, starting from the last pose.
-  if (options_.bow_matching && vocabulary_ && !ref->feature_vector.empty()) {
+  if (options_.tracking.bow_matching && vocabulary_ && !ref->feature_vector.empty()) {
     computeBow(current_);
     current_.clearMatches();
     if (matching::searchByBoW(ref, current_, 0.7f, true) >= 15) {
@@ -578,7 +579,7 @@ bool Tracker::relocaliseWith(KeyFrame* kf) {
 // the cars the frame could show are expected: in front of the camera, inside the image, and no farther
 // than the farthest car box of the frame (what the detector reaches here). Without boxes: no check.
 bool Tracker::carsAgreeWith(const KeyFrame* kf) const {
-  if (!options_.relocalisation_object_check || cars_in_view_.empty()) return true;
+  if (!options_.tracking.relocalisation_object_check || cars_in_view_.empty()) return true;
   double reach = 0;
   for (const Eigen::Vector3d& p : cars_in_view_) reach = std::max(reach, p.norm());
   std::vector<Eigen::Vector3d> p_cam = objects::parkedCarCentres(*kf, map_.objects());
@@ -657,8 +658,8 @@ bool Tracker::trackLocalMap() {
   if (std::getenv("BESLAM_ORB_DEBUG"))  // developers: how near a frame came to being lost
     std::fprintf(stderr, "frame %ld: local map %zu kfs %zu points, inliers %d\n", static_cast<long>(current_.index),
                  local_kfs_.size(), local_points_.size(), inliers_);
-  if (current_.index < last_reloc_frame_ + static_cast<int64_t>(options_.fps) && inliers_ < 50) return false;
-  return inliers_ >= options_.min_tracked_inliers;
+  if (current_.index < last_reloc_frame_ + static_cast<int64_t>(options_.tracking.fps) && inliers_ < 50) return false;
+  return inliers_ >= options_.tracking.min_tracked_inliers;
 }
 
 void Tracker::updateLocalKeyFrames() {
@@ -702,8 +703,8 @@ void Tracker::updateLocalKeyFrames() {
   // lap's two ends through points seen far ahead (it would take up the drift there, and the loop closer,
   // whose candidates must not be covisible, would find no loop; docs/place-recognition.md). Not in a
   // loaded map nor after a relocalisation: there the old keyframes are where the tracker is.
-  const long stretch = options_.loop_own_stretch_keyframes;
-  if (options_.loop_closure && stretch > 0 && last_kf_ && !map_loaded_ && relocalisations_ == 0 && !map_.hasLoop()) {
+  const long stretch = options_.own_stretch_keyframes;
+  if (stretch > 0 && last_kf_ && !map_loaded_ && relocalisations_ == 0 && !map_.hasLoop()) {
     auto old = [&](const KeyFrame* k) { return k->id + stretch < last_kf_->id; };
     local_kfs_.erase(std::remove_if(local_kfs_.begin(), local_kfs_.end(), old), local_kfs_.end());
     if (best_kf && old(best_kf)) {  // the reference keyframe too is one of the stretch
@@ -773,7 +774,7 @@ void Tracker::searchLocalPoints() {
 
 bool Tracker::needNewKeyFrame() const {
   const int n_kfs = static_cast<int>(map_.numKeyFrames());
-  const int max_frames = static_cast<int>(options_.fps);
+  const int max_frames = static_cast<int>(options_.tracking.fps);
   if (current_.index < last_reloc_frame_ + max_frames && n_kfs > max_frames) return false;
   KeyFrame* ref = reference_kf_;
   if (!ref) return true;
@@ -783,7 +784,7 @@ bool Tracker::needNewKeyFrame() const {
   // threaded mapping finish before the next frame, so a minimum gap stands in for "busy"; with concurrent
   // mapping accepts_keyframe_ asks the mapper itself.
   const int64_t since = current_.index - last_kf_frame_;
-  const bool c1 = since >= max_frames || since >= options_.keyframe_min_gap;
+  const bool c1 = since >= max_frames || since >= options_.tracking.keyframe_min_gap;
   // ORB-SLAM2's rule for a camera with depth: few of the keypoints with a depth tracked and many more to
   // map. In a thin stretch the reference's count is small, so the ratio alone asks too late (the frame is
   // near the inlier floor by then); this asks while the keypoints the scan measured can still become points.
@@ -808,9 +809,9 @@ bool Tracker::needNewKeyFrame() const {
   }
   // A thin map (most points seen twice) leaves the reference's count small, so the ratio asks late: a frame
   // near the tracking floor asks too, while it still tracks enough points to make new ones.
-  const bool near_floor = inliers_ < options_.keyframe_floor_ratio * options_.min_tracked_inliers;
-  const bool c2 =
-      (settled_inliers < ref_matches * options_.keyframe_ref_ratio || need_close || near_floor) && inliers_ > 15;
+  const bool near_floor = inliers_ < options_.tracking.keyframe_floor_ratio * options_.tracking.min_tracked_inliers;
+  const bool c2 = (settled_inliers < ref_matches * options_.tracking.keyframe_ref_ratio || need_close || near_floor) &&
+                  inliers_ > 15;
   return c1 && c2 && (!accepts_keyframe_ || accepts_keyframe_());
 }
 

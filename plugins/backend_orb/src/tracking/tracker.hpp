@@ -14,7 +14,8 @@
 #include <utility>
 #include <vector>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
+#include "beslam_orb/types.hpp"
 #include "features/feature_set.hpp"
 #include "features/scale_pyramid.hpp"
 #include "init/two_view.hpp"
@@ -32,11 +33,29 @@ struct FrameRecord {
   Eigen::Isometry3d T_cw_online;
 };
 
+// What the tracker reads of Options: tracking's own options, initialisation's (the tracker initialises the
+// map), and the few values of the other modules it needs. Made from a run's Options only.
+struct TrackerOptions {
+  explicit TrackerOptions(const Options& o)
+      : tracking(o.tracking),
+        init(o.init),
+        seed(o.seed),
+        static_object_weight(o.static_object_weight),
+        localisation_only(o.map_reuse.localisation_only),
+        own_stretch_keyframes(o.loop.enabled ? o.loop.own_stretch_keyframes : 0) {}
+  TrackingOptions tracking;
+  InitOptions init;
+  uint64_t seed;                // seeds RANSAC (initialisation, relocalisation's PnP)
+  double static_object_weight;  // trusted points' weight in pose optimisation
+  bool localisation_only;       // track against a loaded map without changing it
+  int own_stretch_keyframes;    // with loop closing, the local map's reach until a loop is closed (0: all)
+};
+
 class Tracker {
  public:
   // on_keyframe(kf, initial): hand a new keyframe to local mapping (initial = the two initial keyframes).
   using KeyFrameSink = std::function<void(KeyFrame*, bool initial)>;
-  Tracker(const Camera& camera, const Options& options, const ScalePyramid& pyramid, Map& map, KeyFrameSink sink,
+  Tracker(const Camera& camera, const TrackerOptions& options, const ScalePyramid& pyramid, Map& map, KeyFrameSink sink,
           std::function<void()> on_reset, const place::Vocabulary* vocabulary = nullptr,
           KeyFrameDatabase* database = nullptr);
 
@@ -44,12 +63,12 @@ class Tracker {
   // Concurrent mapping: a keyframe that the rules ask for is made only if `accepts()` says local mapping
   // can take it now (ORB-SLAM2's monocular rule: none while mapping is busy). Unset: always.
   void setKeyFrameAcceptance(std::function<bool()> accepts) { accepts_keyframe_ = std::move(accepts); }
-  // The map is metric by the scan and holds it (Options::lidar_points; local mapping makes map points from
+  // The map is metric by the scan and holds it (ScaleOptions::lidar_points; local mapping makes map points from
   // keyframes' LiDAR ranges): ask for a keyframe when few of the frame's ranged keypoints are tracked. Set
   // per frame.
   void useLidarPoints(bool on) { lidar_points_ = on; }
   // The frame's car boxes (centres in the camera frame, metres, any motion state) when the map is metric,
-  // for the parked-car check of relocalisation candidates (Options::relocalisation_object_check); empty
+  // for the parked-car check of relocalisation candidates (TrackingOptions::relocalisation_object_check); empty
   // otherwise (no check). Set per frame.
   void setCarsInView(std::vector<Eigen::Vector3d> p_cam) { cars_in_view_ = std::move(p_cam); }
   int relocalisationObjectRejections() const { return reloc_object_rejections_; }
@@ -123,7 +142,7 @@ class Tracker {
   KeyFrame* validReference();
 
   Camera camera_;
-  Options options_;
+  TrackerOptions options_;
   const ScalePyramid& pyramid_;
   Map& map_;
   KeyFrameSink sink_;

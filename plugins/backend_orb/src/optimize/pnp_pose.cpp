@@ -1,5 +1,6 @@
-#include "tracking/pnp_pose.hpp"
+#include "optimize/pnp_pose.hpp"
 
+#include <Eigen/Core>  // before OpenCV's Eigen utilities
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <vector>

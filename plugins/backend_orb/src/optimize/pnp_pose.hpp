@@ -5,7 +5,7 @@
 
 #include <cstdint>
 
-#include "beslam_orb/orb_slam.hpp"
+#include "beslam_orb/options.hpp"
 
 namespace beslam::orb {
 
