@@ -19,7 +19,6 @@ Two things are printed:
   in its boxes moves, across (x) and along (z) the world's bird's-eye view, against its lifted boxes.
 The map's points on a parked car are static by construction; on a car driving along the camera's line of
 travel they are triangulated as a parked car farther away (docs/motion.md "The floor under a static call")."""
-import argparse
 import collections
 import os
 import sys
@@ -75,12 +74,9 @@ def percentile(values, q):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = run_files.track_parser(__doc__, 10)
     ap.add_argument("--calib", required=True, help="KITTI calib.txt (its P0 row)")
     ap.add_argument("--camera-height", type=float, default=1.65, help="metres over the road (KITTI: 1.65)")
-    ap.add_argument("--range", type=float, default=25.0, help="metres from the camera (default 25)")
-    ap.add_argument("--min-detections", type=int, default=10, help="detections a track needs (default 10)")
-    ap.add_argument("run")
     a = ap.parse_args()
     fx, cx, cy = read_camera(a.calib)
     poses, times, keyframe_times = read_run(a.run)

@@ -16,7 +16,6 @@ divided by the camera height: 1 for a box bottom on the road under a parked car.
 ego's line of travel is triangulated at v_ego / (v_ego - v) times its range, so its contact point sits that
 factor lower (1.12 for 1 m/s at 9 m/s): the test that would resolve the epipolar ambiguity with physics needs
 parked cars well inside that."""
-import argparse
 import collections
 import math
 import os
@@ -107,13 +106,10 @@ def triangulate(obs, poses, k):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = run_files.track_parser(__doc__, 6)
     ap.add_argument("--poses", required=True, help="true poses, KITTI odometry format")
     ap.add_argument("--calib", required=True, help="the sequence's calib.txt")
     ap.add_argument("--camera-height", type=float, default=1.65, help="metres over the road (KITTI: 1.65)")
-    ap.add_argument("--range", type=float, default=25.0, help="boxes within this many metres")
-    ap.add_argument("--min-detections", type=int, default=6)
-    ap.add_argument("run")
     a = ap.parse_args()
     poses = run_files.rows(a.poses, 12)
     k = read_intrinsics(a.calib)

@@ -27,7 +27,6 @@ closer than M metres, the mean world position of those is taken as the car's pla
 shrinks with the square of its range), and every farther detection's range is compared with that place's
 range from the same camera. The velocity a parked car seems to move at is about this share times the ego's
 speed."""
-import argparse
 import collections
 import math
 import os
@@ -80,15 +79,12 @@ def first_below(track, offset, z, speed):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = run_files.track_parser(__doc__, 8)
     ap.add_argument("--poses", required=True, help="true poses, KITTI odometry format")
     ap.add_argument("--times", required=True, help="frame times, one per line")
-    ap.add_argument("--range", type=float, default=25.0, help="metres from the camera (default 25)")
-    ap.add_argument("--min-detections", type=int, default=8, help="detections a track needs (default 8)")
     ap.add_argument("--z", type=float, default=2.0, help="standard errors of the bound (default 2, z_static)")
     ap.add_argument("--static-speed", type=float, default=1.0, help="m/s a static test rejects (default 1)")
     ap.add_argument("--near", type=float, default=0.0, help="range error against the near detections (m; 0: off)")
-    ap.add_argument("run")
     a = ap.parse_args()
     if a.min_detections < 3:
         sys.exit("--min-detections must be at least 3")

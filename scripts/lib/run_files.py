@@ -2,11 +2,23 @@
 folder's objects.txt (KITTI tracking rows: frame, track id, class, truncation, occlusion, alpha, 2D box x1 y1 x2
 y2, height width length, x y z of the box's bottom centre in the camera frame, yaw, score; with the motion state
 appended). Bad input ends the script with one line naming the file and line."""
+import argparse
 import collections
 import math
 import sys
 
 Car = collections.namedtuple("Car", "frame track truncation box2d bottom_cam state")
+
+
+def track_parser(doc, min_detections):
+    """The argument parser of a script that reads a run's car tracks: doc (its docstring) as the description,
+    --range, --min-detections and RUN; the script adds its own options."""
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--range", type=float, default=25.0, help="metres from the camera (default 25)")
+    ap.add_argument("--min-detections", type=int, default=min_detections,
+                    help="detections a track needs (default %d)" % min_detections)
+    ap.add_argument("run", help="a `beslam run` output folder")
+    return ap
 
 
 def fail(path, line, problem):

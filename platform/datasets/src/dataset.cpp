@@ -85,7 +85,7 @@ std::string joinPath(const std::string& a, const std::string& b) { return (fs::p
 
 double kittiCameraHeight(const std::string& sequence_dir) {
   const std::string manifest = joinPath(sequence_dir, "manifest.yaml");
-  if (!isFile(manifest)) return 1.65;
+  if (!isFile(manifest)) return kKittiCameraHeight;
   double height = 0;
   try {
     const YAML::Node node = loadYamlFile(manifest)["config"]["camera"]["mount_height"];
@@ -171,6 +171,22 @@ std::vector<std::size_t> selectFrames(const std::vector<std::int64_t>& indices, 
                        std::to_string(indices.size()) + " frames (numbers " + std::to_string(indices.front()) + ".." +
                        std::to_string(indices.back()) + ")");
   return positions;
+}
+
+std::vector<FrameEntry> selectImageFrames(const std::vector<std::pair<std::int64_t, std::string>>& images,
+                                          const DatasetOptions& options, const std::string& where,
+                                          const std::function<void(FrameEntry&, std::size_t)>& fill) {
+  std::vector<std::int64_t> indices;
+  for (const auto& [index, path] : images) indices.push_back(index);
+  std::vector<FrameEntry> frames;
+  for (std::size_t p : selectFrames(indices, options, where)) {
+    FrameEntry f;
+    f.index = images[p].first;
+    f.image_path = images[p].second;
+    fill(f, p);
+    frames.push_back(std::move(f));
+  }
+  return frames;
 }
 
 int chooseCamera(const std::string& name, const std::function<bool(int)>& present,

@@ -67,9 +67,11 @@ std::vector<long double> readRawTimestamps(const std::string& path);
 // "path:line: ..." on anything else.
 trajectory::Trajectory readEurocGroundTruth(const std::string& path);
 
-// KITTI's cameras sit 1.65 m over the road (Geiger et al. 2013, the recording platform); a sequence that
-// `beslam synth` rendered says its own in sequence_dir/manifest.yaml (config.camera.mount_height).
-// A manifest without a readable, positive height is an error naming the file.
+// KITTI's cameras sit 1.65 m over the road (Geiger et al. 2013, the recording platform).
+constexpr double kKittiCameraHeight = 1.65;
+// kKittiCameraHeight, unless the sequence is one `beslam synth` rendered: it says its own in
+// sequence_dir/manifest.yaml (config.camera.mount_height). A manifest without a readable, positive height
+// is an error naming the file.
 double kittiCameraHeight(const std::string& sequence_dir);
 bool isDirectory(const std::string& path);
 bool isFile(const std::string& path);
@@ -85,6 +87,13 @@ std::vector<std::pair<std::int64_t, std::string>> listNumberedFiles(const std::s
 // beslam::Error on a bad range or one that selects nothing from `where`.
 std::vector<std::size_t> selectFrames(const std::vector<std::int64_t>& indices, const DatasetOptions& options,
                                       const std::string& where);
+
+// The frames options.first/last/step select from numbered image files (as listNumberedFiles gives them;
+// `where` names them in errors), in order, each with its number and image path; fill(frame, position in
+// `images`) adds the rest (timestamp, lidar scan, labels).
+std::vector<FrameEntry> selectImageFrames(const std::vector<std::pair<std::int64_t, std::string>>& images,
+                                          const DatasetOptions& options, const std::string& where,
+                                          const std::function<void(FrameEntry&, std::size_t)>& fill);
 
 // "image_0" / "image_00" / "auto" -> camera number 0..3; `present(i)` says whether camera i's folder exists.
 // Throws beslam::Error naming `where` when the camera is unknown or absent.

@@ -44,19 +44,13 @@ std::unique_ptr<Dataset> openKittiObject(const DatasetOptions& options) {
     requireFile(path, "image");
     images.emplace_back(index, path);
   }
-  std::vector<std::int64_t> indices;
-  for (const auto& [index, path] : images) indices.push_back(index);
-
   const std::string velodyne_dir = joinPath(options.root, "velodyne");
   const bool has_lidar = isDirectory(velodyne_dir);
   DatasetContents c;
-  c.camera_height = 1.65;  // KITTI's recording platform
-  std::string first_calib;
-  for (std::size_t p : selectFrames(indices, options, image_dir)) {
-    FrameEntry f;
-    f.index = images[p].first;
+  c.camera_height = kKittiCameraHeight;
+  std::string first_calib;  // the first frame's calibration file, which the others' must agree with
+  c.frames = selectImageFrames(images, options, image_dir, [&](FrameEntry& f, std::size_t) {
     f.timestamp = 0.1 * static_cast<double>(f.index);
-    f.image_path = images[p].second;
     const std::string stem = std::filesystem::path(f.image_path).stem().string();
     if (has_lidar) f.lidar_path = joinPath(velodyne_dir, stem + ".bin");
     const std::string label_path = joinPath(joinPath(options.root, "label_2"), stem + ".txt");
@@ -68,7 +62,7 @@ std::unique_ptr<Dataset> openKittiObject(const DatasetOptions& options) {
     const Camera camera =
         cameraFromProjection(*calib.P[static_cast<std::size_t>(cam)], 0, 0, calib_path + ": P" + std::to_string(cam));
     const auto T_cam_lidar = has_lidar ? T_cami_velo(calib, cam) : std::nullopt;
-    if (c.frames.empty()) {
+    if (first_calib.empty()) {
       c.camera = camera;
       c.T_cam_lidar = T_cam_lidar;
       first_calib = calib_path;
@@ -76,8 +70,7 @@ std::unique_ptr<Dataset> openKittiObject(const DatasetOptions& options) {
       throwAt(calib_path, "calibration differs from " + first_calib + "; open such frames one at a time (sequence: \"" +
                               stem + "\")");
     }
-    c.frames.push_back(std::move(f));
-  }
+  });
   fillImageSize(c.camera, c.frames.front().image_path);
   const std::string camera_text = applyCameraFile(c, options);
   if (c.frames.size() == 1) c.label_path = c.frames.front().label_path;

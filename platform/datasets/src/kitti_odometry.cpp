@@ -35,22 +35,15 @@ std::unique_ptr<Dataset> openKittiOdometry(const DatasetOptions& options) {
     throwAt(times_path, "has " + std::to_string(times.size()) + " timestamps but " + image_dir + " has " +
                             std::to_string(images.size()) + " images");
 
-  std::vector<std::int64_t> indices;
-  for (const auto& [index, path] : images) indices.push_back(index);
   const std::string velodyne_dir = joinPath(sequence_dir, "velodyne");
   const bool has_lidar = isDirectory(velodyne_dir);
 
   DatasetContents c;
   c.camera_height = kittiCameraHeight(sequence_dir);
-  for (std::size_t p : selectFrames(indices, options, image_dir)) {
-    FrameEntry f;
-    f.index = images[p].first;
+  c.frames = selectImageFrames(images, options, image_dir, [&](FrameEntry& f, std::size_t p) {
     f.timestamp = times[p];
-    f.image_path = images[p].second;
-    if (has_lidar)
-      f.lidar_path = joinPath(velodyne_dir, std::filesystem::path(images[p].second).stem().string() + ".bin");
-    c.frames.push_back(std::move(f));
-  }
+    if (has_lidar) f.lidar_path = joinPath(velodyne_dir, std::filesystem::path(f.image_path).stem().string() + ".bin");
+  });
   c.camera = cameraFromProjection(*P, 0, 0, calib_path + ": P" + std::to_string(cam));
   fillImageSize(c.camera, c.frames.front().image_path);
   const std::string camera_text = applyCameraFile(c, options);

@@ -88,21 +88,15 @@ std::unique_ptr<Dataset> openKittiRaw(const DatasetOptions& options) {
     throwAt(times_path, "has " + std::to_string(times.size()) + " timestamps but " + image_dir + " has " +
                             std::to_string(images.size()) + " images");
 
-  std::vector<std::int64_t> indices;
-  for (const auto& [index, path] : images) indices.push_back(index);
   const std::string velodyne_dir = joinPath(joinPath(drive_dir, "velodyne_points"), "data");
   const bool has_lidar = isDirectory(velodyne_dir);
 
   DatasetContents c;
-  c.camera_height = 1.65;  // KITTI's recording platform
-  for (std::size_t p : selectFrames(indices, options, image_dir)) {
-    FrameEntry f;
-    f.index = images[p].first;
+  c.camera_height = kKittiCameraHeight;
+  c.frames = selectImageFrames(images, options, image_dir, [&](FrameEntry& f, std::size_t p) {
     f.timestamp = static_cast<double>(times[p] - times.front());
-    f.image_path = images[p].second;
     if (has_lidar) f.lidar_path = joinPath(velodyne_dir, std::filesystem::path(f.image_path).stem().string() + ".bin");
-    c.frames.push_back(std::move(f));
-  }
+  });
   c.camera = cameraFromProjection(*P, 0, 0, cam_to_cam + ": P_rect_0" + std::to_string(cam));
   fillImageSize(c.camera, c.frames.front().image_path);
   const std::string camera_text = applyCameraFile(c, options);

@@ -38,29 +38,22 @@ std::unique_ptr<Dataset> openKittiTracking(const DatasetOptions& options) {
     image_dir = sequence_images(cam);
     images = listNumberedFiles(image_dir, ".png", true);
   }
-  std::vector<std::int64_t> indices;
-  for (const auto& [index, path] : images) indices.push_back(index);
-
   const std::string velodyne_dir = joinPath(joinPath(options.root, "velodyne"), options.sequence);
   const bool has_lidar = isDirectory(velodyne_dir);
   const std::string label_path = joinPath(joinPath(options.root, "label_02"), options.sequence + ".txt");
   const bool has_labels = isFile(label_path);
 
   DatasetContents c;
-  c.camera_height = 1.65;  // KITTI's recording platform
-  for (std::size_t p : selectFrames(indices, options, image_dir)) {
-    FrameEntry f;
-    f.index = images[p].first;
+  c.camera_height = kKittiCameraHeight;
+  c.frames = selectImageFrames(images, options, image_dir, [&](FrameEntry& f, std::size_t) {
     f.timestamp = 0.1 * static_cast<double>(f.index);
-    f.image_path = images[p].second;
     if (has_lidar) {
       const std::string stem = image_less ? std::to_string(1000000 + f.index).substr(1)
                                           : std::filesystem::path(f.image_path).stem().string();
       f.lidar_path = joinPath(velodyne_dir, stem + ".bin");
     }
     if (has_labels) f.label_path = label_path;
-    c.frames.push_back(std::move(f));
-  }
+  });
   const auto& P = *calib.P[static_cast<std::size_t>(cam)];
   c.camera = cameraFromProjection(P, 0, 0, calib_path + ": P" + std::to_string(cam));
   if (image_less) {

@@ -354,215 +354,248 @@ void saveMapFile(const std::string& path, const Map& map, const MapFileInfo& inf
   writeAtomically(path, {&header.buffer(), &payload, &trailer.buffer()});
 }
 
-MapFileInfo loadMapFile(const std::string& path, const MapFileInfo& expected, const ScalePyramid& pyramid, Map& map,
-                        std::vector<ObjectLandmark>& landmarks) {
-  if (!map.keyframes().empty() || !map.points().empty()) fail(path, "cannot load into a map that is not empty");
-  std::string data;
-  {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
-    std::ostringstream buffer;
-    buffer << in.rdbuf();
-    if (in.bad()) fail(path, "cannot read");
-    data = buffer.str();
-  }
+namespace {
+
+// ------------------------------------------------------------------ loading, stage by stage
+
+struct Payload {
+  uint32_t version = 0;
+  const char* data = nullptr;
+  uint64_t size = 0;
+};
+
+// The payload between the header (magic, version, payload size) and the trailer (its checksum), all checked.
+Payload checkEnvelope(const std::string& path, const std::string& data) {
   if (data.size() < sizeof(kMagic) || std::memcmp(data.data(), kMagic, sizeof(kMagic)) != 0)
     fail(path, "not a BE-SLAM map file (no BESLAMAP header)");
   if (data.size() < kHeaderBytes)
     fail(path, "truncated: " + std::to_string(data.size()) + " bytes, no complete header");
   Reader header(data.data() + sizeof(kMagic), kHeaderBytes - sizeof(kMagic));
-  const uint32_t version = header.u32();
-  if (version < 1 || version > kMapFileVersion)
-    fail(path, "format version " + std::to_string(version) + "; this build reads versions 1 to " +
+  Payload p;
+  p.version = header.u32();
+  if (p.version < 1 || p.version > kMapFileVersion)
+    fail(path, "format version " + std::to_string(p.version) + "; this build reads versions 1 to " +
                    std::to_string(kMapFileVersion));
-  const uint64_t payload_size = header.u64();
-  const uint64_t expected_size = kHeaderBytes + payload_size + kTrailerBytes;
-  if (payload_size > data.size() || data.size() != expected_size)
+  p.size = header.u64();
+  const uint64_t expected_size = kHeaderBytes + p.size + kTrailerBytes;
+  if (p.size > data.size() || data.size() != expected_size)
     fail(path, std::string(data.size() < expected_size ? "truncated" : "corrupt") + ": " + std::to_string(data.size()) +
                    " bytes where the header says " + std::to_string(expected_size));
-  const char* payload = data.data() + kHeaderBytes;
-  Reader trailer(payload + payload_size, kTrailerBytes);
-  if (trailer.u64() != fnv1a(payload, payload_size)) fail(path, "corrupt: checksum mismatch");
+  p.data = data.data() + kHeaderBytes;
+  Reader trailer(p.data + p.size, kTrailerBytes);
+  if (trailer.u64() != fnv1a(p.data, p.size)) fail(path, "corrupt: checksum mismatch");
+  return p;
+}
 
+// The payload's first record: what the map was made with, and its origin keyframe's id.
+MapFileInfo readInfo(Reader& r, int64_t& origin_id) {
   MapFileInfo info;
+  info.camera.width = r.i32();
+  info.camera.height = r.i32();
+  info.camera.fx = r.finite("camera");
+  info.camera.fy = r.finite("camera");
+  info.camera.cx = r.finite("camera");
+  info.camera.cy = r.finite("camera");
+  info.levels = r.i32();
+  info.scale_factor = r.finite("scale factor");
+  info.vocabulary = r.text();
+  info.metric = r.u8() != 0;
+  origin_id = r.i64();
+  return info;
+}
+
+// Checks that cannot wait for the whole file: the keypoints' octaves need this build's pyramid.
+void checkMadeLikeThisRun(const std::string& path, const MapFileInfo& info, const MapFileInfo& expected) {
+  if (!sameCamera(info.camera, expected.camera))
+    fail(path, "made with camera " + describe(info.camera) + "; this run's camera is " + describe(expected.camera));
+  if (info.levels != expected.levels || !sameValue(info.scale_factor, expected.scale_factor))
+    fail(path, "made with " + std::to_string(info.levels) + " pyramid levels x " + std::to_string(info.scale_factor) +
+                   "; this run uses " + std::to_string(expected.levels) + " x " +
+                   std::to_string(expected.scale_factor) + " (options levels, scale_factor)");
+  if (!info.vocabulary.empty() && !expected.vocabulary.empty() && info.vocabulary != expected.vocabulary)
+    fail(path, "made with vocabulary '" + info.vocabulary + "'; this run uses '" + expected.vocabulary + "'");
+}
+
+// A keyframe's features: keypoints (checked against the image and the pyramid), descriptors, object ranges.
+std::shared_ptr<FeatureSet> readFeatures(Reader& r, const MapFileInfo& info) {
+  constexpr size_t kKeypointBytes = 5 * 4 + 1 + 2 + 3 + 32;
+  const uint32_t n = r.count(kMaxKeypoints, kKeypointBytes, "keypoint count");
+  auto f = std::make_shared<FeatureSet>();
+  f->width = info.camera.width;
+  f->height = info.camera.height;
+  f->keypoints.resize(n);
+  f->labels.resize(n);
+  f->colours.resize(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    cv::KeyPoint& kp = f->keypoints[i];
+    kp.pt.x = r.f32();
+    kp.pt.y = r.f32();
+    kp.size = r.f32();
+    kp.angle = r.f32();
+    kp.response = r.f32();
+    kp.octave = r.u8();
+    if (!std::isfinite(kp.pt.x) || !std::isfinite(kp.pt.y) || !std::isfinite(kp.angle)) r.fail("non-finite keypoint");
+    // Keypoints are found in the image; one outside it (found by fuzzing: -2.8e24) would overflow the
+    // feature grid's cell index.
+    if (!(kp.pt.x >= 0 && kp.pt.x < info.camera.width && kp.pt.y >= 0 && kp.pt.y < info.camera.height))
+      r.fail("keypoint at (" + std::to_string(kp.pt.x) + ", " + std::to_string(kp.pt.y) + ") outside the " +
+             std::to_string(info.camera.width) + "x" + std::to_string(info.camera.height) + " image");
+    if (kp.octave >= info.levels) r.fail("keypoint octave " + std::to_string(kp.octave) + " out of range");
+    f->labels[i] = r.u16();
+    r.bytes(&f->colours[i][0], 3);
+  }
+  f->descriptors = cv::Mat(static_cast<int>(n), 32, CV_8U);
+  if (n > 0) r.bytes(f->descriptors.data, static_cast<size_t>(n) * 32);
+  if (r.u8() != 0) {
+    f->object_range.resize(n);
+    for (float& v : f->object_range) v = r.f32();
+  }
+  f->buildGrid();
+  return f;
+}
+
+void readKeyFrame(Reader& r, const MapFileInfo& info, uint32_t version, KeyFrameRecord& k) {
+  k.id = r.i64();
+  k.frame_index = r.i64();
+  k.timestamp = r.finite("timestamp");
+  k.T_cw = r.pose("keyframe pose");
+  k.parent = r.i64();
+  k.features = readFeatures(r, info);
+  const uint32_t n = static_cast<uint32_t>(k.features->size());
+  const uint32_t n_points = r.count(n, 12, "keyframe point count");
+  k.points.resize(n_points);
+  for (auto& [idx, id] : k.points) {
+    idx = r.u32();
+    id = r.i64();
+    if (idx >= n) r.fail("keyframe point at keypoint " + std::to_string(idx) + " of " + std::to_string(n));
+  }
+  const uint32_t n_links = r.count(kMaxLinks, 12, "covisibility link count");
+  k.links.resize(n_links);
+  for (auto& [id, weight] : k.links) {
+    id = r.i64();
+    weight = r.i32();
+  }
+  if (version >= 3) {  // version 2 had no loop edges
+    k.loop_edges.resize(r.count(kMaxLinks, 8, "loop edge count"));
+    for (int64_t& id : k.loop_edges) id = r.i64();
+  }
+}
+
+void readPoint(Reader& r, uint32_t n_kfs, PointRecord& p) {
+  p.id = r.i64();
+  p.reference = r.i64();
+  p.first_keyframe = r.i64();
+  p.position = r.vec3("map point position");
+  p.normal = r.vec3("map point normal");
+  p.min_distance = r.f32();
+  p.max_distance = r.f32();
+  r.bytes(p.descriptor.data(), 32);
+  p.visible = r.i32();
+  p.found = r.i32();
+  p.trusted = r.u8() != 0;
+  p.object_id = r.i32();
+  p.grey = r.u8();
+  p.r = r.u8();
+  p.g = r.u8();
+  p.b = r.u8();
+  const uint32_t n_obs = r.count(n_kfs, 12, "observation count");
+  p.observations.resize(n_obs);
+  for (auto& [id, idx] : p.observations) {
+    id = r.i64();
+    idx = r.u32();
+  }
+}
+
+void readObject(Reader& r, uint32_t version, ObjectLandmark& o) {
+  o.id = r.i64();
+  o.confidence = version >= 2 ? r.finite("object confidence") : 1.0;  // version 1 had none
+  o.T_world_object = r.pose("object pose");
+  o.dimensions = r.vec3("object size");
+  const uint32_t n = r.count(kMaxSurfacePoints, 24, "object surface point count");
+  o.points_object.resize(n);
+  for (Eigen::Vector3d& q : o.points_object) q = r.vec3("object surface point");
+}
+
+// Every id must resolve, every observation point at a keypoint that exists.
+void checkReferences(const Reader& r, const std::vector<KeyFrameRecord>& kfs, const std::vector<PointRecord>& points,
+                     int64_t origin_id) {
+  std::unordered_map<int64_t, const KeyFrameRecord*> kf_by_id;
+  std::unordered_map<int64_t, const PointRecord*> point_by_id;
+  for (const KeyFrameRecord& k : kfs)
+    if (!kf_by_id.emplace(k.id, &k).second || k.id < 0) r.fail("keyframe id " + std::to_string(k.id) + " repeated");
+  for (const PointRecord& p : points)
+    if (!point_by_id.emplace(p.id, &p).second || p.id < 0) r.fail("map point id " + std::to_string(p.id) + " repeated");
+  if (!kfs.empty() && !kf_by_id.count(origin_id)) r.fail("origin keyframe " + std::to_string(origin_id) + " missing");
+  for (const KeyFrameRecord& k : kfs) {
+    if (k.parent >= 0 && !kf_by_id.count(k.parent))
+      r.fail("keyframe " + std::to_string(k.id) + ": parent " + std::to_string(k.parent) + " missing");
+    for (const auto& [idx, id] : k.points)
+      if (!point_by_id.count(id))
+        r.fail("keyframe " + std::to_string(k.id) + ": map point " + std::to_string(id) + " missing");
+    for (const auto& [id, weight] : k.links)
+      if (!kf_by_id.count(id) || id == k.id)
+        r.fail("keyframe " + std::to_string(k.id) + ": covisible keyframe " + std::to_string(id) + " missing");
+    for (int64_t id : k.loop_edges)
+      if (!kf_by_id.count(id) || id == k.id)
+        r.fail("keyframe " + std::to_string(k.id) + ": loop edge to keyframe " + std::to_string(id) + " missing");
+  }
+  for (const PointRecord& p : points) {
+    if (!kf_by_id.count(p.reference))
+      r.fail("map point " + std::to_string(p.id) + ": reference keyframe " + std::to_string(p.reference) + " missing");
+    for (const auto& [id, idx] : p.observations) {
+      auto it = kf_by_id.find(id);
+      if (it == kf_by_id.end() || idx >= it->second->features->size())
+        r.fail("map point " + std::to_string(p.id) + ": observation in keyframe " + std::to_string(id) +
+               " at keypoint " + std::to_string(idx) + " does not exist");
+    }
+  }
+}
+
+// The parsed file, whole and checked.
+struct MapRecords {
+  MapFileInfo info;
+  int64_t origin_id = -1;
   std::vector<KeyFrameRecord> kfs;
   std::vector<PointRecord> points;
   std::vector<ObjectLandmark> objects;
-  int64_t origin_id = -1;
-  try {
-    Reader r(payload, payload_size);
-    info.camera.width = r.i32();
-    info.camera.height = r.i32();
-    info.camera.fx = r.finite("camera");
-    info.camera.fy = r.finite("camera");
-    info.camera.cx = r.finite("camera");
-    info.camera.cy = r.finite("camera");
-    info.levels = r.i32();
-    info.scale_factor = r.finite("scale factor");
-    info.vocabulary = r.text();
-    info.metric = r.u8() != 0;
-    origin_id = r.i64();
+};
 
-    // Checks that cannot wait for the whole file: the keypoints' octaves need this build's pyramid.
-    if (!sameCamera(info.camera, expected.camera))
-      fail(path, "made with camera " + describe(info.camera) + "; this run's camera is " + describe(expected.camera));
-    if (info.levels != expected.levels || !sameValue(info.scale_factor, expected.scale_factor))
-      fail(path, "made with " + std::to_string(info.levels) + " pyramid levels x " + std::to_string(info.scale_factor) +
-                     "; this run uses " + std::to_string(expected.levels) + " x " +
-                     std::to_string(expected.scale_factor) + " (options levels, scale_factor)");
-    if (!info.vocabulary.empty() && !expected.vocabulary.empty() && info.vocabulary != expected.vocabulary)
-      fail(path, "made with vocabulary '" + info.vocabulary + "'; this run uses '" + expected.vocabulary + "'");
+// Parses and checks the payload; a problem in it throws Corrupt.
+void readPayload(const std::string& path, const Payload& payload, const MapFileInfo& expected, MapRecords& m) {
+  Reader r(payload.data, payload.size);
+  m.info = readInfo(r, m.origin_id);
+  checkMadeLikeThisRun(path, m.info, expected);
 
-    constexpr size_t kKeyFrameMinBytes = 8 * 3 + 8 * 13 + 4 * 3 + 1, kKeypointBytes = 5 * 4 + 1 + 2 + 3 + 32;
-    const uint32_t n_kfs = r.count(kMaxKeyFrames, kKeyFrameMinBytes, "keyframe count");
-    kfs.resize(n_kfs);
-    for (KeyFrameRecord& k : kfs) {
-      k.id = r.i64();
-      k.frame_index = r.i64();
-      k.timestamp = r.finite("timestamp");
-      k.T_cw = r.pose("keyframe pose");
-      k.parent = r.i64();
-      const uint32_t n = r.count(kMaxKeypoints, kKeypointBytes, "keypoint count");
-      auto f = std::make_shared<FeatureSet>();
-      f->width = info.camera.width;
-      f->height = info.camera.height;
-      f->keypoints.resize(n);
-      f->labels.resize(n);
-      f->colours.resize(n);
-      for (uint32_t i = 0; i < n; ++i) {
-        cv::KeyPoint& kp = f->keypoints[i];
-        kp.pt.x = r.f32();
-        kp.pt.y = r.f32();
-        kp.size = r.f32();
-        kp.angle = r.f32();
-        kp.response = r.f32();
-        kp.octave = r.u8();
-        if (!std::isfinite(kp.pt.x) || !std::isfinite(kp.pt.y) || !std::isfinite(kp.angle))
-          r.fail("non-finite keypoint");
-        // Keypoints are found in the image; one outside it (found by fuzzing: -2.8e24) would overflow the
-        // feature grid's cell index.
-        if (!(kp.pt.x >= 0 && kp.pt.x < info.camera.width && kp.pt.y >= 0 && kp.pt.y < info.camera.height))
-          r.fail("keypoint at (" + std::to_string(kp.pt.x) + ", " + std::to_string(kp.pt.y) + ") outside the " +
-                 std::to_string(info.camera.width) + "x" + std::to_string(info.camera.height) + " image");
-        if (kp.octave >= info.levels) r.fail("keypoint octave " + std::to_string(kp.octave) + " out of range");
-        f->labels[i] = r.u16();
-        r.bytes(&f->colours[i][0], 3);
-      }
-      f->descriptors = cv::Mat(static_cast<int>(n), 32, CV_8U);
-      if (n > 0) r.bytes(f->descriptors.data, static_cast<size_t>(n) * 32);
-      if (r.u8() != 0) {
-        f->object_range.resize(n);
-        for (float& v : f->object_range) v = r.f32();
-      }
-      f->buildGrid();
-      k.features = std::move(f);
-      const uint32_t n_points = r.count(n, 12, "keyframe point count");
-      k.points.resize(n_points);
-      for (auto& [idx, id] : k.points) {
-        idx = r.u32();
-        id = r.i64();
-        if (idx >= n) r.fail("keyframe point at keypoint " + std::to_string(idx) + " of " + std::to_string(n));
-      }
-      const uint32_t n_links = r.count(kMaxLinks, 12, "covisibility link count");
-      k.links.resize(n_links);
-      for (auto& [id, weight] : k.links) {
-        id = r.i64();
-        weight = r.i32();
-      }
-      if (version >= 3) {  // version 2 had no loop edges
-        k.loop_edges.resize(r.count(kMaxLinks, 8, "loop edge count"));
-        for (int64_t& id : k.loop_edges) id = r.i64();
-      }
-    }
+  constexpr size_t kKeyFrameMinBytes = 8 * 3 + 8 * 13 + 4 * 3 + 1;
+  const uint32_t n_kfs = r.count(kMaxKeyFrames, kKeyFrameMinBytes, "keyframe count");
+  m.kfs.resize(n_kfs);
+  for (KeyFrameRecord& k : m.kfs) readKeyFrame(r, m.info, payload.version, k);
 
-    constexpr size_t kPointMinBytes = 8 * 3 + 8 * 6 + 4 * 2 + 32 + 4 * 2 + 1 + 4 + 4 + 4;
-    const uint32_t n_points = r.count(kMaxPoints, kPointMinBytes, "map point count");
-    points.resize(n_points);
-    for (PointRecord& p : points) {
-      p.id = r.i64();
-      p.reference = r.i64();
-      p.first_keyframe = r.i64();
-      p.position = r.vec3("map point position");
-      p.normal = r.vec3("map point normal");
-      p.min_distance = r.f32();
-      p.max_distance = r.f32();
-      r.bytes(p.descriptor.data(), 32);
-      p.visible = r.i32();
-      p.found = r.i32();
-      p.trusted = r.u8() != 0;
-      p.object_id = r.i32();
-      p.grey = r.u8();
-      p.r = r.u8();
-      p.g = r.u8();
-      p.b = r.u8();
-      const uint32_t n_obs = r.count(n_kfs, 12, "observation count");
-      p.observations.resize(n_obs);
-      for (auto& [id, idx] : p.observations) {
-        id = r.i64();
-        idx = r.u32();
-      }
-    }
+  constexpr size_t kPointMinBytes = 8 * 3 + 8 * 6 + 4 * 2 + 32 + 4 * 2 + 1 + 4 + 4 + 4;
+  const uint32_t n_points = r.count(kMaxPoints, kPointMinBytes, "map point count");
+  m.points.resize(n_points);
+  for (PointRecord& p : m.points) readPoint(r, n_kfs, p);
 
-    const uint32_t n_objects = r.count(kMaxLandmarks, 8 + (version >= 2 ? 8 : 0) + 8 * 15 + 4, "object landmark count");
-    objects.resize(n_objects);
-    for (ObjectLandmark& o : objects) {
-      o.id = r.i64();
-      o.confidence = version >= 2 ? r.finite("object confidence") : 1.0;  // version 1 had none
-      o.T_world_object = r.pose("object pose");
-      o.dimensions = r.vec3("object size");
-      const uint32_t n = r.count(kMaxSurfacePoints, 24, "object surface point count");
-      o.points_object.resize(n);
-      for (Eigen::Vector3d& q : o.points_object) q = r.vec3("object surface point");
-    }
-    if (!r.done()) r.fail("data after the last record");
+  const uint32_t n_objects =
+      r.count(kMaxLandmarks, 8 + (payload.version >= 2 ? 8 : 0) + 8 * 15 + 4, "object landmark count");
+  m.objects.resize(n_objects);
+  for (ObjectLandmark& o : m.objects) readObject(r, payload.version, o);
+  if (!r.done()) r.fail("data after the last record");
 
-    // Every id must resolve, every observation point at a keypoint that exists.
-    std::unordered_map<int64_t, const KeyFrameRecord*> kf_by_id;
-    std::unordered_map<int64_t, const PointRecord*> point_by_id;
-    for (const KeyFrameRecord& k : kfs)
-      if (!kf_by_id.emplace(k.id, &k).second || k.id < 0) r.fail("keyframe id " + std::to_string(k.id) + " repeated");
-    for (const PointRecord& p : points)
-      if (!point_by_id.emplace(p.id, &p).second || p.id < 0)
-        r.fail("map point id " + std::to_string(p.id) + " repeated");
-    if (!kfs.empty() && !kf_by_id.count(origin_id)) r.fail("origin keyframe " + std::to_string(origin_id) + " missing");
-    for (const KeyFrameRecord& k : kfs) {
-      if (k.parent >= 0 && !kf_by_id.count(k.parent))
-        r.fail("keyframe " + std::to_string(k.id) + ": parent " + std::to_string(k.parent) + " missing");
-      for (const auto& [idx, id] : k.points)
-        if (!point_by_id.count(id))
-          r.fail("keyframe " + std::to_string(k.id) + ": map point " + std::to_string(id) + " missing");
-      for (const auto& [id, weight] : k.links)
-        if (!kf_by_id.count(id) || id == k.id)
-          r.fail("keyframe " + std::to_string(k.id) + ": covisible keyframe " + std::to_string(id) + " missing");
-      for (int64_t id : k.loop_edges)
-        if (!kf_by_id.count(id) || id == k.id)
-          r.fail("keyframe " + std::to_string(k.id) + ": loop edge to keyframe " + std::to_string(id) + " missing");
-    }
-    for (const PointRecord& p : points) {
-      if (!kf_by_id.count(p.reference))
-        r.fail("map point " + std::to_string(p.id) + ": reference keyframe " + std::to_string(p.reference) +
-               " missing");
-      for (const auto& [id, idx] : p.observations) {
-        auto it = kf_by_id.find(id);
-        if (it == kf_by_id.end() || idx >= it->second->features->size())
-          r.fail("map point " + std::to_string(p.id) + ": observation in keyframe " + std::to_string(id) +
-                 " at keypoint " + std::to_string(idx) + " does not exist");
-      }
-    }
-  } catch (const Corrupt& e) {
-    fail(path, std::string("corrupt: ") + e.what());
-  }
+  checkReferences(r, m.kfs, m.points, m.origin_id);
+}
 
-  // Build the map (nothing can fail from here on).
+// Builds the map from checked records (nothing can fail here).
+void restoreMap(const MapRecords& m, const Camera& camera, const ScalePyramid& pyramid, Map& map) {
   std::unordered_map<int64_t, KeyFrame*> kf_ptr;
   std::unordered_map<int64_t, MapPoint*> point_ptr;
-  for (const KeyFrameRecord& k : kfs) {
+  for (const KeyFrameRecord& k : m.kfs) {
     Frame frame(k.frame_index, k.timestamp, k.features);
     frame.T_cw = k.T_cw;
-    kf_ptr[k.id] = map.restoreKeyFrame(k.id, frame, expected.camera, pyramid);
+    kf_ptr[k.id] = map.restoreKeyFrame(k.id, frame, camera, pyramid);
   }
-  if (!kfs.empty()) map.setOrigin(kf_ptr.at(origin_id));
-  for (const PointRecord& p : points) {
+  if (!m.kfs.empty()) map.setOrigin(kf_ptr.at(m.origin_id));
+  for (const PointRecord& p : m.points) {
     MapPoint* mp = map.restoreMapPoint(p.id, p.position, kf_ptr.at(p.reference), p.first_keyframe);
     point_ptr[p.id] = mp;
     mp->normal = p.normal;
@@ -579,7 +612,7 @@ MapFileInfo loadMapFile(const std::string& path, const MapFileInfo& expected, co
     mp->b = p.b;
     for (const auto& [id, idx] : p.observations) mp->addObservation(kf_ptr.at(id), idx);
   }
-  for (const KeyFrameRecord& k : kfs) {
+  for (const KeyFrameRecord& k : m.kfs) {
     KeyFrame* kf = kf_ptr.at(k.id);
     for (const auto& [idx, id] : k.points) kf->addPoint(point_ptr.at(id), idx);
     std::map<KeyFrame*, int, IdLess<KeyFrame>> weights;
@@ -587,8 +620,32 @@ MapFileInfo loadMapFile(const std::string& path, const MapFileInfo& expected, co
     kf->restoreLinks(k.parent >= 0 ? kf_ptr.at(k.parent) : nullptr, weights);
     for (int64_t id : k.loop_edges) kf->loop_edges.insert(kf_ptr.at(id));
   }
-  landmarks = std::move(objects);
-  return info;
+}
+
+}  // namespace
+
+MapFileInfo loadMapFile(const std::string& path, const MapFileInfo& expected, const ScalePyramid& pyramid, Map& map,
+                        std::vector<ObjectLandmark>& landmarks) {
+  if (!map.keyframes().empty() || !map.points().empty()) fail(path, "cannot load into a map that is not empty");
+  std::string data;
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+    std::ostringstream buffer;
+    buffer << in.rdbuf();
+    if (in.bad()) fail(path, "cannot read");
+    data = buffer.str();
+  }
+  const Payload payload = checkEnvelope(path, data);
+  MapRecords records;
+  try {
+    readPayload(path, payload, expected, records);
+  } catch (const Corrupt& e) {
+    fail(path, std::string("corrupt: ") + e.what());
+  }
+  restoreMap(records, expected.camera, pyramid, map);
+  landmarks = std::move(records.objects);
+  return records.info;
 }
 
 }  // namespace beslam::orb

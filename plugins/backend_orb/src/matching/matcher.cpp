@@ -272,46 +272,74 @@ int searchByBoW(const KeyFrame* kf, Frame& cur, float ratio, bool check_orientat
   return n;
 }
 
-int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen::Matrix3d& F21,
-                           std::vector<std::pair<int, int>>& matches, float ratio, bool check_orientation,
-                           bool same_bow_node) {
-  matches.clear();
-  const FeatureSet& f1 = *kf1->features;
-  const FeatureSet& f2 = *kf2->features;
-  // Direct-index node of every keypoint (empty: no restriction).
-  std::vector<uint32_t> node1, node2;
-  if (same_bow_node && !kf1->feature_vector.empty() && !kf2->feature_vector.empty()) {
-    node1.assign(f1.size(), 0);
-    node2.assign(f2.size(), 0);
-    for (const auto& [node, idx] : kf1->feature_vector)
-      for (int i : idx) node1[i] = node;
-    for (const auto& [node, idx] : kf2->feature_vector)
-      for (int i : idx) node2[i] = node;
-  }
-  const Camera& cam = kf2->camera;
-  const ScalePyramid& pyr = kf2->pyramid;
+namespace {
 
-  // Epipole in kf2 and the depth range along kf1's rays worth searching.
-  const Eigen::Isometry3d T21 = kf2->T_cw * kf1->T_cw.inverse();
-  const Eigen::Vector3d c1_in_2 = T21.translation();
-  if (c1_in_2.z() <= 1e-9 && c1_in_2.z() >= -1e-9) return 0;
-  const Eigen::Vector2d epipole = project(cam, c1_in_2);
-  double d_min = std::numeric_limits<double>::max(), d_max = 0;
-  for (MapPoint* mp : kf1->points) {
-    if (!mp || mp->bad) continue;
-    const double z = (kf1->T_cw * mp->position).z();
-    if (z <= 0) continue;
-    d_min = std::min(d_min, z);
-    d_max = std::max(d_max, z);
-  }
-  if (d_max <= 0) return 0;
-  d_min *= 0.5;
-  d_max *= 2.0;
-  const double band_max = std::sqrt(3.84 * pyr.sigma2[pyr.levels - 1]);
-  const float cell_h = static_cast<float>(cam.height) / FeatureGrid::kRows;
+// Each keypoint's direct-index (bag of words) node.
+std::vector<uint32_t> directIndexNodes(const KeyFrame* kf) {
+  std::vector<uint32_t> node(kf->features->size(), 0);
+  for (const auto& [id, idx] : kf->feature_vector)
+    for (int i : idx) node[i] = id;
+  return node;
+}
 
-  std::vector<int> matched2(f2.size(), -1), dist2(f2.size(), 256);
-  std::vector<int> match12(f1.size(), -1);
+// searchForTriangulation's search: each keypoint of kf1 (without a map point) looks for its nearest two
+// descriptors among kf2's keypoints (without one) near its epipolar line, on the segment of it that kf1's
+// map points' depths allow, away from the epipole.
+class EpipolarSearch {
+ public:
+  EpipolarSearch(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen::Matrix3d& F21)
+      : kf1_(kf1),
+        kf2_(kf2),
+        f1_(*kf1->features),
+        f2_(*kf2->features),
+        cam_(kf2->camera),
+        pyr_(kf2->pyramid),
+        F21_(F21),
+        T21_(kf2->T_cw * kf1->T_cw.inverse()),
+        c1_in_2_(T21_.translation()) {}
+
+  // Only pairs with the same direct-index node (empty: no restriction).
+  void restrictToNodes(std::vector<uint32_t> node1, std::vector<uint32_t> node2) {
+    node1_ = std::move(node1);
+    node2_ = std::move(node2);
+  }
+  // Epipole in kf2 and the depth range along kf1's rays worth searching; false when there is none (kf1's
+  // centre in kf2's focal plane, or no map point of kf1 in front of it).
+  bool findEpipoleAndDepths();
+  void collectCandidates();
+  // Every keypoint's nearest two (none for those with a map point).
+  std::vector<NearestTwo> nearestForAll() const;
+
+ private:
+  struct Box {
+    double x_lo, x_hi, y_lo, y_hi;
+  };
+  // One keypoint of kf1's epipolar line in kf2 (ln: the norm of its normal).
+  struct Line {
+    int i1;
+    Eigen::Vector3d line;
+    double ln;
+    const uint8_t* descriptor;
+  };
+  NearestTwo nearestAlongLine(int i1, std::vector<int>& stamp, std::vector<int>& near) const;
+  bool segmentBox(const cv::KeyPoint& kp1, Box& box) const;
+  void searchCells(const Line& l, int gr, int gc0, int gc1, std::vector<int>& stamp, std::vector<int>& near,
+                   NearestTwo& nn) const;
+
+  const KeyFrame* kf1_;
+  const KeyFrame* kf2_;
+  const FeatureSet& f1_;
+  const FeatureSet& f2_;
+  const Camera& cam_;
+  const ScalePyramid& pyr_;
+  const Eigen::Matrix3d& F21_;
+  const Eigen::Isometry3d T21_;
+  const Eigen::Vector3d c1_in_2_;
+  std::vector<uint32_t> node1_, node2_;
+  Eigen::Vector2d epipole_;
+  double d_min_ = std::numeric_limits<double>::max(), d_max_ = 0, band_max_ = 0;
+  float cell_h_ = 0;
+
   // kf2's keypoints without a point, copied once into grid order (a cell's keypoints are contiguous) with
   // their tests' thresholds: positions and line thresholds in arrays of their own (a cell range is screened
   // in one branch-free pass), the epipole threshold and kf2 index per candidate. The candidates are visited
@@ -320,108 +348,151 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
     double epipole_th;  // 100 x its level's scale: squared distance to the epipole, px^2
     int index;          // in kf2
   };
-  std::vector<Candidate> c2;
-  std::vector<double> c2_x, c2_y, c2_line_th;  // c2_line_th: 3.84 sigma^2 of its level, squared px to the line
-  c2.reserve(f2.size());
-  c2_x.reserve(f2.size());
-  c2_y.reserve(f2.size());
-  c2_line_th.reserve(f2.size());
-  std::vector<int> cell_start(FeatureGrid::kCols * FeatureGrid::kRows + 1, 0);
+  std::vector<Candidate> c2_;
+  std::vector<double> c2_x_, c2_y_, c2_line_th_;  // c2_line_th_: 3.84 sigma^2 of its level, squared px to the line
+  std::vector<int> cell_start_;
+};
+
+bool EpipolarSearch::findEpipoleAndDepths() {
+  if (c1_in_2_.z() <= 1e-9 && c1_in_2_.z() >= -1e-9) return false;
+  epipole_ = project(cam_, c1_in_2_);
+  for (MapPoint* mp : kf1_->points) {
+    if (!mp || mp->bad) continue;
+    const double z = (kf1_->T_cw * mp->position).z();
+    if (z <= 0) continue;
+    d_min_ = std::min(d_min_, z);
+    d_max_ = std::max(d_max_, z);
+  }
+  if (d_max_ <= 0) return false;
+  d_min_ *= 0.5;
+  d_max_ *= 2.0;
+  band_max_ = std::sqrt(3.84 * pyr_.sigma2[pyr_.levels - 1]);
+  cell_h_ = static_cast<float>(cam_.height) / FeatureGrid::kRows;
+  return true;
+}
+
+void EpipolarSearch::collectCandidates() {
+  c2_.reserve(f2_.size());
+  c2_x_.reserve(f2_.size());
+  c2_y_.reserve(f2_.size());
+  c2_line_th_.reserve(f2_.size());
+  cell_start_.assign(FeatureGrid::kCols * FeatureGrid::kRows + 1, 0);
   for (int cell = 0; cell < FeatureGrid::kCols * FeatureGrid::kRows; ++cell) {
-    cell_start[cell] = static_cast<int>(c2.size());
-    for (const int *it = f2.grid.cellBegin(cell), *end = f2.grid.cellEnd(cell); it != end; ++it) {
-      if (kf2->points[*it]) continue;
-      const cv::KeyPoint& kp2 = f2.keypoints[*it];
-      c2.push_back({100.0 * pyr.scale[kp2.octave], *it});
-      c2_x.push_back(kp2.pt.x);
-      c2_y.push_back(kp2.pt.y);
-      c2_line_th.push_back(3.84 * pyr.sigma2[kp2.octave]);
+    cell_start_[cell] = static_cast<int>(c2_.size());
+    for (const int *it = f2_.grid.cellBegin(cell), *end = f2_.grid.cellEnd(cell); it != end; ++it) {
+      if (kf2_->points[*it]) continue;
+      const cv::KeyPoint& kp2 = f2_.keypoints[*it];
+      c2_.push_back({100.0 * pyr_.scale[kp2.octave], *it});
+      c2_x_.push_back(kp2.pt.x);
+      c2_y_.push_back(kp2.pt.y);
+      c2_line_th_.push_back(3.84 * pyr_.sigma2[kp2.octave]);
     }
   }
-  cell_start.back() = static_cast<int>(c2.size());
-  // Each keypoint of kf1 finds its nearest two along its line independently of the others: in parallel
-  // (OpenCV's thread pool, a few stripes, each with its own visit stamps), into its own slot. Which one
-  // keeps a contested keypoint of kf2 is decided afterwards in index order, as in one sequential pass, so
-  // the matches do not depend on the threads.
-  std::vector<NearestTwo> nearest(f1.size());
-  auto nearestAlongLine = [&](int i1, std::vector<int>& stamp, std::vector<int>& near) {
-    NearestTwo nn;
-    const cv::KeyPoint& kp1 = f1.keypoints[i1];
-    const Eigen::Vector3d x1(kp1.pt.x, kp1.pt.y, 1.0);
-    const Eigen::Vector3d line = F21 * x1;
-    const double ln = std::hypot(line.x(), line.y());
-    if (ln < 1e-12) return nn;
-    // Segment of the line between the depths d_min and d_max on kf1's ray.
-    const Eigen::Vector3d ray = T21.linear() * unproject(cam, kp1.pt.x, kp1.pt.y);
-    double a = d_min, b = d_max;
-    const double z_a = c1_in_2.z() + ray.z() * a, z_b = c1_in_2.z() + ray.z() * b;
-    const double z_eps = 1e-3 * d_min;
-    if (z_a <= z_eps && z_b <= z_eps) return nn;
-    if (z_a <= z_eps) a = (z_eps - c1_in_2.z()) / ray.z();
-    if (z_b <= z_eps) b = (z_eps - c1_in_2.z()) / ray.z();
-    const Eigen::Vector2d pa = project(cam, c1_in_2 + ray * a), pb = project(cam, c1_in_2 + ray * b);
-    const double x_lo = std::max(0.0, std::min(pa.x(), pb.x()) - band_max);
-    const double x_hi = std::min(cam.width - 1.0, std::max(pa.x(), pb.x()) + band_max);
-    const double y_lo = std::max(0.0, std::min(pa.y(), pb.y()) - band_max);
-    const double y_hi = std::min(cam.height - 1.0, std::max(pa.y(), pb.y()) + band_max);
-    if (x_lo > x_hi || y_lo > y_hi) return nn;
+  cell_start_.back() = static_cast<int>(c2_.size());
+}
 
-    // The epipolar test first, on the contiguous array; descriptors only for what passes it.
-    const uint8_t* d1 = f1.descriptor(i1);
-    const double ln2 = ln * ln;
-    const double lx = line.x(), ly = line.y(), lz = line.z();
-    const int row0 = static_cast<int>(y_lo / cell_h), row1 = static_cast<int>(y_hi / cell_h);
-    for (int row = row0; row <= row1; ++row) {
-      const double ry0 = std::max(y_lo, row * static_cast<double>(cell_h));
-      const double ry1 = std::min(y_hi, (row + 1) * static_cast<double>(cell_h) - 1e-3);
-      double xa = x_lo, xb = x_hi;
-      if (std::fabs(line.x()) > 1e-9) {  // x of the line at both row edges, widened by the band
-        const double xr0 = -(line.y() * ry0 + line.z()) / line.x();
-        const double xr1 = -(line.y() * ry1 + line.z()) / line.x();
-        const double widen = band_max * ln / std::fabs(line.x());
-        xa = std::max(x_lo, std::min(xr0, xr1) - widen);
-        xb = std::min(x_hi, std::max(xr0, xr1) + widen);
-      }
-      if (xa > xb) continue;
-      int gc0, gc1, gr0, gr1;
-      if (!f2.grid.cellRange(static_cast<float>(xa), static_cast<float>(ry0), static_cast<float>(xb),
-                             static_cast<float>(ry1), gc0, gc1, gr0, gr1))
-        continue;
-      for (int gr = gr0; gr <= gr1; ++gr) {
-        // The cells gc0..gc1 of grid row gr are contiguous in c2: the line test over all of them first
-        // (no branch per candidate), then the rest for the ones near the line, in the same order. A
-        // candidate failing the line test fails it again whenever this keypoint's search meets it, so only
-        // the ones passing it need the visit stamp.
-        const int b = cell_start[gr * FeatureGrid::kCols + gc0], e = cell_start[gr * FeatureGrid::kCols + gc1 + 1];
-        int n_near = 0;
-        for (int k = b; k < e; ++k) {
-          const double dl = lx * c2_x[k] + ly * c2_y[k] + lz;
-          near[n_near] = k;
-          n_near += !(dl * dl / ln2 >= c2_line_th[k]);
-        }
-        for (int j = 0; j < n_near; ++j) {
-          const int k = near[j];
-          if (stamp[k] == static_cast<int>(i1)) continue;
-          stamp[k] = static_cast<int>(i1);
-          const Candidate& c = c2[k];
-          const double ex = epipole.x() - c2_x[k], ey = epipole.y() - c2_y[k];
-          if (ex * ex + ey * ey < c.epipole_th) continue;
-          const int i2 = c.index;
-          if (!node2.empty() && node2[i2] != node1[i1]) continue;  // triangulation_bow
-          nn.add(hamming(d1, f2.descriptor(i2)), i2);
-        }
-      }
-    }
-    return nn;
-  };
+// Each keypoint of kf1 finds its nearest two along its line independently of the others: in parallel
+// (OpenCV's thread pool, a few stripes, each with its own visit stamps), into its own slot. Which one
+// keeps a contested keypoint of kf2 is decided afterwards in index order, as in one sequential pass, so
+// the matches do not depend on the threads.
+std::vector<NearestTwo> EpipolarSearch::nearestForAll() const {
+  std::vector<NearestTwo> nearest(f1_.size());
   auto searchRange = [&](const cv::Range& range) {
-    std::vector<int> stamp(c2.size(), -1);  // by position in c2
-    std::vector<int> near(c2.size());       // a cell range's candidates near the line
+    std::vector<int> stamp(c2_.size(), -1);  // by position in c2_
+    std::vector<int> near(c2_.size());       // a cell range's candidates near the line
     for (int i1 = range.start; i1 < range.end; ++i1)
-      if (!kf1->points[i1]) nearest[i1] = nearestAlongLine(i1, stamp, near);
+      if (!kf1_->points[i1]) nearest[i1] = nearestAlongLine(i1, stamp, near);
   };
-  cv::parallel_for_(cv::Range(0, static_cast<int>(f1.size())), searchRange, 4);
-  for (size_t i1 = 0; i1 < f1.size(); ++i1) {
+  cv::parallel_for_(cv::Range(0, static_cast<int>(f1_.size())), searchRange, 4);
+  return nearest;
+}
+
+// The box of the segment of kp1's line between the depths d_min and d_max on kf1's ray, widened by the
+// widest band and clipped to the image; false when it is empty.
+bool EpipolarSearch::segmentBox(const cv::KeyPoint& kp1, Box& box) const {
+  const Eigen::Vector3d ray = T21_.linear() * unproject(cam_, kp1.pt.x, kp1.pt.y);
+  double a = d_min_, b = d_max_;
+  const double z_a = c1_in_2_.z() + ray.z() * a, z_b = c1_in_2_.z() + ray.z() * b;
+  const double z_eps = 1e-3 * d_min_;
+  if (z_a <= z_eps && z_b <= z_eps) return false;
+  if (z_a <= z_eps) a = (z_eps - c1_in_2_.z()) / ray.z();
+  if (z_b <= z_eps) b = (z_eps - c1_in_2_.z()) / ray.z();
+  const Eigen::Vector2d pa = project(cam_, c1_in_2_ + ray * a), pb = project(cam_, c1_in_2_ + ray * b);
+  box.x_lo = std::max(0.0, std::min(pa.x(), pb.x()) - band_max_);
+  box.x_hi = std::min(cam_.width - 1.0, std::max(pa.x(), pb.x()) + band_max_);
+  box.y_lo = std::max(0.0, std::min(pa.y(), pb.y()) - band_max_);
+  box.y_hi = std::min(cam_.height - 1.0, std::max(pa.y(), pb.y()) + band_max_);
+  return !(box.x_lo > box.x_hi || box.y_lo > box.y_hi);
+}
+
+NearestTwo EpipolarSearch::nearestAlongLine(int i1, std::vector<int>& stamp, std::vector<int>& near) const {
+  NearestTwo nn;
+  const cv::KeyPoint& kp1 = f1_.keypoints[i1];
+  const Eigen::Vector3d x1(kp1.pt.x, kp1.pt.y, 1.0);
+  const Eigen::Vector3d line = F21_ * x1;
+  const double ln = std::hypot(line.x(), line.y());
+  if (ln < 1e-12) return nn;
+  Box box;
+  if (!segmentBox(kp1, box)) return nn;
+
+  // The epipolar test first, on the contiguous array; descriptors only for what passes it.
+  const Line l{i1, line, ln, f1_.descriptor(i1)};
+  const int row0 = static_cast<int>(box.y_lo / cell_h_), row1 = static_cast<int>(box.y_hi / cell_h_);
+  for (int row = row0; row <= row1; ++row) {
+    const double ry0 = std::max(box.y_lo, row * static_cast<double>(cell_h_));
+    const double ry1 = std::min(box.y_hi, (row + 1) * static_cast<double>(cell_h_) - 1e-3);
+    double xa = box.x_lo, xb = box.x_hi;
+    if (std::fabs(line.x()) > 1e-9) {  // x of the line at both row edges, widened by the band
+      const double xr0 = -(line.y() * ry0 + line.z()) / line.x();
+      const double xr1 = -(line.y() * ry1 + line.z()) / line.x();
+      const double widen = band_max_ * ln / std::fabs(line.x());
+      xa = std::max(box.x_lo, std::min(xr0, xr1) - widen);
+      xb = std::min(box.x_hi, std::max(xr0, xr1) + widen);
+    }
+    if (xa > xb) continue;
+    int gc0, gc1, gr0, gr1;
+    if (!f2_.grid.cellRange(static_cast<float>(xa), static_cast<float>(ry0), static_cast<float>(xb),
+                            static_cast<float>(ry1), gc0, gc1, gr0, gr1))
+      continue;
+    for (int gr = gr0; gr <= gr1; ++gr) searchCells(l, gr, gc0, gc1, stamp, near, nn);
+  }
+  return nn;
+}
+
+// The cells gc0..gc1 of grid row gr are contiguous in c2_: the line test over all of them first (no branch
+// per candidate), then the rest for the ones near the line, in the same order. A candidate failing the
+// line test fails it again whenever this keypoint's search meets it, so only the ones passing it need the
+// visit stamp.
+void EpipolarSearch::searchCells(const Line& l, int gr, int gc0, int gc1, std::vector<int>& stamp,
+                                 std::vector<int>& near, NearestTwo& nn) const {
+  const double ln2 = l.ln * l.ln;
+  const double lx = l.line.x(), ly = l.line.y(), lz = l.line.z();
+  const int b = cell_start_[gr * FeatureGrid::kCols + gc0], e = cell_start_[gr * FeatureGrid::kCols + gc1 + 1];
+  int n_near = 0;
+  for (int k = b; k < e; ++k) {
+    const double dl = lx * c2_x_[k] + ly * c2_y_[k] + lz;
+    near[n_near] = k;
+    n_near += !(dl * dl / ln2 >= c2_line_th_[k]);
+  }
+  for (int j = 0; j < n_near; ++j) {
+    const int k = near[j];
+    if (stamp[k] == l.i1) continue;
+    stamp[k] = l.i1;
+    const Candidate& c = c2_[k];
+    const double ex = epipole_.x() - c2_x_[k], ey = epipole_.y() - c2_y_[k];
+    if (ex * ex + ey * ey < c.epipole_th) continue;
+    const int i2 = c.index;
+    if (!node2_.empty() && node2_[i2] != node1_[l.i1]) continue;  // triangulation_bow
+    nn.add(hamming(l.descriptor, f2_.descriptor(i2)), i2);
+  }
+}
+
+// kf2's keypoint for each of kf1's (-1: none): the nearest passing the ratio test; a keypoint of kf2 that
+// several found goes to the nearest of them (the first in index order among equals).
+std::vector<int> keepNearestMatches(const std::vector<NearestTwo>& nearest, size_t n2, float ratio) {
+  std::vector<int> matched2(n2, -1), dist2(n2, 256);
+  std::vector<int> match12(nearest.size(), -1);
+  for (size_t i1 = 0; i1 < nearest.size(); ++i1) {
     const NearestTwo& nn = nearest[i1];
     if (nn.index < 0 || nn.best > kThLow || nn.best > ratio * nn.second) continue;
     if (matched2[nn.index] >= 0) {
@@ -432,12 +503,32 @@ int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen
     dist2[nn.index] = nn.best;
     match12[i1] = nn.index;
   }
-  if (check_orientation) {
-    RotationHistogram hist;
-    for (size_t i1 = 0; i1 < f1.size(); ++i1)
-      if (match12[i1] >= 0) hist.add(f1.keypoints[i1].angle, f2.keypoints[match12[i1]].angle, static_cast<int>(i1));
-    for (int i1 : hist.rejected()) match12[i1] = -1;
-  }
+  return match12;
+}
+
+// Drops the matches whose keypoints' rotation falls outside the three main bins of the histogram.
+void dropRotationOutliers(const FeatureSet& f1, const FeatureSet& f2, std::vector<int>& match12) {
+  RotationHistogram hist;
+  for (size_t i1 = 0; i1 < f1.size(); ++i1)
+    if (match12[i1] >= 0) hist.add(f1.keypoints[i1].angle, f2.keypoints[match12[i1]].angle, static_cast<int>(i1));
+  for (int i1 : hist.rejected()) match12[i1] = -1;
+}
+
+}  // namespace
+
+int searchForTriangulation(const KeyFrame* kf1, const KeyFrame* kf2, const Eigen::Matrix3d& F21,
+                           std::vector<std::pair<int, int>>& matches, float ratio, bool check_orientation,
+                           bool same_bow_node) {
+  matches.clear();
+  const FeatureSet& f1 = *kf1->features;
+  const FeatureSet& f2 = *kf2->features;
+  EpipolarSearch search(kf1, kf2, F21);
+  if (same_bow_node && !kf1->feature_vector.empty() && !kf2->feature_vector.empty())
+    search.restrictToNodes(directIndexNodes(kf1), directIndexNodes(kf2));
+  if (!search.findEpipoleAndDepths()) return 0;
+  search.collectCandidates();
+  std::vector<int> match12 = keepNearestMatches(search.nearestForAll(), f2.size(), ratio);
+  if (check_orientation) dropRotationOutliers(f1, f2, match12);
   for (size_t i1 = 0; i1 < f1.size(); ++i1)
     if (match12[i1] >= 0) matches.emplace_back(static_cast<int>(i1), match12[i1]);
   return static_cast<int>(matches.size());

@@ -47,6 +47,8 @@ class SchurLevenbergMarquardt {
     const ceres::LossFunction* loss;
     int pose, vector;
   };
+  class Solver;  // one solve(): its layout, state and linearisation (schur_lm.cpp)
+
   std::vector<double*> poses_, vectors_;
   std::vector<bool> pose_fixed_;
   std::vector<Residual> residuals_;

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <memory>
+#include <optional>
+#include <string>
 #include <type_traits>
 
 #include "fit/render_depth.hpp"
@@ -206,161 +208,233 @@ bool FitOptions::validate(std::string* why) const {
   return true;
 }
 
-FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_world_obj_init,
-                    const Eigen::Vector3d& size, const Eigen::VectorXd& code_init, const FitObservations& obs,
-                    const FitOptions& options) {
+namespace {
+
+// Why fitObject cannot fit these inputs (none when it can).
+std::optional<std::string> inputProblem(const shape::ShapePrior& prior, const Eigen::Vector3d& size,
+                                        const Eigen::VectorXd& code0, const Eigen::Isometry3d& T_world_obj_init,
+                                        const FitObservations& obs, const FitOptions& options) {
   const int K = prior.dimensions();
-  const Eigen::VectorXd code0 = code_init.size() == 0 ? Eigen::VectorXd::Zero(K) : code_init;
   std::string why;
-  if (!options.validate(&why)) return failed(T_world_obj_init, size, code0, "bad fit options: " + why);
+  if (!options.validate(&why)) return "bad fit options: " + why;
   if (K < 1 || K > kMaxFitDims)
-    return failed(
-        T_world_obj_init, size, code0,
-        "the shape prior has " + std::to_string(K) + " dimensions (1.." + std::to_string(kMaxFitDims) + " supported)");
-  if (code0.size() != K || !code0.allFinite())
-    return failed(T_world_obj_init, size, code0, "initial code must be " + std::to_string(K) + " finite values");
-  if (!(size.allFinite() && size.minCoeff() > 0)) return failed(T_world_obj_init, size, code0, "size must be positive");
-  if (!T_world_obj_init.matrix().allFinite())
-    return failed(T_world_obj_init, size, code0, "initial pose is not finite");
-  if (obs.T_world_obj_boxes && !obs.T_world_obj_boxes->matrix().allFinite())
-    return failed(T_world_obj_init, size, code0, "the boxes' pose is not finite");
+    return "the shape prior has " + std::to_string(K) + " dimensions (1.." + std::to_string(kMaxFitDims) +
+           " supported)";
+  if (code0.size() != K || !code0.allFinite()) return "initial code must be " + std::to_string(K) + " finite values";
+  if (!(size.allFinite() && size.minCoeff() > 0)) return "size must be positive";
+  if (!T_world_obj_init.matrix().allFinite()) return "initial pose is not finite";
+  if (obs.T_world_obj_boxes && !obs.T_world_obj_boxes->matrix().allFinite()) return "the boxes' pose is not finite";
   const size_t n = obs.p_world.size();
-  if (n == 0 && obs.rays.empty() && obs.silhouette.empty())
-    return failed(T_world_obj_init, size, code0, "no surface observations");
+  if (n == 0 && obs.rays.empty() && obs.silhouette.empty()) return "no surface observations";
   if (!obs.weight.empty() && obs.weight.size() != n)
-    return failed(T_world_obj_init, size, code0,
-                  std::to_string(obs.weight.size()) + " weights for " + std::to_string(n) + " observations");
+    return std::to_string(obs.weight.size()) + " weights for " + std::to_string(n) + " observations";
   for (size_t i = 0; i < n; ++i) {
-    if (!obs.p_world[i].allFinite())
-      return failed(T_world_obj_init, size, code0, "observation " + std::to_string(i) + " is not finite");
+    if (!obs.p_world[i].allFinite()) return "observation " + std::to_string(i) + " is not finite";
     if (!obs.weight.empty() && !(obs.weight[i] > 0 && obs.weight[i] <= 1))
-      return failed(T_world_obj_init, size, code0, "weight " + std::to_string(i) + " is outside (0, 1]");
+      return "weight " + std::to_string(i) + " is outside (0, 1]";
   }
   for (size_t j = 0; j < obs.rays.size(); ++j) {
     const DepthRay& ray = obs.rays[j];
     if (!(ray.origin_world.allFinite() && ray.direction_world.allFinite() && std::isfinite(ray.depth_m) &&
           ray.depth_m > 0 && std::abs(ray.direction_world.norm() - 1) < 1e-6))
-      return failed(T_world_obj_init, size, code0,
-                    "ray " + std::to_string(j) + " is not finite, has no positive depth or no unit direction");
-    if (!(ray.weight > 0 && ray.weight <= 1))
-      return failed(T_world_obj_init, size, code0, "ray " + std::to_string(j) + " weight is outside (0, 1]");
+      return "ray " + std::to_string(j) + " is not finite, has no positive depth or no unit direction";
+    if (!(ray.weight > 0 && ray.weight <= 1)) return "ray " + std::to_string(j) + " weight is outside (0, 1]";
   }
   for (size_t k = 0; k < obs.silhouette.size(); ++k) {
     const SilhouetteRay& ray = obs.silhouette[k];
     if (!(ray.origin_world.allFinite() && ray.direction_world.allFinite() &&
           std::abs(ray.direction_world.norm() - 1) < 1e-6))
-      return failed(T_world_obj_init, size, code0,
-                    "silhouette ray " + std::to_string(k) + " is not finite or has no unit direction");
+      return "silhouette ray " + std::to_string(k) + " is not finite or has no unit direction";
     if (!(ray.weight > 0 && ray.weight <= 1))
-      return failed(T_world_obj_init, size, code0, "silhouette ray " + std::to_string(k) + " weight is outside (0, 1]");
+      return "silhouette ray " + std::to_string(k) + " weight is outside (0, 1]";
   }
-  if (n + obs.rays.size() + obs.silhouette.size() < 4)
-    return failed(T_world_obj_init, size, code0, "fewer than 4 surface observations");
+  if (n + obs.rays.size() + obs.silhouette.size() < 4) return "fewer than 4 surface observations";
+  return std::nullopt;
+}
 
-  const Eigen::Isometry3d T_obj_world_init = T_world_obj_init.inverse();
-  std::vector<Eigen::Vector3d> p0(n);
-  for (size_t i = 0; i < n; ++i) p0[i] = T_obj_world_init * obs.p_world[i];
+// fitObject's solve, in the frame of the initial estimate: the unknowns are the pose update (angle-axis,
+// translation), the code and the log of the size's scale; two stages, each a Ceres problem of the
+// observations' residuals on them.
+class ObjectFit {
+ public:
+  ObjectFit(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_world_obj_init, const Eigen::Vector3d& size,
+            const Eigen::VectorXd& code0, const FitObservations& obs, const FitOptions& options)
+      : prior_(prior),
+        K_(prior.dimensions()),
+        T_world_obj_init_(T_world_obj_init),
+        T_obj_world_init_(T_world_obj_init.inverse()),
+        size_(size),
+        obs_(obs),
+        options_(options),
+        p0_(obs.p_world.size()),
+        code_(code0) {
+    for (size_t i = 0; i < p0_.size(); ++i) p0_[i] = T_obj_world_init_ * obs.p_world[i];
+  }
 
-  double pose[6] = {0, 0, 0, 0, 0, 0};
-  double log_size[3] = {0, 0, 0};
-  Eigen::VectorXd code = code0;
-  int iterations = 0;
-  double cost = 0;
+  // Stage 0 holds the code (and the size) and widens the Huber kernels 4 times; stage 1 frees the code (and
+  // the size with fit_size). False (with why) when Ceres' solution is not usable.
+  bool solveStage(int stage, std::string& why);
+  // The estimate, its cost and how well it agrees with the observations (ok is left to the caller).
+  FitResult result() const;
+
+ private:
+  void addSurfaceResiduals(ceres::Problem& problem, int stage);
+  void addBoxPrior(ceres::Problem& problem);
+  void addDepthResiduals(ceres::Problem& problem, int stage);
+  void addSilhouetteResiduals(ceres::Problem& problem, int stage);
+  void addPriorsAndConstants(ceres::Problem& problem, int stage);
+
+  const shape::ShapePrior& prior_;
+  const int K_;
+  const Eigen::Isometry3d& T_world_obj_init_;
+  const Eigen::Isometry3d T_obj_world_init_;
+  const Eigen::Vector3d& size_;
+  const FitObservations& obs_;
+  const FitOptions& options_;
+  std::vector<Eigen::Vector3d> p0_;  // the surface observations in the initial object frame
+
+  double pose_[6] = {0, 0, 0, 0, 0, 0};
+  double log_size_[3] = {0, 0, 0};
+  Eigen::VectorXd code_;
+  int iterations_ = 0;
+  double cost_ = 0;
+};
+
+void ObjectFit::addSurfaceResiduals(ceres::Problem& problem, int stage) {
+  const double huber = stage == 0 ? 4 * options_.huber_m : options_.huber_m;
+  for (size_t i = 0; i < p0_.size(); ++i) {
+    const double w = obs_.weight.empty() ? 1.0 : obs_.weight[i];
+    const double scale = std::sqrt(options_.lambda_surface * w) / options_.sigma_m;
+    problem.AddResidualBlock(surfaceCostFor(K_, prior_, p0_[i], size_, scale), new ceres::HuberLoss(huber * scale),
+                             pose_, code_.data(), log_size_);
+  }
+}
+
+void ObjectFit::addBoxPrior(ceres::Problem& problem) {
+  const Eigen::Isometry3d D_boxes = T_obj_world_init_ * *obs_.T_world_obj_boxes;
+  const double yaw = std::atan2(D_boxes.linear()(1, 0), D_boxes.linear()(0, 0));
+  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BoxPriorResidual, 4, 6>(new BoxPriorResidual{
+                               D_boxes.translation(), yaw, options_.box_sigma_m, options_.box_sigma_yaw}),
+                           nullptr, pose_);
+}
+
+void ObjectFit::addDepthResiduals(ceres::Problem& problem, int stage) {
+  for (const DepthRay& ray : obs_.rays) {
+    const double scale = std::sqrt(options_.lambda_render * ray.weight) / options_.sigma_depth_m;
+    problem.AddResidualBlock(depthCostFor(K_, prior_, T_obj_world_init_ * ray.origin_world,
+                                          T_obj_world_init_.linear() * ray.direction_world, size_, ray.depth_m, scale),
+                             new ceres::HuberLoss((stage == 0 ? 4 : 1) * options_.huber_depth_m * scale), pose_,
+                             code_.data(), log_size_);
+  }
+}
+
+void ObjectFit::addSilhouetteResiduals(ceres::Problem& problem, int stage) {
+  // The estimate at the start of this solve: the level's metres per unit is taken there.
+  const Eigen::Isometry3d T_obj_world_now = poseUpdate(pose_).inverse() * T_obj_world_init_;
+  const double size_now[3] = {size_.x() * std::exp(log_size_[0]), size_.y() * std::exp(log_size_[1]),
+                              size_.z() * std::exp(log_size_[2])};
+  for (const SilhouetteRay& ray : obs_.silhouette) {
+    const Eigen::Vector3d o = T_obj_world_now * ray.origin_world, u = T_obj_world_now.linear() * ray.direction_world;
+    const double ov[3] = {o.x(), o.y(), o.z()}, uv[3] = {u.x(), u.y(), u.z()};
+    const double scale = std::sqrt(options_.lambda_silhouette * ray.weight) / options_.sigma_silhouette_m;
+    const double metres = metresPerLevel(prior_, ov, uv, size_now, code_.data());
+    problem.AddResidualBlock(
+        silhouetteCostFor(K_, prior_, T_obj_world_init_ * ray.origin_world,
+                          T_obj_world_init_.linear() * ray.direction_world, size_, ray.inside, scale * metres),
+        new ceres::HuberLoss((stage == 0 ? 4 : 1) * options_.huber_silhouette_m * scale), pose_, code_.data(),
+        log_size_);
+  }
+}
+
+// The code prior, which blocks are held in this stage, the size prior, and yaw_only's pose manifold.
+void ObjectFit::addPriorsAndConstants(ceres::Problem& problem, int stage) {
+  if (options_.lambda_code > 0)
+    problem.AddResidualBlock(new DiagonalPrior(std::sqrt(options_.lambda_code) * prior_.codeStd().cwiseInverse()),
+                             nullptr, code_.data());
+  if (stage == 0) problem.SetParameterBlockConstant(code_.data());
+  if (options_.fit_size && stage > 0) {
+    problem.AddResidualBlock(
+        new DiagonalPrior(Eigen::Vector3d::Constant(std::sqrt(options_.lambda_size) / options_.size_sigma)), nullptr,
+        log_size_);
+  } else {
+    problem.SetParameterBlockConstant(log_size_);
+  }
+  if (options_.yaw_only) problem.SetManifold(pose_, new ceres::SubsetManifold(6, {0, 1}));
+}
+
+bool ObjectFit::solveStage(int stage, std::string& why) {
+  ceres::Problem problem;
+  addSurfaceResiduals(problem, stage);
+  if (obs_.T_world_obj_boxes) addBoxPrior(problem);
+  if (options_.lambda_render > 0) addDepthResiduals(problem, stage);
+  if (options_.lambda_silhouette > 0) addSilhouetteResiduals(problem, stage);
+  addPriorsAndConstants(problem, stage);
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  so.max_num_iterations = options_.max_iterations;
+  so.num_threads = 1;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  if (!summary.IsSolutionUsable()) {
+    why = "solver failed: " + summary.message;
+    return false;
+  }
+  iterations_ += static_cast<int>(summary.iterations.size());
+  cost_ = summary.final_cost;
+  return true;
+}
+
+FitResult ObjectFit::result() const {
+  FitResult r;
+  r.T_world_obj = T_world_obj_init_ * poseUpdate(pose_);
+  r.size = size_.cwiseProduct(Eigen::Vector3d(std::exp(log_size_[0]), std::exp(log_size_[1]), std::exp(log_size_[2])));
+  r.code = code_;
+  r.cost = 2 * cost_;  // Ceres reports half the sum of squares
+  r.iterations = iterations_;
+  const Eigen::Isometry3d T_obj_world = r.T_world_obj.inverse();
+  const size_t n = obs_.p_world.size();
+  double sum2 = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double d = prior_.distance(T_obj_world * obs_.p_world[i], r.size, r.code);
+    sum2 += d * d;
+    if (std::abs(d) < options_.inlier_m) ++r.inliers;
+  }
+  r.rms_m = n ? std::sqrt(sum2 / n) : 0.0;
+  for (const SilhouetteRay& ray : obs_.silhouette) {
+    const Eigen::Vector3d o = T_obj_world * ray.origin_world, u = T_obj_world.linear() * ray.direction_world;
+    const double ov[3] = {o.x(), o.y(), o.z()}, uv[3] = {u.x(), u.y(), u.z()};
+    const double s[3] = {r.size.x(), r.size.y(), r.size.z()};
+    double level = 0;
+    const double metres = metresPerLevel(prior_, ov, uv, s, r.code.data(), &level);  // one search for both
+    const double violation = (ray.inside ? level : -level) * metres;
+    if (violation < options_.inlier_m) ++r.silhouette_agree;
+  }
+  return r;
+}
+
+}  // namespace
+
+FitResult fitObject(const shape::ShapePrior& prior, const Eigen::Isometry3d& T_world_obj_init,
+                    const Eigen::Vector3d& size, const Eigen::VectorXd& code_init, const FitObservations& obs,
+                    const FitOptions& options) {
+  const int K = prior.dimensions();
+  const Eigen::VectorXd code0 = code_init.size() == 0 ? Eigen::VectorXd::Zero(K) : code_init;
+  if (const auto why = inputProblem(prior, size, code0, T_world_obj_init, obs, options))
+    return failed(T_world_obj_init, size, code0, *why);
+
+  ObjectFit fit(prior, T_world_obj_init, size, code0, obs, options);
   try {
     for (int stage = 0; stage < 2; ++stage) {
-      const double huber = stage == 0 ? 4 * options.huber_m : options.huber_m;
-      ceres::Problem problem;
-      for (size_t i = 0; i < n; ++i) {
-        const double w = obs.weight.empty() ? 1.0 : obs.weight[i];
-        const double scale = std::sqrt(options.lambda_surface * w) / options.sigma_m;
-        problem.AddResidualBlock(surfaceCostFor(K, prior, p0[i], size, scale), new ceres::HuberLoss(huber * scale),
-                                 pose, code.data(), log_size);
-      }
-      if (obs.T_world_obj_boxes) {
-        const Eigen::Isometry3d D_boxes = T_obj_world_init * *obs.T_world_obj_boxes;
-        const double yaw = std::atan2(D_boxes.linear()(1, 0), D_boxes.linear()(0, 0));
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BoxPriorResidual, 4, 6>(new BoxPriorResidual{
-                                     D_boxes.translation(), yaw, options.box_sigma_m, options.box_sigma_yaw}),
-                                 nullptr, pose);
-      }
-      if (options.lambda_render > 0)
-        for (const DepthRay& ray : obs.rays) {
-          const double scale = std::sqrt(options.lambda_render * ray.weight) / options.sigma_depth_m;
-          problem.AddResidualBlock(
-              depthCostFor(K, prior, T_obj_world_init * ray.origin_world,
-                           T_obj_world_init.linear() * ray.direction_world, size, ray.depth_m, scale),
-              new ceres::HuberLoss((stage == 0 ? 4 : 1) * options.huber_depth_m * scale), pose, code.data(), log_size);
-        }
-      if (options.lambda_silhouette > 0) {
-        // The estimate at the start of this solve: the level's metres per unit is taken there.
-        const Eigen::Isometry3d T_obj_world_now = poseUpdate(pose).inverse() * T_obj_world_init;
-        const double size_now[3] = {size.x() * std::exp(log_size[0]), size.y() * std::exp(log_size[1]),
-                                    size.z() * std::exp(log_size[2])};
-        for (const SilhouetteRay& ray : obs.silhouette) {
-          const Eigen::Vector3d o = T_obj_world_now * ray.origin_world,
-                                u = T_obj_world_now.linear() * ray.direction_world;
-          const double ov[3] = {o.x(), o.y(), o.z()}, uv[3] = {u.x(), u.y(), u.z()};
-          const double scale = std::sqrt(options.lambda_silhouette * ray.weight) / options.sigma_silhouette_m;
-          const double metres = metresPerLevel(prior, ov, uv, size_now, code.data());
-          problem.AddResidualBlock(
-              silhouetteCostFor(K, prior, T_obj_world_init * ray.origin_world,
-                                T_obj_world_init.linear() * ray.direction_world, size, ray.inside, scale * metres),
-              new ceres::HuberLoss((stage == 0 ? 4 : 1) * options.huber_silhouette_m * scale), pose, code.data(),
-              log_size);
-        }
-      }
-      if (options.lambda_code > 0)
-        problem.AddResidualBlock(new DiagonalPrior(std::sqrt(options.lambda_code) * prior.codeStd().cwiseInverse()),
-                                 nullptr, code.data());
-      if (stage == 0) problem.SetParameterBlockConstant(code.data());
-      if (options.fit_size && stage > 0) {
-        problem.AddResidualBlock(
-            new DiagonalPrior(Eigen::Vector3d::Constant(std::sqrt(options.lambda_size) / options.size_sigma)), nullptr,
-            log_size);
-      } else {
-        problem.SetParameterBlockConstant(log_size);
-      }
-      if (options.yaw_only) problem.SetManifold(pose, new ceres::SubsetManifold(6, {0, 1}));
-      ceres::Solver::Options so;
-      so.linear_solver_type = ceres::DENSE_QR;
-      so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-      so.max_num_iterations = options.max_iterations;
-      so.num_threads = 1;
-      so.logging_type = ceres::SILENT;
-      ceres::Solver::Summary summary;
-      ceres::Solve(so, &problem, &summary);
-      if (!summary.IsSolutionUsable())
-        return failed(T_world_obj_init, size, code0, "solver failed: " + summary.message);
-      iterations += static_cast<int>(summary.iterations.size());
-      cost = summary.final_cost;
+      std::string why;
+      if (!fit.solveStage(stage, why)) return failed(T_world_obj_init, size, code0, why);
     }
   } catch (const std::exception& e) {
     return failed(T_world_obj_init, size, code0, std::string("solver failed: ") + e.what());
   }
 
-  FitResult r;
-  r.T_world_obj = T_world_obj_init * poseUpdate(pose);
-  r.size = size.cwiseProduct(Eigen::Vector3d(std::exp(log_size[0]), std::exp(log_size[1]), std::exp(log_size[2])));
-  r.code = code;
-  r.cost = 2 * cost;  // Ceres reports half the sum of squares
-  r.iterations = iterations;
-  const Eigen::Isometry3d T_obj_world = r.T_world_obj.inverse();
-  double sum2 = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const double d = prior.distance(T_obj_world * obs.p_world[i], r.size, r.code);
-    sum2 += d * d;
-    if (std::abs(d) < options.inlier_m) ++r.inliers;
-  }
-  r.rms_m = n ? std::sqrt(sum2 / n) : 0.0;
-  for (const SilhouetteRay& ray : obs.silhouette) {
-    const Eigen::Vector3d o = T_obj_world * ray.origin_world, u = T_obj_world.linear() * ray.direction_world;
-    const double ov[3] = {o.x(), o.y(), o.z()}, uv[3] = {u.x(), u.y(), u.z()};
-    const double s[3] = {r.size.x(), r.size.y(), r.size.z()};
-    double level = 0;
-    const double metres = metresPerLevel(prior, ov, uv, s, r.code.data(), &level);  // one search for both
-    const double violation = (ray.inside ? level : -level) * metres;
-    if (violation < options.inlier_m) ++r.silhouette_agree;
-  }
+  FitResult r = fit.result();
   if (!(r.T_world_obj.matrix().allFinite() && r.code.allFinite() && r.size.allFinite()))
     return failed(T_world_obj_init, size, code0, "solver returned a non-finite result");
   r.ok = true;
