@@ -26,7 +26,12 @@ odometry nearly every car in view is parked (docs/motion.md).
 closer than M metres, the mean world position of those is taken as the car's place (a box's range error
 shrinks with the square of its range), and every farther detection's range is compared with that place's
 range from the same camera. The velocity a parked car seems to move at is about this share times the ego's
-speed."""
+speed.
+
+--state STATE keeps only the detections the motion checker gave that state: with `static`, what the boxes a
+checker hands on as parked (to the mask generator, the backend and the reconstructor) make a parked car seem to
+do; a checker that refines the range of the boxes it calls static (motion_bev_tracker's parallax_range) is
+measured where it acts."""
 import collections
 import math
 import os
@@ -37,9 +42,11 @@ import run_files  # noqa: E402
 from run_files import fail  # noqa: E402
 
 
-def read_tracks(run, poses, times, max_range):
+def read_tracks(run, poses, times, max_range, state=None):
     tracks = collections.defaultdict(list)
     for car in run_files.cars(run, max_range, unclipped=True):
+        if state and car.state != state:
+            continue
         if car.frame < 0 or car.frame >= len(poses) or car.frame >= len(times):
             fail(run + "/objects.txt", 0, "frame %d has no pose or time (%d poses, %d times)" % (
                 car.frame, len(poses), len(times)))
@@ -85,13 +92,15 @@ def main():
     ap.add_argument("--z", type=float, default=2.0, help="standard errors of the bound (default 2, z_static)")
     ap.add_argument("--static-speed", type=float, default=1.0, help="m/s a static test rejects (default 1)")
     ap.add_argument("--near", type=float, default=0.0, help="range error against the near detections (m; 0: off)")
+    ap.add_argument("--state", choices=["static", "dynamic", "unknown"],
+                    help="only the detections the motion checker gave this state (default: all)")
     a = ap.parse_args()
     if a.min_detections < 3:
         sys.exit("--min-detections must be at least 3")
     poses = run_files.rows(a.poses, 12)
     times = [r[0] for r in run_files.rows(a.times, 1)]
     fits = []
-    for track_id, track in read_tracks(a.run, poses, times, a.range).items():
+    for track_id, track in read_tracks(a.run, poses, times, a.range, a.state).items():
         if len(track) < a.min_detections:
             continue
         fit = line_fit(track)

@@ -330,6 +330,27 @@ TEST_F(RunTest, WrongAbiPluginIsNamedWithItsCause) {
   EXPECT_NE(r.err.find("wrong_major.so: built for plugin ABI 2.0"), std::string::npos) << r.err;
 }
 
+TEST_F(RunTest, AMotionCheckerHandingOnANonFiniteBoxStopsTheRunNamingIt) {
+  // A checker writes into the boxes in place: the host checks what it hands on as it checks a detector's.
+  const std::string bad = pipeline(
+      "detector: {plugin: fixture_boxes}\n"
+      "motion_checker: {plugin: fixture_all_static, corrupt_nan: true}\n");
+  const Result r = beslam("run " + bad + " --out " + (dir_ / "out").string(), dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("plugin fixture_all_static"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("box 0 has a non-finite centre"), std::string::npos) << r.err;
+}
+
+TEST_F(RunTest, ABoxWithANegativePositionSigmaStopsTheRunNamingTheDetector) {
+  const Result r =
+      beslam("run " + pipeline("detector: {plugin: fixture_boxes, range_sigma: -0.5}\n") + " --out " + (dir_ / "out").string(), dir_);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("plugin fixture_boxes"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("box 0 has a non-finite or negative position sigma"), std::string::npos) << r.err;
+}
+
 TEST_F(RunTest, NanFromDetectorStopsTheRunAndKeepsEarlierOutput) {
   const std::string good = pipeline("detector: {plugin: fixture_boxes}\n");
   ASSERT_EQ(beslam("run " + good + " --out " + (dir_ / "out").string(), dir_).code, 0);

@@ -54,9 +54,9 @@ class StageTimer {
   Clock::time_point t0_;
 };
 
-// Boxes from a detector must be finite and sized before any other plugin sees them.
-void checkBoxes(const std::vector<beslam_box3d>& boxes, const registry::Plugin& detector,
-                const datasets::Frame& frame) {
+// Boxes from a detector must be finite and sized before any other plugin sees them; the boxes a motion checker
+// hands on are checked again (it writes into them in place: a faulty one must not reach the backend).
+void checkBoxes(const std::vector<beslam_box3d>& boxes, const registry::Plugin& plugin, const datasets::Frame& frame) {
   for (size_t i = 0; i < boxes.size(); ++i) {
     const beslam_box3d& b = boxes[i];
     const char* bad = nullptr;
@@ -67,8 +67,11 @@ void checkBoxes(const std::vector<beslam_box3d>& boxes, const registry::Plugin& 
     if (!bad && !std::isfinite(b.score)) bad = "a non-finite score";
     if (!bad && (b.flags & BESLAM_BOX_HAS_VELOCITY))
       for (double v : b.velocity_cam) bad = std::isfinite(v) ? bad : "a non-finite velocity";
+    if (!bad && (b.flags & BESLAM_BOX_HAS_POSITION_SIGMA))
+      for (double v : {b.position_sigma[0], b.position_sigma[1], b.range_drift})
+        bad = bad ? bad : (std::isfinite(v) && v >= 0 ? nullptr : "a non-finite or negative position sigma");
     if (bad)
-      throw Error("plugin " + detector.id + " (" + detector.library_path + "): frame " + std::to_string(frame.index) +
+      throw Error("plugin " + plugin.id + " (" + plugin.library_path + "): frame " + std::to_string(frame.index) +
                   " (" + frame.image_path + "): box " + std::to_string(i) + " has " + bad);
   }
 }
@@ -469,6 +472,7 @@ class Run {
       std::vector<int32_t> detected_ids;
       for (const beslam_box3d& b : f.boxes) detected_ids.push_back(b.track_id);
       motion_->classify(f.view, f.T_world_cam_predicted, f.boxes);
+      checkBoxes(f.boxes, motion_->plugin(), f.frame);
       for (size_t i = 0; i < f.boxes.size(); ++i) {  // ids the checker made up (not the detector's) move on
         beslam_box3d& b = f.boxes[i];
         if (b.track_id >= 0 && b.track_id != detected_ids[i]) b.track_id += track_id_offset_;
