@@ -17,5 +17,5 @@ fi
 cmake -S . -B build -DCMAKE_BUILD_TYPE="${BESLAM_BUILD_TYPE:-Release}" -DBESLAM_BUILD_TESTS=$tests
 cmake --build build -j"${BESLAM_JOBS:-$(nproc 2>/dev/null || echo 2)}" --target beslam_demo
 build/bin/beslam run configs/demo.yaml --out out/demo --overwrite "$@"
-echo "demo: built only the demo's plugins; every other plugin (KITTI, LiDAR, replay pipelines):" \
-  "cmake --build build -j2 --target beslam_runtime"
+echo "demo: built only the demo's plugins; every other plugin (KITTI, replay pipelines):" \
+  "cmake --build build -j2 --target beslam_runtime; the LiDAR detector needs PCL first: scripts/install-deps.sh --lidar"

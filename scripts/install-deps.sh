@@ -1,24 +1,28 @@
 #!/usr/bin/env bash
 # Installs the Debian bookworm packages BE-SLAM needs. Idempotent: does nothing when all are present (no
 # apt-get update either), so repeated runs and CI re-runs cost a second.
-#   scripts/install-deps.sh          what the build and the demo need (scripts/demo.sh)
-#   scripts/install-deps.sh --test   that and what the tests need: GoogleTest, clang (the sanitised build and
-#                                    the fuzz targets), clang-format, Chromium (the report's browser test),
+#   scripts/install-deps.sh          what the build and the demo need (scripts/demo.sh): every plugin but
+#                                    detector_lidar
+#   scripts/install-deps.sh --lidar  that and PCL, for detector_lidar (libpcl-dev pulls in about 200 packages:
+#                                    VTK, Qt, a Java runtime)
+#   scripts/install-deps.sh --test   that, PCL and what the tests need: GoogleTest, clang (the sanitised build
+#                                    and the fuzz targets), clang-format, Chromium (the report's browser test),
 #                                    pytest (the Python package's tests)
 set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config ccache
-  libeigen3-dev libopencv-dev libceres-dev libpcl-dev libyaml-cpp-dev
+  libeigen3-dev libopencv-dev libceres-dev libyaml-cpp-dev
   libboost-dev libboost-filesystem-dev liboctomap-dev nlohmann-json3-dev
   libjs-three libjs-chart.js   # the HTML report's libraries
   pybind11-dev python3-numpy   # the Python package (platform/python)
 )
 case "${1:-}" in
   "") ;;
-  --test) packages+=(libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev clang-format chromium
-    python3-pytest) ;;
-  *) echo "install-deps: unknown option '$1' (expected none or --test)" >&2; exit 2 ;;
+  --lidar) packages+=(libpcl-dev) ;;
+  --test) packages+=(libpcl-dev libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev clang-format
+    chromium python3-pytest) ;;
+  *) echo "install-deps: unknown option '$1' (expected none, --lidar or --test)" >&2; exit 2 ;;
 esac
 
 missing=()
