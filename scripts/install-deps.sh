@@ -15,7 +15,7 @@ packages=(
   libeigen3-dev libopencv-dev libceres-dev libyaml-cpp-dev
   libboost-dev libboost-filesystem-dev liboctomap-dev nlohmann-json3-dev
   libjs-three libjs-chart.js   # the HTML report's libraries
-  pybind11-dev python3-numpy   # the Python package (platform/python)
+  pybind11-dev python3-dev python3-numpy   # the Python package (platform/python)
 )
 case "${1:-}" in
   "") ;;
