@@ -60,6 +60,7 @@ TEST(ImageIo, SixteenBitAndJpeg) {
   EXPECT_EQ(readImageSize(dir / "a.jpg"), cv::Size(64, 48));
   test::truncateFile(dir / "a.jpg", std::filesystem::file_size(dir / "a.jpg") / 2);
   EXPECT_BESLAM_ERROR(loadImage(dir / "a.jpg", false), dir / "a.jpg", "truncated JPEG");
+  EXPECT_BESLAM_ERROR(readImageSize(dir / "a.jpg"), dir / "a.jpg", "truncated JPEG");
 }
 
 TEST(ImageIo, MissingUnreadableAndTruncated) {
@@ -68,6 +69,7 @@ TEST(ImageIo, MissingUnreadableAndTruncated) {
   EXPECT_BESLAM_ERROR(readImageSize(dir / "none.png"), dir / "none.png", "missing image");
   test::writeText(dir / "text.png", "this is not an image");
   EXPECT_BESLAM_ERROR(loadImage(dir / "text.png", false), dir / "text.png", "unknown image format", "PNG, JPEG");
+  EXPECT_BESLAM_ERROR(readImageSize(dir / "text.png"), dir / "text.png", "unknown image format", "PNG, JPEG");
   test::writeText(dir / "empty.png", "");
   EXPECT_BESLAM_ERROR(loadImage(dir / "empty.png", false), dir / "empty.png", "empty");
 
@@ -94,6 +96,7 @@ TEST(ImageIo, EveryFormatTheImageFolderTakesLoads) {
     const bool grey = std::string(name) == "a.pgm";
     ASSERT_TRUE(cv::imwrite(dir / name, test::pattern(37, 21, grey ? 1 : 3))) << name;
     EXPECT_EQ(loadImage(dir / name, true).gray.size(), cv::Size(37, 21)) << name;
+    EXPECT_EQ(readImageSize(dir / name), cv::Size(37, 21)) << name;  // from the header alone
   }
 }
 
@@ -104,6 +107,7 @@ TEST(ImageIo, AHeaderClaimingAHugeImageIsRefusedBeforeDecoding) {
   const auto expectRefused = [&](const std::string& name, const std::string& bytes, const std::string& format) {
     test::writeText(dir / name, bytes);
     EXPECT_BESLAM_ERROR(loadImage(dir / name, false), dir / name, format + " image of", "more than the 67108864");
+    EXPECT_BESLAM_ERROR(readImageSize(dir / name), dir / name, format + " image of", "more than the 67108864");
   };
   const std::string jpeg(
       "\xff\xd8\xff\xc0\x00\x11\x08\xff\xd8\x2f\x0a\x03\x01\x22\x00\x02\x11\x01\x03\x11\x01\xf8\xfa\xff\xda"

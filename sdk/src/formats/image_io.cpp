@@ -153,7 +153,7 @@ std::optional<DeclaredSize> tiffSize(const unsigned char* d, std::size_t size) {
 // The width and height an image file declares in its header, for the formats the datasets take (PNG, JPEG,
 // PGM/PPM, BMP, TIFF, WebP); refuses a size that is missing, zero or above kMaxImagePixels, and any other
 // format (OpenCV would decode a few more, with no size known before it allocates).
-void checkDeclaredSize(const std::string& path, const std::string& bytes) {
+cv::Size checkDeclaredSize(const std::string& path, const std::string& bytes) {
   const auto* d = reinterpret_cast<const unsigned char*>(bytes.data());
   const std::size_t size = bytes.size();
   const auto starts = [&](const char* magic, std::size_t n) { return size >= n && std::equal(d, d + n, magic); };
@@ -187,6 +187,7 @@ void checkDeclaredSize(const std::string& path, const std::string& bytes) {
     throwAt(path, std::string(format) + " image of " + std::to_string(declared->width) + "x" +
                       std::to_string(declared->height) + " pixels, more than the " + std::to_string(kMaxImagePixels) +
                       " the loader decodes");
+  return {static_cast<int>(declared->width), static_cast<int>(declared->height)};
 }
 
 void requireFile(const std::string& path) {
@@ -228,15 +229,27 @@ void checkPng(const std::string& path, const std::string& bytes) {
   if (!seen_idat) throwAt(path, "corrupt PNG image (no IDAT chunk)");
 }
 
-LoadedImage loadImage(const std::string& path, bool want_color) {
+namespace {
+
+// The file's bytes after every check that needs no decoding (present, not empty, a PNG's chunks and a JPEG's
+// end marker whole, a known format whose header declares a size the loader takes); `declared` is that size.
+std::string readCheckedImage(const std::string& path, cv::Size& declared) {
   requireFile(path);
-  const std::string bytes = readFile(path);
+  std::string bytes = readFile(path);
   if (bytes.empty()) throwAt(path, "truncated image (empty file)");
   if (hasPngSignature(bytes))
     checkPng(path, bytes);
   else if (hasJpegStart(bytes))
     checkJpeg(path, bytes);
-  checkDeclaredSize(path, bytes);
+  declared = checkDeclaredSize(path, bytes);
+  return bytes;
+}
+
+}  // namespace
+
+LoadedImage loadImage(const std::string& path, bool want_color) {
+  cv::Size declared;
+  const std::string bytes = readCheckedImage(path, declared);
 
   cv::Mat decoded;
   try {
@@ -274,20 +287,9 @@ LoadedImage loadImage(const std::string& path, bool want_color) {
 }
 
 cv::Size readImageSize(const std::string& path) {
-  requireFile(path);
-  std::ifstream in(path, std::ios::binary);
-  std::string head(33, '\0');  // signature (8) + IHDR length/type (8) + width/height (8) + rest
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<std::size_t>(in.gcount()));
-  if (hasPngSignature(head)) {
-    if (head.size() < 24 || head.compare(12, 4, "IHDR") != 0) throwAt(path, "truncated PNG image (no IHDR)");
-    const auto* d = reinterpret_cast<const unsigned char*>(head.data());
-    const std::uint32_t width = readBigEndian32(d + 16), height = readBigEndian32(d + 20);
-    if (width == 0 || height == 0 || width > 1u << 20 || height > 1u << 20)
-      throwAt(path, "corrupt PNG image (size " + std::to_string(width) + "x" + std::to_string(height) + ")");
-    return {static_cast<int>(width), static_cast<int>(height)};
-  }
-  return loadImage(path, false).gray.size();
+  cv::Size declared;
+  readCheckedImage(path, declared);
+  return declared;
 }
 
 }  // namespace beslam::formats

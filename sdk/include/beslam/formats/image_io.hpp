@@ -23,7 +23,9 @@ LoadedImage loadImage(const std::string& path, bool want_color);
 // lengths and CRCs, IHDR first, IEND present).
 void checkPng(const std::string& path, const std::string& bytes);
 
-// Width and height from the PNG IHDR (cheap), or by decoding other formats; throws like loadImage.
+// Width and height as the file's header declares them, after loadImage's checks that need no decoding (the
+// same formats and size limit, a PNG's chunks and a JPEG's end marker whole); throws like loadImage. The
+// pixels are not decoded: corrupt image data is found when the frame itself is loaded.
 cv::Size readImageSize(const std::string& path);
 
 }  // namespace beslam::formats
