@@ -146,7 +146,7 @@ TEST(Registry, ListsSchemaOfSdkPlugin) {
   registry.loadLibrary(fixture("sdk_fixtures"));
   const auto& p = registry.find("fixture_boxes");
   EXPECT_EQ(p.version, "0.1.0");
-  ASSERT_EQ(p.fields.size(), 5u);
+  ASSERT_EQ(p.fields.size(), 6u);
   EXPECT_EQ(p.fields[1].key, "depth");
   EXPECT_EQ(p.fields[1].type, BESLAM_CONFIG_DOUBLE);
   EXPECT_DOUBLE_EQ(p.fields[1].min_value, 0.5);
@@ -179,9 +179,13 @@ TEST(Registry, DetectAndClassifyRoundTrip) {
   cls.text = "car";
   const std::vector<beslam_config_value> config = {number("emit_nan", BESLAM_CONFIG_BOOL, 0),
                                                    number("depth", BESLAM_CONFIG_DOUBLE, 12.5),
-                                                   number("count", BESLAM_CONFIG_INT, 3), cls, list};
+                                                   number("count", BESLAM_CONFIG_INT, 3),
+                                                   cls,
+                                                   list,
+                                                   number("range_sigma", BESLAM_CONFIG_DOUBLE, 0)};
   auto detector = host.create<beslam::registry::DetectorInstance>("fixture_boxes", config);
-  auto checker = host.create<beslam::registry::MotionCheckerInstance>("fixture_all_static");
+  auto checker = host.create<beslam::registry::MotionCheckerInstance>("fixture_all_static",
+                                                                      {number("corrupt_nan", BESLAM_CONFIG_BOOL, 0)});
 
   std::vector<uint8_t> pixels(64 * 48, 128);
   beslam_frame frame = emptyFrame();
@@ -318,7 +322,8 @@ TEST(Registry, AWorldChangeCrossesFromBackendToMotionChecker) {
   FixtureHost host({"backend_world_moved", "motion_checker_1_6", "sdk_fixtures"});
   auto backend = host.create<beslam::registry::BackendInstance>("backend_world_moved");
   auto old_checker = host.create<beslam::registry::MotionCheckerInstance>("motion_checker_1_6");
-  auto checker = host.create<beslam::registry::MotionCheckerInstance>("fixture_all_static");
+  auto checker = host.create<beslam::registry::MotionCheckerInstance>("fixture_all_static",
+                                                                      {number("corrupt_nan", BESLAM_CONFIG_BOOL, 0)});
   EXPECT_EQ(host.registry.find("motion_checker_1_6").functions_size, offsetof(beslam_motion_checker_v1, world_moved));
   EXPECT_EQ(host.registry.find("fixture_all_static").functions_size, sizeof(beslam_motion_checker_v1));
 

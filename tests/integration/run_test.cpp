@@ -343,8 +343,9 @@ TEST_F(RunTest, AMotionCheckerHandingOnANonFiniteBoxStopsTheRunNamingIt) {
 }
 
 TEST_F(RunTest, ABoxWithANegativePositionSigmaStopsTheRunNamingTheDetector) {
-  const Result r =
-      beslam("run " + pipeline("detector: {plugin: fixture_boxes, range_sigma: -0.5}\n") + " --out " + (dir_ / "out").string(), dir_);
+  const Result r = beslam(
+      "run " + pipeline("detector: {plugin: fixture_boxes, range_sigma: -0.5}\n") + " --out " + (dir_ / "out").string(),
+      dir_);
   EXPECT_EQ(r.code, 1);
   EXPECT_EQ(lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("plugin fixture_boxes"), std::string::npos) << r.err;
