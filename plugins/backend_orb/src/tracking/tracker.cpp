@@ -363,7 +363,7 @@ void Tracker::forgetCulled() {
       r.reference = r.reference->parent;
     }
   }
-  auto live = [this](KeyFrame* kf) {
+  auto live = [](KeyFrame* kf) {
     while (kf && kf->bad) kf = kf->parent;
     return kf;
   };
