@@ -232,8 +232,9 @@ void checkPng(const std::string& path, const std::string& bytes) {
 namespace {
 
 // The file's bytes after every check that needs no decoding (present, not empty, a PNG's chunks and a JPEG's
-// end marker whole, a known format whose header declares a size the loader takes); `declared` is that size.
-std::string readCheckedImage(const std::string& path, cv::Size& declared) {
+// end marker whole, a known format whose header declares a size the loader takes); `declared`, when given,
+// receives that size.
+std::string readCheckedImage(const std::string& path, cv::Size* declared = nullptr) {
   requireFile(path);
   std::string bytes = readFile(path);
   if (bytes.empty()) throwAt(path, "truncated image (empty file)");
@@ -241,15 +242,15 @@ std::string readCheckedImage(const std::string& path, cv::Size& declared) {
     checkPng(path, bytes);
   else if (hasJpegStart(bytes))
     checkJpeg(path, bytes);
-  declared = checkDeclaredSize(path, bytes);
+  const cv::Size size = checkDeclaredSize(path, bytes);
+  if (declared) *declared = size;
   return bytes;
 }
 
 }  // namespace
 
 LoadedImage loadImage(const std::string& path, bool want_color) {
-  cv::Size declared;
-  const std::string bytes = readCheckedImage(path, declared);
+  const std::string bytes = readCheckedImage(path);
 
   cv::Mat decoded;
   try {
@@ -288,7 +289,7 @@ LoadedImage loadImage(const std::string& path, bool want_color) {
 
 cv::Size readImageSize(const std::string& path) {
   cv::Size declared;
-  readCheckedImage(path, declared);
+  readCheckedImage(path, &declared);
   return declared;
 }
 
