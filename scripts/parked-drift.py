@@ -30,8 +30,7 @@ speed.
 
 --state STATE keeps only the detections the motion checker gave that state: with `static`, what the boxes a
 checker hands on as parked (to the mask generator, the backend and the reconstructor) make a parked car seem to
-do; a checker that refines the range of the boxes it calls static (motion_bev_tracker's parallax_range) is
-measured where it acts."""
+do."""
 import collections
 import math
 import os
